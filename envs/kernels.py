@@ -1,0 +1,1064 @@
+"""Compiled equilibrium solver for the point-spring grasp (numba).
+
+Problem (all quantities non-dimensional, see :class:`envs.psm.ScaledProblem`)::
+
+    minimise  Pi(x) = sum_radial k_int/2 (|q_i| - 1)^2 + sum_contour k_ext/2 (|q_i+1 - q_i| - h)^2
+                      + sum_fingers [tau theta_j + kappa/2 (theta_j - theta_0)^2]
+    subject to  g_m(x) >= 0
+
+with ``x = (q_0 .. q_N-1, theta_R, theta_L)``. The constraints are
+
+* face:   distance from contour point ``i`` to the gripping-face segment of finger ``j``
+          (signed distance to the face line where the point projects on the face, distance to
+          the face's end corner beyond it);
+* corner: the tip (or root) corner of finger ``j`` stays outside the contour edge it faces;
+* stop:   ``theta_j >= theta_min`` (jaws closed on each other).
+
+Method: a primal-dual interior-point Newton method with exact Hessians, inertia correction and a
+backtracking line search on the barrier merit, followed by an augmented-Lagrangian Newton polish
+on the identified contact set so that contacts hold to round-off. The Newton matrix is a
+cyclic block-tridiagonal matrix (springs) bordered by the two finger angles; ordering the contour
+points 0, N-1, 1, N-2, ... makes it banded (half bandwidth 5), so each factorization is a banded
+Cholesky plus a 2x2 Schur complement: O(N) work. Outer rounds update the set of candidate
+constraints (which edge a corner faces, points that newly approach a face) until it is
+consistent with the solution.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .psm import (
+    P_C0X,
+    P_C1X,
+    P_H,
+    P_HW,
+    P_KAPPA,
+    P_KC,
+    P_KR,
+    P_LMAX,
+    P_PHASE,
+    P_TAU,
+    P_TH0,
+    P_THMIN,
+)
+
+BW = 5  # half bandwidth of the interleaved point ordering
+
+# status codes
+OK = 0
+ITER_LIMIT = 1
+LINALG_FAIL = 2
+LINESEARCH_FAIL = 3
+CONTACT_CYCLE = 4
+POLISH_FAIL = 5
+INFEASIBLE_START = 6
+SADDLE = 7
+STATUS_MESSAGES = {
+    OK: "converged",
+    ITER_LIMIT: "interior-point iteration limit reached",
+    LINALG_FAIL: "Newton matrix could not be made positive definite",
+    LINESEARCH_FAIL: "line search failed to decrease the barrier merit",
+    CONTACT_CYCLE: "contact candidate set did not settle (cycling between finger tip and face)",
+    POLISH_FAIL: "active-set polish did not reach the contact tolerance",
+    INFEASIBLE_START: "start point violates a contact constraint",
+    SADDLE: "stuck at an unstable (saddle) equilibrium; escapes from it failed",
+}
+
+# option vector layout
+O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH = range(5)
+N_OPTIONS = 5
+
+
+def default_options() -> np.ndarray:
+    """Solver options: [stationarity tol, max iterations, max rounds, mu0 factor, polish]."""
+    return np.array([1e-11, 300.0, 12.0, 1e-2, 1.0])
+
+
+@njit(cache=True, inline="always")
+def _frame(j, th):
+    s = math.sin(th)
+    c = math.cos(th)
+    if j == 0:
+        return s, c, -c, s  # ex, ey, nx, ny
+    return -s, c, c, s
+
+
+@njit(cache=True)
+def _band_index(n):
+    """Scalar index of component 0 of each point in the interleaved (banded) ordering."""
+    idx = np.empty(n, dtype=np.int64)
+    half = (n - 1) // 2
+    for i in range(n):
+        pos = 2 * i if i <= half else 2 * (n - 1 - i) + 1
+        idx[i] = 2 * pos
+    return idx
+
+
+# --------------------------------------------------------------------------------------------
+# constraints
+
+
+@njit(cache=True)
+def _face_eval(q, i, j, th, prm, grad, hess):
+    """Face constraint of point i on finger j: value, local grad/Hessian over (qx, qy, theta)."""
+    ex, ey, nx, ny = _frame(j, th)
+    vx = q[i, 0] + prm[P_C0X + 2 * j]
+    vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
+    hw = prm[P_HW]
+    s = ex * vx + ey * vy
+    m = nx * vx + ny * vy
+    for a in range(3):
+        grad[a] = 0.0
+        for b in range(3):
+            hess[a, b] = 0.0
+    if s < 0.0 or s > prm[P_LMAX]:
+        # beyond an end of the face: distance to that corner (s_c = 0 or lmax)
+        sc = 0.0 if s < 0.0 else prm[P_LMAX]
+        ds = s - sc
+        dm = m - hw
+        g = math.sqrt(ds * ds + dm * dm)
+        if g < 1e-300:
+            return 0.0
+        # w = ds*e + dm*n ; dw/dq = I (in (e,n) basis), dw/dtheta: ds' = e'.v = -n.v = -m,
+        # dm' = n'.v = e.v = s ; the corner moves too: d(sc e + hw n)/dtheta = -sc n + hw e
+        # so d(ds)/dth = -m - hw... computed in world coordinates below.
+        wx = ds * ex + dm * nx
+        wy = ds * ey + dm * ny
+        # world vector from corner to point: p - (sc e + hw n) with p = v; w = v - sc e - hw n
+        # dw/dtheta = sc n - hw e
+        dwx = sc * nx - hw * ex
+        dwy = sc * ny - hw * ey
+        ux = wx / g
+        uy = wy / g
+        grad[0] = ux
+        grad[1] = uy
+        grad[2] = ux * dwx + uy * dwy
+        # Hessian of |w|: (I - u u^T)/g in w; d2w/dtheta2 = sc e' - hw n' = -sc n - hw e
+        d2x = sc * ex + hw * nx
+        d2y = sc * ey + hw * ny
+        pxx = (1.0 - ux * ux) / g
+        pxy = (-ux * uy) / g
+        pyy = (1.0 - uy * uy) / g
+        hess[0, 0] = pxx
+        hess[0, 1] = pxy
+        hess[1, 0] = pxy
+        hess[1, 1] = pyy
+        hess[0, 2] = pxx * dwx + pxy * dwy
+        hess[1, 2] = pxy * dwx + pyy * dwy
+        hess[2, 0] = hess[0, 2]
+        hess[2, 1] = hess[1, 2]
+        hess[2, 2] = dwx * hess[0, 2] + dwy * hess[1, 2] + ux * d2x + uy * d2y
+        return g
+    grad[0] = nx
+    grad[1] = ny
+    grad[2] = s
+    hess[0, 2] = ex
+    hess[1, 2] = ey
+    hess[2, 0] = ex
+    hess[2, 1] = ey
+    hess[2, 2] = -m
+    return m - hw
+
+
+@njit(cache=True)
+def _corner_eval(q, k, j, th, sc, prm, grad, hess):
+    """Corner of finger j at axial position sc vs contour edge k -> k+1.
+
+    Local variables (ax, ay, bx, by, theta). Value: signed distance of the corner from the edge
+    line, positive outside the (counter-clockwise) polygon.
+    """
+    n = q.shape[0]
+    k1 = k + 1 if k + 1 < n else 0
+    ex, ey, nx, ny = _frame(j, th)
+    hw = prm[P_HW]
+    cx = prm[P_C0X + 2 * j]
+    cy = prm[P_C0X + 2 * j + 1]
+    kx = -cx + sc * ex + hw * nx
+    ky = -cy + sc * ey + hw * ny
+    k1x = -sc * nx + hw * ex
+    k1y = -sc * ny + hw * ey
+    k2x = -sc * ex - hw * nx
+    k2y = -sc * ey - hw * ny
+    ax, ay = q[k, 0], q[k, 1]
+    ux, uy = kx - ax, ky - ay
+    dx, dy = q[k1, 0] - ax, q[k1, 1] - ay
+    L = math.sqrt(dx * dx + dy * dy)
+    cr = ux * dy - uy * dx
+    g = cr / L
+    # first derivatives in (u, d)
+    jdx, jdy = dy, -dx  # J d
+    jux, juy = uy, -ux  # J u
+    gux, guy = jdx / L, jdy / L
+    L3 = L * L * L
+    gdx = -jux / L - cr * dx / L3
+    gdy = -juy / L - cr * dy / L3
+    # M_ud[a, b] = J[a, b]/L - (Jd)_a d_b / L^3 ; J = [[0, 1], [-1, 0]]
+    mud = np.empty((2, 2))
+    mud[0, 0] = -jdx * dx / L3
+    mud[0, 1] = 1.0 / L - jdx * dy / L3
+    mud[1, 0] = -1.0 / L - jdy * dx / L3
+    mud[1, 1] = -jdy * dy / L3
+    L5 = L3 * L * L
+    mdd = np.empty((2, 2))
+    mdd[0, 0] = 2.0 * jux * dx / L3 - cr / L3 + 3.0 * cr * dx * dx / L5
+    mdd[1, 1] = 2.0 * juy * dy / L3 - cr / L3 + 3.0 * cr * dy * dy / L5
+    mdd[0, 1] = (jux * dy + dx * juy) / L3 + 3.0 * cr * dx * dy / L5
+    mdd[1, 0] = mdd[0, 1]
+    # T maps z=(ax, ay, bx, by, th) to (ux, uy, dx, dy)
+    t = np.zeros((4, 5))
+    t[0, 0] = -1.0
+    t[1, 1] = -1.0
+    t[0, 4] = k1x
+    t[1, 4] = k1y
+    t[2, 0] = -1.0
+    t[3, 1] = -1.0
+    t[2, 2] = 1.0
+    t[3, 3] = 1.0
+    gv = np.array([gux, guy, gdx, gdy])
+    mm = np.zeros((4, 4))
+    for a in range(2):
+        for b in range(2):
+            mm[a, 2 + b] = mud[a, b]
+            mm[2 + b, a] = mud[a, b]
+            mm[2 + a, 2 + b] = mdd[a, b]
+    for a in range(5):
+        acc = 0.0
+        for r in range(4):
+            acc += t[r, a] * gv[r]
+        grad[a] = acc
+    mt = mm @ t
+    for a in range(5):
+        for b in range(5):
+            acc = 0.0
+            for r in range(4):
+                acc += t[r, a] * mt[r, b]
+            hess[a, b] = acc
+    hess[4, 4] += gux * k2x + guy * k2y
+    return g
+
+
+# --------------------------------------------------------------------------------------------
+# energy, gradient, Hessian
+
+
+@njit(cache=True)
+def _energy(x, n, prm):
+    e = 0.0
+    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        qx, qy = x[2 * i], x[2 * i + 1]
+        lr = math.sqrt(qx * qx + qy * qy)
+        e += 0.5 * kr * (lr - 1.0) ** 2
+        dx, dy = x[2 * i1] - qx, x[2 * i1 + 1] - qy
+        lc = math.sqrt(dx * dx + dy * dy)
+        e += 0.5 * kc * (lc - h) ** 2
+    for j in range(2):
+        th = x[2 * n + j]
+        e += prm[P_TAU] * th + 0.5 * prm[P_KAPPA] * (th - prm[P_TH0]) ** 2
+    return e
+
+
+@njit(cache=True)
+def _add(ab, bb, dd, nb, p, r, v):
+    """Add v to the symmetric Newton matrix entry (p, r) (band-ordered; >= nb is an angle)."""
+    if p < nb and r < nb:
+        if p >= r:
+            ab[p, p - r] += v
+        else:
+            ab[r, r - p] += v
+    elif p < nb:
+        bb[p, r - nb] += v
+    elif r < nb:
+        bb[r, p - nb] += v
+    else:
+        dd[p - nb, r - nb] += v
+        if p != r:
+            dd[r - nb, p - nb] += v
+
+
+@njit(cache=True)
+def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess):
+    """Spring and finger energy gradient (natural order) and Hessian (band order)."""
+    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
+    nb = 2 * n
+    for i in range(n):
+        qx, qy = x[2 * i], x[2 * i + 1]
+        lr = math.sqrt(qx * qx + qy * qy)
+        f = kr * (lr - 1.0) / lr
+        grad[2 * i] += f * qx
+        grad[2 * i + 1] += f * qy
+        if want_hess:
+            ux, uy = qx / lr, qy / lr
+            tt = kr * (1.0 - 1.0 / lr)
+            p = bidx[i]
+            ab[p, 0] += kr * ux * ux + tt * (1.0 - ux * ux)
+            ab[p + 1, 0] += kr * uy * uy + tt * (1.0 - uy * uy)
+            ab[p + 1, 1] += kr * ux * uy - tt * ux * uy
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
+        lc = math.sqrt(dx * dx + dy * dy)
+        f = kc * (lc - h) / lc
+        grad[2 * i] -= f * dx
+        grad[2 * i + 1] -= f * dy
+        grad[2 * i1] += f * dx
+        grad[2 * i1 + 1] += f * dy
+        if want_hess:
+            ux, uy = dx / lc, dy / lc
+            tt = kc * (1.0 - h / lc)
+            kxx = kc * ux * ux + tt * (1.0 - ux * ux)
+            kyy = kc * uy * uy + tt * (1.0 - uy * uy)
+            kxy = kc * ux * uy - tt * ux * uy
+            pa, pb = bidx[i], bidx[i1]
+            ab[pa, 0] += kxx
+            ab[pa + 1, 0] += kyy
+            ab[pa + 1, 1] += kxy
+            ab[pb, 0] += kxx
+            ab[pb + 1, 0] += kyy
+            ab[pb + 1, 1] += kxy
+            _add(ab, bb, dd, nb, pa, pb, -kxx)
+            _add(ab, bb, dd, nb, pa + 1, pb + 1, -kyy)
+            _add(ab, bb, dd, nb, pa, pb + 1, -kxy)
+            _add(ab, bb, dd, nb, pa + 1, pb, -kxy)
+    for j in range(2):
+        th = x[nb + j]
+        grad[nb + j] += prm[P_TAU] + prm[P_KAPPA] * (th - prm[P_TH0])
+        if want_hess:
+            dd[j, j] += prm[P_KAPPA]
+
+
+# --------------------------------------------------------------------------------------------
+# constraint bookkeeping: constraint m has kind (0 face, 1 corner, 2 stop), finger j, index i/k
+# and corner position sc. Gradients/Hessians are evaluated on demand.
+
+
+@njit(cache=True)
+def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
+    """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
+    th = x[2 * n + j]
+    if kind == 0:
+        g = _face_eval(q, idx, j, th, prm, grad5, hess5)
+        dofs[0] = 2 * idx
+        dofs[1] = 2 * idx + 1
+        dofs[2] = 2 * n + j
+        return g, 3
+    if kind == 1:
+        g = _corner_eval(q, idx, j, th, sc, prm, grad5, hess5)
+        k1 = idx + 1 if idx + 1 < n else 0
+        dofs[0] = 2 * idx
+        dofs[1] = 2 * idx + 1
+        dofs[2] = 2 * k1
+        dofs[3] = 2 * k1 + 1
+        dofs[4] = 2 * n + j
+        return g, 5
+    for a in range(5):
+        grad5[a] = 0.0
+        for b in range(5):
+            hess5[a, b] = 0.0
+    grad5[0] = 1.0
+    dofs[0] = 2 * n + j
+    return th - prm[P_THMIN], 1
+
+
+@njit(cache=True)
+def _to_band(d, n, bidx):
+    if d >= 2 * n:
+        return d
+    i = d // 2
+    return bidx[i] + (d - 2 * i)
+
+
+@njit(cache=True)
+def _all_gaps(x, n, prm, kinds, fj, fidx, fsc, gout, grad5, hess5, dofs):
+    q = x[: 2 * n].reshape(n, 2)
+    for m in range(kinds.shape[0]):
+        g, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        gout[m] = g
+
+
+# --------------------------------------------------------------------------------------------
+# banded Cholesky with a 2x2 bordered Schur complement
+
+
+@njit(cache=True)
+def _chol_band(ab, lb, nb, shift):
+    for p in range(nb):
+        for k in range(BW, 0, -1):
+            c = p - k
+            if c < 0:
+                lb[p, k] = 0.0
+                continue
+            acc = ab[p, k]
+            lo = max(0, p - BW)
+            for m in range(max(lo, c - BW), c):
+                acc -= lb[p, p - m] * lb[c, c - m]
+            lb[p, k] = acc / lb[c, 0]
+        acc = ab[p, 0] + shift
+        for m in range(max(0, p - BW), p):
+            v = lb[p, p - m]
+            acc -= v * v
+        if not acc > 0.0:
+            return False
+        lb[p, 0] = math.sqrt(acc)
+    return True
+
+
+@njit(cache=True)
+def _solve_band(lb, nb, rhs, out):
+    for p in range(nb):
+        acc = rhs[p]
+        for m in range(max(0, p - BW), p):
+            acc -= lb[p, p - m] * out[m]
+        out[p] = acc / lb[p, 0]
+    for p in range(nb - 1, -1, -1):
+        acc = out[p]
+        for m in range(p + 1, min(nb, p + BW + 1)):
+            acc -= lb[m, m - p] * out[m]
+        out[p] = acc / lb[p, 0]
+
+
+@njit(cache=True)
+def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
+    """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
+    if not _chol_band(ab, lb, nb, shift):
+        return False
+    for c in range(2):
+        for p in range(nb):
+            tmp[p] = bb[p, c]
+        _solve_band(lb, nb, tmp, ybuf[:, c])
+    s00 = dd[0, 0] + shift
+    s11 = dd[1, 1] + shift
+    s01 = dd[0, 1]
+    for p in range(nb):
+        s00 -= bb[p, 0] * ybuf[p, 0]
+        s11 -= bb[p, 1] * ybuf[p, 1]
+        s01 -= bb[p, 0] * ybuf[p, 1]
+    det = s00 * s11 - s01 * s01
+    if not (s00 > 0.0 and det > 1e-300 * max(1.0, s00 * s11) and det > 0.0):
+        return False
+    _solve_band(lb, nb, rb, out_b)
+    r0 = rt[0]
+    r1 = rt[1]
+    for p in range(nb):
+        r0 -= bb[p, 0] * out_b[p]
+        r1 -= bb[p, 1] * out_b[p]
+    t0 = (s11 * r0 - s01 * r1) / det
+    t1 = (s00 * r1 - s01 * r0) / det
+    out_t[0] = t0
+    out_t[1] = t1
+    for p in range(nb):
+        out_b[p] -= ybuf[p, 0] * t0 + ybuf[p, 1] * t1
+    return True
+
+
+# --------------------------------------------------------------------------------------------
+# candidate constraints
+
+
+@njit(cache=True)
+def _straddle_edge(q, n, j, th, sc, prm):
+    """Contour edge crossed by the line through finger j's corner at axial position sc.
+
+    Among edges whose end points lie on both sides of that line and on the near side of the
+    disk, the one closest to the face line; -1 if none.
+    """
+    ex, ey, nx, ny = _frame(j, th)
+    cx = prm[P_C0X + 2 * j]
+    cy = prm[P_C0X + 2 * j + 1]
+    best = -1
+    bestd = 1e300
+    for k in range(n):
+        k1 = k + 1 if k + 1 < n else 0
+        sa = ex * (q[k, 0] + cx) + ey * (q[k, 1] + cy) - sc
+        sb = ex * (q[k1, 0] + cx) + ey * (q[k1, 1] + cy) - sc
+        if sa * sb > 0.0:
+            continue
+        ma = nx * (q[k, 0] + cx) + ny * (q[k, 1] + cy)
+        mb = nx * (q[k1, 0] + cx) + ny * (q[k1, 1] + cy)
+        dist = 0.5 * (ma + mb)
+        if dist < bestd:
+            bestd = dist
+            best = k
+    return best
+
+
+@njit(cache=True)
+def _near(q, i, j, th):
+    ex, ey, nx, ny = _frame(j, th)
+    return nx * q[i, 0] + ny * q[i, 1] < 0.6
+
+
+@njit(cache=True)
+def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
+    m = 0
+    for j in range(2):
+        for i in range(n):
+            if face[j, i]:
+                kinds[m] = 0
+                fj[m] = j
+                fidx[m] = i
+                fsc[m] = 0.0
+                m += 1
+    for j in range(2):
+        for c in range(2):
+            if corner[j, c] >= 0:
+                kinds[m] = 1
+                fj[m] = j
+                fidx[m] = corner[j, c]
+                fsc[m] = prm[P_LMAX] if c == 0 else 0.0
+                m += 1
+    for j in range(2):
+        kinds[m] = 2
+        fj[m] = j
+        fidx[m] = 0
+        fsc[m] = 0.0
+        m += 1
+    return m
+
+
+# --------------------------------------------------------------------------------------------
+# the interior-point Newton solve for a fixed candidate set
+
+
+@njit(cache=True)
+def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
+                   g_out, grad5, hess5, dofs, barrier_mu):
+    """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
+
+    With barrier_mu > 0 the returned gradient is that of Pi - mu sum log g; with barrier_mu = 0
+    it is grad Pi - sum lam grad g (used by the augmented-Lagrangian polish, where lam already
+    holds lam_k - rho g).
+    """
+    nb = 2 * n
+    grad[:] = 0.0
+    ab[:, :] = 0.0
+    bb[:, :] = 0.0
+    dd[:, :] = 0.0
+    _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True)
+    q = x[:nb].reshape(n, 2)
+    for m in range(mcount):
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        g_out[m] = g
+        w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
+        for a in range(nd):
+            grad[dofs[a]] -= w * grad5[a]
+        for a in range(nd):
+            pa = _to_band(dofs[a], n, bidx)
+            for b in range(a + 1):
+                pb = _to_band(dofs[b], n, bidx)
+                v = sig[m] * grad5[a] * grad5[b] - lam[m] * hess5[a, b]
+                _add(ab, bb, dd, nb, pa, pb, v)
+
+
+@njit(cache=True)
+def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs):
+    e = _energy(x, n, prm)
+    q = x[: 2 * n].reshape(n, 2)
+    for m in range(mcount):
+        g, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        gbuf[m] = g
+        if not g > 0.0:
+            return math.inf
+        e -= mu * math.log(g)
+    return e
+
+
+@njit(cache=True)
+def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs, res):
+    res[:] = 0.0
+    ab = np.zeros((1, 1))
+    _spring_terms(x, n, prm, np.zeros(n, dtype=np.int64), res, ab, ab, ab, False)
+    q = x[: 2 * n].reshape(n, 2)
+    for m in range(mcount):
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        gbuf[m] = g
+        for a in range(nd):
+            res[dofs[a]] -= lam[m] * grad5[a]
+    r = 0.0
+    for a in range(res.shape[0]):
+        r = max(r, abs(res[a]))
+    return r
+
+
+@njit(cache=True)
+def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, work_it):
+    """Primal-dual interior point on a fixed constraint set. Returns (status, iterations)."""
+    nb = 2 * n
+    nx = nb + 2
+    tol = opts[O_TOL] * fscale
+    maxit = int(opts[O_MAXIT])
+    grad = np.zeros(nx)
+    step = np.zeros(nx)
+    xt = np.zeros(nx)
+    res = np.zeros(nx)
+    ab = np.zeros((nb, BW + 1))
+    lb = np.zeros((nb, BW + 1))
+    bb = np.zeros((nb, 2))
+    dd = np.zeros((2, 2))
+    ybuf = np.zeros((nb, 2))
+    rb = np.zeros(nb)
+    ob = np.zeros(nb)
+    tmp = np.zeros(nb)
+    rt = np.zeros(2)
+    ot = np.zeros(2)
+    g = np.zeros(mcount)
+    gt = np.zeros(mcount)
+    sig = np.zeros(mcount)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    mu = mu0
+    mu_min = 1e-3 * tol
+    shift_last = 0.0
+    kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    it = 0
+    n_neg = 0
+    while it < maxit:
+        # barrier-subproblem and overall convergence tests
+        kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
+                            res)
+        comp = 0.0
+        for m in range(mcount):
+            comp = max(comp, abs(lam[m] * g[m] - mu))
+        if kkt <= 10.0 * max(mu, tol) and comp <= 10.0 * max(mu, tol):
+            if mu <= mu_min:
+                work_it[0] += it
+                return OK, it
+            mu = max(mu_min, min(0.2 * mu, mu ** 1.5))
+            continue
+        it += 1
+        for m in range(mcount):
+            sig[m] = lam[m] / g[m]
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
+                       g, grad5, hess5, dofs, mu)
+        for d in range(nb):
+            i = d // 2
+            rb[bidx[i] + (d - 2 * i)] = -grad[d]
+        rt[0] = -grad[nb]
+        rt[1] = -grad[nb + 1]
+        shift = kreg
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        if not ok:
+            shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
+            while not ok:
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+                if ok:
+                    break
+                shift *= 8.0
+                if shift > 1e12 * max(prm[P_KC], 1.0):
+                    work_it[0] += it
+                    return LINALG_FAIL, it
+            shift_last = shift
+            if mu < 1e-7 * fscale:
+                n_neg += 1
+                if n_neg >= 4:
+                    # negative curvature at a nearly converged barrier problem: a saddle that
+                    # descent from a symmetric start cannot leave; the caller perturbs and retries
+                    work_it[0] += it
+                    return SADDLE, it
+        else:
+            n_neg = 0
+        for d in range(nb):
+            i = d // 2
+            step[d] = ob[bidx[i] + (d - 2 * i)]
+        step[nb] = ot[0]
+        step[nb + 1] = ot[1]
+        slope = 0.0
+        for d in range(nx):
+            slope += grad[d] * step[d]
+        # damp huge finger rotations (a full step can jump a finger past a vertex)
+        smax = 0.0
+        for d in range(nb):
+            smax = max(smax, abs(step[d]))
+        alpha = 1.0
+        lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
+        if lim > 1.0:
+            alpha = 1.0 / lim
+        phi0 = _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gt, grad5, hess5, dofs)
+        accepted = False
+        for _ls in range(60):
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+            phi = _merit(xt, n, prm, kinds, fj, fidx, fsc, mcount, mu, gt, grad5, hess5, dofs)
+            if phi < math.inf:
+                feasible = True
+                for m in range(mcount):
+                    if gt[m] < 0.01 * g[m]:
+                        feasible = False
+                        break
+                if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
+                    accepted = True
+                    break
+            alpha *= 0.5
+        if not accepted:
+            # tiny progress is impossible at this mu: accept if already stationary to round-off
+            if kkt <= 1e3 * tol:
+                mu = max(mu_min, 0.2 * mu)
+                if mu <= mu_min:
+                    work_it[0] += it
+                    return OK, it
+                continue
+            work_it[0] += it
+            return LINESEARCH_FAIL, it
+        # multiplier step: Newton direction at the old point, same step length, kept positive
+        q = x[:nb].reshape(n, 2)
+        for m in range(mcount):
+            _, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+            dl = 0.0
+            for a in range(nd):
+                dl += grad5[a] * step[dofs[a]]
+            dlam = mu / g[m] - lam[m] - sig[m] * dl
+            lam_new = lam[m] + alpha * dlam
+            if lam_new < 0.01 * lam[m]:
+                lam_new = 0.01 * lam[m]
+            gm = gt[m]
+            lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
+        if opts.shape[0] > 5 and opts[5] > 0:
+            print("ipm", it, mu / fscale, kkt / fscale, comp / fscale, alpha, shift)
+        for d in range(nx):
+            x[d] = xt[d]
+    work_it[0] += it
+    return ITER_LIMIT, it
+
+
+@njit(cache=True)
+def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active, work_it):
+    """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
+
+    Returns (ok, stable) where stable means the final Newton matrix needed no shift.
+    """
+    nb = 2 * n
+    nx = nb + 2
+    grad = np.zeros(nx)
+    ab = np.zeros((nb, BW + 1))
+    lb = np.zeros((nb, BW + 1))
+    bb = np.zeros((nb, 2))
+    dd = np.zeros((2, 2))
+    ybuf = np.zeros((nb, 2))
+    rb = np.zeros(nb)
+    ob = np.zeros(nb)
+    tmp = np.zeros(nb)
+    rt = np.zeros(2)
+    ot = np.zeros(2)
+    g = np.zeros(mcount)
+    sig = np.zeros(mcount)
+    lam_eff = np.zeros(mcount)
+    res = np.zeros(nx)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
+    rho = 1e2 * kscale
+    tol = opts[O_TOL] * fscale
+    q = x[:nb].reshape(n, 2)
+    for m in range(mcount):
+        if not active[m]:
+            lam[m] = 0.0
+    stable = True
+    kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    for _outer in range(40):
+        work_it[0] += 1
+        for m in range(mcount):
+            gm, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+            g[m] = gm
+            if active[m]:
+                sig[m] = rho
+                lam_eff[m] = lam[m] - rho * gm
+            else:
+                sig[m] = 0.0
+                lam_eff[m] = 0.0
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam_eff, sig, grad, ab, bb,
+                       dd, g, grad5, hess5, dofs, 0.0)
+        for d in range(nb):
+            i = d // 2
+            rb[bidx[i] + (d - 2 * i)] = -grad[d]
+        rt[0] = -grad[nb]
+        rt[1] = -grad[nb + 1]
+        shift = kreg
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        stable = ok
+        while not ok:
+            shift = max(shift * 8.0, 1e-8 * kscale)
+            if shift > 1e6 * kscale:
+                return False, False
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        for d in range(nb):
+            i = d // 2
+            x[d] += ob[bidx[i] + (d - 2 * i)]
+        x[nb] += ot[0]
+        x[nb + 1] += ot[1]
+        # multiplier update
+        for m in range(mcount):
+            if active[m]:
+                gm, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5,
+                                  dofs)
+                lam[m] = lam[m] - rho * gm
+        kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
+                            res)
+        viol = 0.0
+        for m in range(mcount):
+            if active[m]:
+                viol = max(viol, abs(g[m]))
+        if opts.shape[0] > 5 and opts[5] > 0:
+            print("polish", _outer, kkt / fscale, viol, shift)
+        if kkt <= 10.0 * tol and viol <= 1e-13:
+            return True, stable
+    return False, stable
+
+
+@njit(cache=True)
+def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf):
+    """New start point near a saddle: rotate the contour about the pin, open the fingers."""
+    nb = 2 * n
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    angle = (0.25 if attempt % 2 == 1 else -0.25) * attempt * 2.0 * math.pi / n
+    c = math.cos(angle)
+    s = math.sin(angle)
+    for i in range(n):
+        qx, qy = xs[2 * i], xs[2 * i + 1]
+        x0[2 * i] = c * qx - s * qy
+        x0[2 * i + 1] = s * qx + c * qy
+    opening = 0.01
+    for _k in range(8):
+        for j in range(2):
+            x0[nb + j] = min(xs[nb + j] + opening, prm[P_TH0])
+        _all_gaps(x0, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        ok = True
+        for m in range(mcount):
+            if not gbuf[m] > 1e-8:
+                ok = False
+        if ok:
+            return True
+        opening *= 2.0
+    return False
+
+
+@njit(cache=True)
+def solve_one(n, prm, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face_cand, info):
+    """Solve one grasp in place.
+
+    Parameters
+    ----------
+    n : int
+        Number of triangles.
+    prm : float64[14]
+        Scaled problem parameters (:func:`envs.psm.scaled_problem`).
+    opts : float64[5]
+        Options (:func:`default_options`).
+    x : float64[2n + 2]
+        In: start point (contour points relative to the centre in units of r, then the finger
+        angles); must be strictly feasible. Out: the solution.
+    lam_face : float64[2, n]
+        In: multipliers of the previous solution (warm start) or zeros; out: scaled face contact
+        forces.
+    lam_corner : float64[2, 2]
+        Out: scaled corner contact forces (finger, [tip, root]).
+    lam_stop : float64[2]
+        Out: scaled joint-stop torques.
+    corner_edge : int64[2, 2]
+        Out: contour edge index faced by each corner (-1 none).
+    face_cand : bool[2, n]
+        Work/out: face constraints considered.
+    info : float64[8]
+        Out: status, Newton iterations, rounds, stable flag, stationarity, max |gap| of contacts,
+        min gap, final mu.
+    """
+    nb = 2 * n
+    bidx = _band_index(n)
+    x0 = x.copy()
+    q0 = x0[:nb].reshape(n, 2)
+    mmax = 2 * n + 4 + 2
+    kinds = np.zeros(mmax, dtype=np.int64)
+    fj = np.zeros(mmax, dtype=np.int64)
+    fidx = np.zeros(mmax, dtype=np.int64)
+    fsc = np.zeros(mmax)
+    lam = np.zeros(mmax)
+    gbuf = np.zeros(mmax)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    work_it = np.zeros(1, dtype=np.int64)
+    tau = prm[P_TAU]
+    fscale = max(tau, prm[P_KAPPA] * abs(prm[P_TH0] - prm[P_THMIN]), 1e-300)
+    # initial candidate sets, evaluated at the start point
+    for j in range(2):
+        th = x0[nb + j]
+        for i in range(n):
+            face_cand[j, i] = False
+            if _near(q0, i, j, th):
+                g = _face_eval(q0, i, j, th, prm, grad5, hess5)
+                if g > 1e-12:
+                    face_cand[j, i] = True
+        for c in range(2):
+            sc = prm[P_LMAX] if c == 0 else 0.0
+            corner_edge[j, c] = -1
+            k = _straddle_edge(q0, n, j, th, sc, prm)
+            if k >= 0:
+                g = _corner_eval(q0, k, j, th, sc, prm, grad5, hess5)
+                if g > 1e-12:
+                    corner_edge[j, c] = k
+    lam_guess_face = lam_face.copy()
+    status = OK
+    escapes = 0
+    rounds = 0
+    stable = True
+    xs = x0.copy()
+    for rnd in range(int(opts[O_MAXROUND]) + 3):
+        rounds = rnd + 1
+        mcount = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+        for d in range(nb + 2):
+            xs[d] = x0[d]
+        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        # initial barrier parameter: from warm-start multipliers when given, else a force scale
+        mu0 = opts[O_MU0] * fscale * 0.05
+        have_warm = False
+        acc = 0.0
+        cnt = 0
+        for m in range(mcount):
+            if kinds[m] == 0 and lam_guess_face[fj[m], fidx[m]] > 0.0:
+                acc += lam_guess_face[fj[m], fidx[m]] * gbuf[m]
+                cnt += 1
+                have_warm = True
+        if have_warm:
+            mu0 = max(acc / cnt, 1e-6 * mu0)
+        feasible = True
+        for m in range(mcount):
+            if not gbuf[m] > 0.0:
+                feasible = False
+            lam[m] = mu0 / gbuf[m]
+            if kinds[m] == 0 and lam_guess_face[fj[m], fidx[m]] > 0.0:
+                lam[m] = lam_guess_face[fj[m], fidx[m]]
+        if not feasible:
+            status = INFEASIBLE_START
+            break
+        status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0,
+                         work_it)
+        if status == SADDLE and escapes < 3:
+            escapes += 1
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, escapes, gbuf):
+                for m in range(mcount):
+                    if kinds[m] == 0:
+                        lam_guess_face[fj[m], fidx[m]] = lam[m]
+                continue
+        if status != OK:
+            break
+        # identify the contact set and polish
+        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        active = np.zeros(mcount, dtype=np.bool_)
+        for m in range(mcount):
+            active[m] = lam[m] > gbuf[m] * fscale and gbuf[m] < 1e-5
+        if opts[O_POLISH] > 0.0:
+            xp = xs.copy()
+            lp = lam[:mcount].copy()
+            okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+                                  fscale, active, work_it)
+            if okp:
+                _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+                good = True
+                for m in range(mcount):
+                    if active[m] and lp[m] < -1e-12 * fscale:
+                        good = False
+                    if (not active[m]) and gbuf[m] < -1e-10:
+                        good = False
+                if good:
+                    for d in range(nb + 2):
+                        xs[d] = xp[d]
+                    for m in range(mcount):
+                        lam[m] = max(lp[m], 0.0) if active[m] else 0.0
+                else:
+                    status = POLISH_FAIL
+            else:
+                status = POLISH_FAIL
+        # check the candidate set against the solution
+        changed = False
+        q = xs[:nb].reshape(n, 2)
+        for j in range(2):
+            th = xs[nb + j]
+            for i in range(n):
+                if not face_cand[j, i]:
+                    g = _face_eval(q, i, j, th, prm, grad5, hess5)
+                    if g < 1e-9:
+                        g0 = _face_eval(q0, i, j, x0[nb + j], prm, grad5, hess5)
+                        if g0 > 1e-12:
+                            face_cand[j, i] = True
+                            changed = True
+            for c in range(2):
+                sc = prm[P_LMAX] if c == 0 else 0.0
+                k = _straddle_edge(q, n, j, th, sc, prm)
+                if k != corner_edge[j, c] and k >= 0:
+                    gk = _corner_eval(q, k, j, th, sc, prm, grad5, hess5)
+                    old_active = False
+                    for m in range(mcount):
+                        if kinds[m] == 1 and fj[m] == j and fsc[m] == sc and lam[m] > 0.0:
+                            old_active = True
+                    if gk < 1e-9 or old_active:
+                        g0 = _corner_eval(q0, k, j, x0[nb + j], sc, prm, grad5, hess5)
+                        if g0 > 1e-12:
+                            corner_edge[j, c] = k
+                            changed = True
+        if status == POLISH_FAIL:
+            # keep the interior-point answer; the caller reports the reason
+            break
+        if not changed and not stable and escapes < 3:
+            # converged to a saddle (e.g. a symmetric squeeze past a bifurcation): perturb
+            escapes += 1
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, escapes, gbuf):
+                for m in range(mcount):
+                    if kinds[m] == 0:
+                        lam_guess_face[fj[m], fidx[m]] = lam[m]
+                continue
+        if not changed:
+            break
+        # warm start the next round from this round's multipliers
+        for m in range(mcount):
+            if kinds[m] == 0:
+                lam_guess_face[fj[m], fidx[m]] = lam[m]
+        if rnd >= int(opts[O_MAXROUND]) + escapes - 1:
+            status = CONTACT_CYCLE
+            break
+    # outputs
+    for d in range(nb + 2):
+        x[d] = xs[d]
+    lam_face[:, :] = 0.0
+    lam_corner[:, :] = 0.0
+    lam_stop[:] = 0.0
+    mcount = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+    _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+    gmin = 1e300
+    gact = 0.0
+    for m in range(mcount):
+        gmin = min(gmin, gbuf[m])
+        if lam[m] > 0.0:
+            gact = max(gact, abs(gbuf[m]))
+        if kinds[m] == 0:
+            lam_face[fj[m], fidx[m]] = lam[m]
+        elif kinds[m] == 1:
+            lam_corner[fj[m], 0 if fsc[m] > 0.0 else 1] = lam[m]
+        else:
+            lam_stop[fj[m]] = lam[m]
+    res = np.zeros(nb + 2)
+    kkt = _stationarity(xs, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs,
+                        res)
+    info[0] = status
+    info[1] = work_it[0]
+    info[2] = rounds
+    info[3] = 1.0 if stable else 0.0
+    info[4] = kkt / fscale
+    info[5] = gact
+    info[6] = gmin
+    info[7] = 0.0
+
+
+@njit(cache=True, parallel=True)
+def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_edge, face_cand, infos):
+    """:func:`solve_one` over a batch (first axis), in parallel threads."""
+    for b in prange(prms.shape[0]):
+        solve_one(n, prms[b], opts, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
+                  corner_edge[b], face_cand[b], infos[b])

@@ -1,0 +1,363 @@
+"""Quasi-static grasp solver: ``simulate``, ``simulate_ramp`` and :class:`GraspResult`.
+
+The grasp at torque ``T_a`` is the stable equilibrium of the point-spring disk squeezed by the two
+torque-driven fingers, with frictionless unilateral contact on both gripping faces and their end
+corners. ``method="newton"`` (default) is the compiled interior-point Newton solver of
+:mod:`envs.kernels`; ``"slsqp"`` and ``"nelder-mead"`` are the baselines of
+:mod:`envs.baselines`. Every result is verified by the independent check of :mod:`envs.kkt`;
+a result that fails it is returned with ``converged=False`` and the reason in ``message``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kernels
+from .kkt import KKTReport, kkt_check
+from .psm import ScaledProblem, rest_points, scaled_problem, spring_strains
+from .scene import Scene, check_range
+
+__all__ = ["GraspResult", "simulate", "simulate_ramp", "METHODS", "result_from_scaled"]
+
+METHODS = ("newton", "slsqp", "nelder-mead")
+WARM_OPENING_RAD = 1e-3
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    """Equilibrium grasp of the point-spring disk at one actuation torque.
+
+    Attributes
+    ----------
+    converged : bool
+        True when the solver converged *and* the independent KKT check passed.
+    message : str
+        ``"converged"`` or the reason for failure.
+    jaw_angles_rad : tuple[float, float]
+        Right and left finger angles from the +y axis [rad].
+    points_m : numpy.ndarray
+        Deformed contour points [m], shape (N, 2), counter-clockwise from the top.
+    contact_mask : numpy.ndarray
+        Whether each point touches each finger (gap ~ 0 and positive force), shape (2, N).
+    contact_forces_n : numpy.ndarray
+        Normal force of each finger on each point [N], shape (2, N) (thickness included).
+    peak_strain : float
+        Largest ``|L - L0| / L0`` over all springs [-].
+    iterations : int
+        Newton iterations (all rounds and the polish) or baseline iterations.
+    solve_time_s : float
+        Wall time of the solve [s].
+    torque_nm, n_triangles, method, stiffness_rule
+        The problem solved.
+    corner_forces_n : numpy.ndarray
+        Force of the (tip, root) corner of each finger on the contour edge it faces [N], (2, 2).
+    corner_edges : numpy.ndarray
+        Edge ``k`` (from point k to k+1) faced by each corner, -1 for none, (2, 2).
+    stop_torques_nm : numpy.ndarray
+        Reaction torque of the closed-jaw stop of each finger [N·m] (non-zero: jaws closed).
+    energy_j : float
+        Total potential energy (springs, actuation, torsion springs) [J].
+    max_displacement_ratio : float
+        Largest contour-point displacement divided by the radius [-].
+    stable : bool
+        The Newton matrix of the contact-constrained problem was positive definite (a strict
+        local minimum, not a saddle).
+    kkt : KKTReport
+        The independent equilibrium check.
+    rounds : int
+        Outer rounds updating the contact candidate set.
+    """
+
+    converged: bool
+    message: str
+    jaw_angles_rad: tuple[float, float]
+    points_m: np.ndarray
+    contact_mask: np.ndarray
+    contact_forces_n: np.ndarray
+    peak_strain: float
+    iterations: int
+    solve_time_s: float
+    torque_nm: float = 0.0
+    n_triangles: int = 0
+    method: str = "newton"
+    stiffness_rule: str = "van_gelder"
+    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
+    corner_edges: np.ndarray = field(default_factory=lambda: -np.ones((2, 2), dtype=int))
+    stop_torques_nm: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    energy_j: float = math.nan
+    max_displacement_ratio: float = math.nan
+    stable: bool = True
+    kkt: KKTReport | None = None
+    rounds: int = 1
+
+    @property
+    def n_contacts(self) -> tuple[int, int]:
+        """Number of contour points touching the right and left finger faces."""
+        return int(self.contact_mask[0].sum()), int(self.contact_mask[1].sum())
+
+    @property
+    def contact_fraction(self) -> float:
+        """Fraction of contour points touching a finger [-]."""
+        return float(self.contact_mask.any(axis=0).mean())
+
+    @property
+    def total_force_n(self) -> tuple[float, float]:
+        """Total normal force of each finger on the disk (faces and corners) [N]."""
+        tot = self.contact_forces_n.sum(axis=1) + self.corner_forces_n.sum(axis=1)
+        return float(tot[0]), float(tot[1])
+
+    @property
+    def asymmetry_rad(self) -> float:
+        """Difference between the right and left jaw angles [rad] (0 for a symmetric grasp)."""
+        return float(self.jaw_angles_rad[0] - self.jaw_angles_rad[1])
+
+    @property
+    def jaw_gap_angle_rad(self) -> float:
+        """Angle between the two fingers [rad] (the paper's Fig. 4 quantity)."""
+        return float(self.jaw_angles_rad[0] + self.jaw_angles_rad[1])
+
+    def to_dict(self) -> dict:
+        """JSON-friendly summary."""
+        return {
+            "converged": self.converged,
+            "message": self.message,
+            "method": self.method,
+            "torque_nm": self.torque_nm,
+            "n_triangles": self.n_triangles,
+            "jaw_angles_rad": list(self.jaw_angles_rad),
+            "peak_strain": self.peak_strain,
+            "max_displacement_ratio": self.max_displacement_ratio,
+            "n_contacts": list(self.n_contacts),
+            "total_force_n": list(self.total_force_n),
+            "corner_forces_n": self.corner_forces_n.tolist(),
+            "stop_torques_nm": self.stop_torques_nm.tolist(),
+            "energy_j": self.energy_j,
+            "stable": self.stable,
+            "iterations": self.iterations,
+            "rounds": self.rounds,
+            "solve_time_s": self.solve_time_s,
+            "kkt": self.kkt._asdict() if self.kkt is not None else None,
+            "points_m": self.points_m.tolist(),
+        }
+
+
+def _check_method(method: str) -> str:
+    if method not in METHODS:
+        raise ValueError(f"method {method!r} is unknown; allowed: {METHODS}")
+    return method
+
+
+def rest_state(prob: ScaledProblem) -> np.ndarray:
+    """Scaled start vector: undeformed contour and fingers at their rest angle."""
+    x = np.empty(2 * prob.n + 2)
+    x[: 2 * prob.n] = rest_points(prob.n, prob.params[kernels.P_PHASE]).ravel()
+    x[2 * prob.n :] = prob.params[kernels.P_TH0]
+    return x
+
+
+def result_from_scaled(
+    scene: Scene,
+    prob: ScaledProblem,
+    torque_nm: float,
+    x: np.ndarray,
+    lam_face: np.ndarray,
+    lam_corner: np.ndarray,
+    corner_edges: np.ndarray,
+    lam_stop: np.ndarray,
+    solver_ok: bool,
+    message: str,
+    iterations: int,
+    solve_time_s: float,
+    method: str,
+    stiffness_rule: str,
+    stable: bool = True,
+    rounds: int = 1,
+) -> GraspResult:
+    """Convert a scaled solution to a :class:`GraspResult` and run the independent check."""
+    from .psm import energy_scaled
+
+    n, r = prob.n, prob.length_m
+    q = x[: 2 * n].reshape(n, 2)
+    points = scene.disk.center_m + r * q
+    angles = (float(x[2 * n]), float(x[2 * n + 1]))
+    face = np.asarray(lam_face, dtype=float) * prob.force_n
+    corner = np.asarray(lam_corner, dtype=float) * prob.force_n
+    stop = np.asarray(lam_stop, dtype=float) * prob.torque_nm
+    report = kkt_check(
+        scene, torque_nm, n, stiffness_rule, points, angles, face, corner, corner_edges, stop
+    )
+    radial, contour = spring_strains(q, prob.rest_contour)
+    peak = float(max(np.max(np.abs(radial)), np.max(np.abs(contour))))
+    rest = rest_points(n, prob.params[kernels.P_PHASE])
+    disp = float(np.max(np.linalg.norm(q - rest, axis=1)))
+    mask = face > 0.0
+    converged = bool(solver_ok and report.passed)
+    if solver_ok and not report.passed:
+        message = f"independent KKT check failed: {report.reason}"
+    return GraspResult(
+        converged=converged,
+        message=message,
+        jaw_angles_rad=angles,
+        points_m=points,
+        contact_mask=mask,
+        contact_forces_n=face,
+        peak_strain=peak,
+        iterations=int(iterations),
+        solve_time_s=float(solve_time_s),
+        torque_nm=float(torque_nm),
+        n_triangles=n,
+        method=method,
+        stiffness_rule=stiffness_rule,
+        corner_forces_n=corner,
+        corner_edges=np.asarray(corner_edges, dtype=int).copy(),
+        stop_torques_nm=stop,
+        energy_j=energy_scaled(x, prob) * prob.torque_nm,
+        max_displacement_ratio=disp,
+        stable=bool(stable),
+        kkt=report,
+        rounds=int(rounds),
+    )
+
+
+def _newton(
+    scene: Scene,
+    prob: ScaledProblem,
+    torque_nm: float,
+    stiffness_rule: str,
+    x0: np.ndarray,
+    lam0: np.ndarray | None,
+    options: np.ndarray,
+) -> GraspResult:
+    n = prob.n
+    x = x0.copy()
+    lam_face = np.zeros((2, n)) if lam0 is None else lam0.copy()
+    lam_corner = np.zeros((2, 2))
+    lam_stop = np.zeros(2)
+    edges = -np.ones((2, 2), dtype=np.int64)
+    cand = np.zeros((2, n), dtype=np.bool_)
+    info = np.zeros(8)
+    t0 = time.perf_counter()
+    kernels.solve_one(n, prob.params, options, x, lam_face, lam_corner, lam_stop, edges, cand,
+                      info)
+    elapsed = time.perf_counter() - t0
+    status = int(info[0])
+    return result_from_scaled(
+        scene, prob, torque_nm, x, lam_face, lam_corner, edges, lam_stop, status == kernels.OK,
+        kernels.STATUS_MESSAGES[status], int(info[1]), elapsed, "newton", stiffness_rule,
+        stable=bool(info[3]), rounds=int(info[2]),
+    )
+
+
+def simulate(
+    scene: Scene,
+    torque_nm: float,
+    n_triangles: int = 20,
+    method: str = "newton",
+    *,
+    stiffness_rule: str = "van_gelder",
+    phase_rad: float = math.pi / 2,
+    time_limit_s: float = 30.0,
+) -> GraspResult:
+    """Solve the grasp at one actuation torque, starting from the rest configuration.
+
+    Parameters
+    ----------
+    scene
+        Gripper and disk.
+    torque_nm
+        Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
+    n_triangles
+        Number of fan triangles ``N`` (4 to 20000).
+    method
+        ``"newton"`` (default), ``"slsqp"`` or ``"nelder-mead"``.
+    stiffness_rule
+        ``"van_gelder"`` (default) or ``"cst_fit"``.
+    phase_rad
+        Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
+    time_limit_s
+        Wall-time budget for the baselines [s] (the Newton solver needs none).
+
+    Returns
+    -------
+    GraspResult
+        ``converged`` is False, with the reason in ``message``, when the solver failed or the
+        independent KKT check rejected its answer.
+    """
+    _check_method(method)
+    check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
+    prob = scaled_problem(scene, torque_nm, n_triangles, stiffness_rule, phase_rad)
+    x0 = rest_state(prob)
+    if method == "newton":
+        return _newton(scene, prob, torque_nm, stiffness_rule, x0, None,
+                       kernels.default_options())
+    from . import baselines
+
+    return baselines.solve(scene, prob, torque_nm, stiffness_rule, method, time_limit_s)
+
+
+def simulate_ramp(
+    scene: Scene,
+    torques_nm,
+    n_triangles: int = 20,
+    method: str = "newton",
+    *,
+    stiffness_rule: str = "van_gelder",
+    phase_rad: float = math.pi / 2,
+    time_limit_s: float = 30.0,
+) -> list[GraspResult]:
+    """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
+
+    Each step starts from the previous equilibrium with the fingers opened by a small angle
+    (so that the start is strictly inside the contact constraints), which follows the branch of
+    equilibria the ramp reaches. A step whose warm start fails is retried from rest.
+
+    Parameters
+    ----------
+    torques_nm
+        Non-decreasing actuation torques [N·m].
+    Other parameters
+        As in :func:`simulate`.
+    """
+    _check_method(method)
+    torques = np.asarray(torques_nm, dtype=float).ravel()
+    if torques.size == 0:
+        raise ValueError("torques_nm must contain at least one torque")
+    for t in torques:
+        check_range("torques_nm[i]", t, 0.0, math.inf)
+    if np.any(np.diff(torques) < 0):
+        raise ValueError("torques_nm must be non-decreasing (a loading ramp)")
+    if method != "newton":
+        return [
+            simulate(scene, t, n_triangles, method, stiffness_rule=stiffness_rule,
+                     phase_rad=phase_rad, time_limit_s=time_limit_s)
+            for t in torques
+        ]
+    options = kernels.default_options()
+    out: list[GraspResult] = []
+    prev: GraspResult | None = None
+    for t in torques:
+        prob = scaled_problem(scene, t, n_triangles, stiffness_rule, phase_rad)
+        res = None
+        if prev is not None and prev.converged:
+            x0, lam0 = _warm_start(scene, prob, prev)
+            res = _newton(scene, prob, t, stiffness_rule, x0, lam0, options)
+        if res is None or not res.converged:
+            res = _newton(scene, prob, t, stiffness_rule, rest_state(prob), None, options)
+        out.append(res)
+        prev = res
+    return out
+
+
+def _warm_start(
+    scene: Scene, prob: ScaledProblem, prev: GraspResult
+) -> tuple[np.ndarray, np.ndarray]:
+    n, r = prob.n, prob.length_m
+    x = np.empty(2 * n + 2)
+    x[: 2 * n] = ((prev.points_m - scene.disk.center_m) / r).ravel()
+    # open the fingers slightly so that every contact gap is strictly positive
+    x[2 * n :] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
+    return x, prev.contact_forces_n / prob.force_n
