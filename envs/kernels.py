@@ -47,6 +47,7 @@ from .psm import (
 )
 
 BW = 5  # half bandwidth of the interleaved point ordering
+P_GAUGE = 14  # extra slot of the kernel's parameter copy: gauge spring stiffness
 
 # status codes
 OK = 0
@@ -69,13 +70,13 @@ STATUS_MESSAGES = {
 }
 
 # option vector layout
-O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH = range(5)
-N_OPTIONS = 5
+O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)
+N_OPTIONS = 6
 
 
 def default_options() -> np.ndarray:
-    """Solver options: [stationarity tol, max iterations, max rounds, mu0 factor, polish]."""
-    return np.array([1e-11, 300.0, 12.0, 1e-2, 1.0])
+    """Solver options: [stationarity tol, max iterations, max rounds, mu0 factor, polish, gauge]."""
+    return np.array([1e-11, 300.0, 12.0, 1e-2, 1.0, 1.0])
 
 
 @njit(cache=True, inline="always")
@@ -197,46 +198,49 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
     gdx = -jux / L - cr * dx / L3
     gdy = -juy / L - cr * dy / L3
     # M_ud[a, b] = J[a, b]/L - (Jd)_a d_b / L^3 ; J = [[0, 1], [-1, 0]]
-    mud = np.empty((2, 2))
-    mud[0, 0] = -jdx * dx / L3
-    mud[0, 1] = 1.0 / L - jdx * dy / L3
-    mud[1, 0] = -1.0 / L - jdy * dx / L3
-    mud[1, 1] = -jdy * dy / L3
+    m00 = -jdx * dx / L3
+    m01 = 1.0 / L - jdx * dy / L3
+    m10 = -1.0 / L - jdy * dx / L3
+    m11 = -jdy * dy / L3
     L5 = L3 * L * L
-    mdd = np.empty((2, 2))
-    mdd[0, 0] = 2.0 * jux * dx / L3 - cr / L3 + 3.0 * cr * dx * dx / L5
-    mdd[1, 1] = 2.0 * juy * dy / L3 - cr / L3 + 3.0 * cr * dy * dy / L5
-    mdd[0, 1] = (jux * dy + dx * juy) / L3 + 3.0 * cr * dx * dy / L5
-    mdd[1, 0] = mdd[0, 1]
-    # T maps z=(ax, ay, bx, by, th) to (ux, uy, dx, dy)
-    t = np.zeros((4, 5))
-    t[0, 0] = -1.0
-    t[1, 1] = -1.0
-    t[0, 4] = k1x
-    t[1, 4] = k1y
-    t[2, 0] = -1.0
-    t[3, 1] = -1.0
-    t[2, 2] = 1.0
-    t[3, 3] = 1.0
-    gv = np.array([gux, guy, gdx, gdy])
-    mm = np.zeros((4, 4))
-    for a in range(2):
-        for b in range(2):
-            mm[a, 2 + b] = mud[a, b]
-            mm[2 + b, a] = mud[a, b]
-            mm[2 + a, 2 + b] = mdd[a, b]
+    d00 = 2.0 * jux * dx / L3 - cr / L3 + 3.0 * cr * dx * dx / L5
+    d11 = 2.0 * juy * dy / L3 - cr / L3 + 3.0 * cr * dy * dy / L5
+    d01 = (jux * dy + dx * juy) / L3 + 3.0 * cr * dx * dy / L5
+    # chain rule to z = (ax, ay, bx, by, theta): u = K(theta) - a, d = b - a
+    grad[0] = -gux - gdx
+    grad[1] = -guy - gdy
+    grad[2] = gdx
+    grad[3] = gdy
+    grad[4] = gux * k1x + guy * k1y
+    # per-z columns of du and dd (du for z = bx, by is zero; dd for theta is zero)
     for a in range(5):
-        acc = 0.0
-        for r in range(4):
-            acc += t[r, a] * gv[r]
-        grad[a] = acc
-    mt = mm @ t
-    for a in range(5):
+        if a == 0:
+            ua0, ua1, da0, da1 = -1.0, 0.0, -1.0, 0.0
+        elif a == 1:
+            ua0, ua1, da0, da1 = 0.0, -1.0, 0.0, -1.0
+        elif a == 2:
+            ua0, ua1, da0, da1 = 0.0, 0.0, 1.0, 0.0
+        elif a == 3:
+            ua0, ua1, da0, da1 = 0.0, 0.0, 0.0, 1.0
+        else:
+            ua0, ua1, da0, da1 = k1x, k1y, 0.0, 0.0
+        # (M t_a) components: Mu = M_ud d, Md = M_du u + M_dd d
+        mu0 = m00 * da0 + m01 * da1
+        mu1 = m10 * da0 + m11 * da1
+        md0 = m00 * ua0 + m10 * ua1 + d00 * da0 + d01 * da1
+        md1 = m01 * ua0 + m11 * ua1 + d01 * da0 + d11 * da1
         for b in range(5):
-            acc = 0.0
-            for r in range(4):
-                acc += t[r, a] * mt[r, b]
-            hess[a, b] = acc
+            if b == 0:
+                ub0, ub1, db0, db1 = -1.0, 0.0, -1.0, 0.0
+            elif b == 1:
+                ub0, ub1, db0, db1 = 0.0, -1.0, 0.0, -1.0
+            elif b == 2:
+                ub0, ub1, db0, db1 = 0.0, 0.0, 1.0, 0.0
+            elif b == 3:
+                ub0, ub1, db0, db1 = 0.0, 0.0, 0.0, 1.0
+            else:
+                ub0, ub1, db0, db1 = k1x, k1y, 0.0, 0.0
+            hess[a, b] = ub0 * mu0 + ub1 * mu1 + db0 * md0 + db1 * md1
     hess[4, 4] += gux * k2x + guy * k2y
     return g
 
@@ -260,6 +264,11 @@ def _energy(x, n, prm):
     for j in range(2):
         th = x[2 * n + j]
         e += prm[P_TAU] * th + 0.5 * prm[P_KAPPA] * (th - prm[P_TH0]) ** 2
+    kg = prm[P_GAUGE]
+    if kg > 0.0:
+        tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
+        ut = (x[0] - ty) * tx + (x[1] + tx) * ty
+        e += 0.5 * kg * ut * ut
     return e
 
 
@@ -282,7 +291,7 @@ def _add(ab, bb, dd, nb, p, r, v):
 
 
 @njit(cache=True)
-def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess):
+def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Spring and finger energy gradient (natural order) and Hessian (band order)."""
     kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
     nb = 2 * n
@@ -295,6 +304,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess):
         if want_hess:
             ux, uy = qx / lr, qy / lr
             tt = kr * (1.0 - 1.0 / lr)
+            if psd and tt < 0.0:
+                tt = 0.0
             p = bidx[i]
             ab[p, 0] += kr * ux * ux + tt * (1.0 - ux * ux)
             ab[p + 1, 0] += kr * uy * uy + tt * (1.0 - uy * uy)
@@ -311,6 +322,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess):
         if want_hess:
             ux, uy = dx / lc, dy / lc
             tt = kc * (1.0 - h / lc)
+            if psd and tt < 0.0:
+                tt = 0.0
             kxx = kc * ux * ux + tt * (1.0 - ux * ux)
             kyy = kc * uy * uy + tt * (1.0 - uy * uy)
             kxy = kc * ux * uy - tt * ux * uy
@@ -330,6 +343,19 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess):
         grad[nb + j] += prm[P_TAU] + prm[P_KAPPA] * (th - prm[P_TH0])
         if want_hess:
             dd[j, j] += prm[P_KAPPA]
+    kg = prm[P_GAUGE]
+    if kg > 0.0:
+        # gauge: a stiff tangential spring on point 0 removes the free rotation of the contour
+        # about the pin; its reaction must vanish at the answer (checked by the caller)
+        tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
+        ut = (x[0] - ty) * tx + (x[1] + tx) * ty
+        grad[0] += kg * ut * tx
+        grad[1] += kg * ut * ty
+        if want_hess:
+            p = bidx[0]
+            ab[p, 0] += kg * tx * tx
+            ab[p + 1, 0] += kg * ty * ty
+            ab[p + 1, 1] += kg * tx * ty
 
 
 # --------------------------------------------------------------------------------------------
@@ -527,7 +553,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
 
 @njit(cache=True)
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
-                   g_out, grad5, hess5, dofs, barrier_mu):
+                   g_out, grad5, hess5, dofs, barrier_mu, psd):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
 
     With barrier_mu > 0 the returned gradient is that of Pi - mu sum log g; with barrier_mu = 0
@@ -539,7 +565,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
     ab[:, :] = 0.0
     bb[:, :] = 0.0
     dd[:, :] = 0.0
-    _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True)
+    _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
@@ -609,6 +635,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     g = np.zeros(mcount)
     gt = np.zeros(mcount)
     sig = np.zeros(mcount)
+    dlam = np.zeros(mcount)
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
@@ -634,8 +661,10 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         it += 1
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
+        # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
+        # springs' negative geometric stiffness removed; a diagonal shift only as a last resort
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
-                       g, grad5, hess5, dofs, mu)
+                       g, grad5, hess5, dofs, mu, False)
         for d in range(nb):
             i = d // 2
             rb[bidx[i] + (d - 2 * i)] = -grad[d]
@@ -643,6 +672,20 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         rt[1] = -grad[nb + 1]
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        exact_ok = ok
+        if ok:
+            n_neg = 0
+        else:
+            if mu < 1e-7 * fscale:
+                n_neg += 1
+                if n_neg >= 6:
+                    # negative curvature at a nearly converged barrier problem: a saddle that
+                    # descent from a symmetric start cannot leave; the caller perturbs and retries
+                    work_it[0] += it
+                    return SADDLE, it
+            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb,
+                           dd, g, grad5, hess5, dofs, mu, True)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
             while not ok:
@@ -654,15 +697,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     work_it[0] += it
                     return LINALG_FAIL, it
             shift_last = shift
-            if mu < 1e-7 * fscale:
-                n_neg += 1
-                if n_neg >= 4:
-                    # negative curvature at a nearly converged barrier problem: a saddle that
-                    # descent from a symmetric start cannot leave; the caller perturbs and retries
-                    work_it[0] += it
-                    return SADDLE, it
-        else:
-            n_neg = 0
         for d in range(nb):
             i = d // 2
             step[d] = ob[bidx[i] + (d - 2 * i)]
@@ -695,6 +729,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     accepted = True
                     break
             alpha *= 0.5
+        ratio = (phi0 - phi) / max(-alpha * slope * (1.0 - 0.5 * alpha), 1e-300)
         if not accepted:
             # tiny progress is impossible at this mu: accept if already stationary to round-off
             if kkt <= 1e3 * tol:
@@ -705,21 +740,31 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                 continue
             work_it[0] += it
             return LINESEARCH_FAIL, it
-        # multiplier step: Newton direction at the old point, same step length, kept positive
+        # multiplier step: Newton direction at the old point, its own fraction-to-boundary step
         q = x[:nb].reshape(n, 2)
+        alpha_d = 1.0
         for m in range(mcount):
             _, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
             dl = 0.0
             for a in range(nd):
                 dl += grad5[a] * step[dofs[a]]
-            dlam = mu / g[m] - lam[m] - sig[m] * dl
-            lam_new = lam[m] + alpha * dlam
-            if lam_new < 0.01 * lam[m]:
-                lam_new = 0.01 * lam[m]
+            dlam[m] = mu / g[m] - lam[m] - sig[m] * dl
+            if dlam[m] < 0.0:
+                alpha_d = min(alpha_d, -0.99 * lam[m] / dlam[m])
+        for m in range(mcount):
+            lam_new = lam[m] + alpha_d * dlam[m]
             gm = gt[m]
             lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
-        if opts.shape[0] > 5 and opts[5] > 0:
-            print("ipm", it, mu / fscale, kkt / fscale, comp / fscale, alpha, shift)
+        if opts.shape[0] > N_OPTIONS and opts[N_OPTIONS] > 0:
+            imax = 0
+            for d in range(nx):
+                if abs(res[d]) > abs(res[imax]):
+                    imax = d
+            gmaxv = 0.0
+            for d in range(nx):
+                gmaxv = max(gmaxv, abs(grad[d]))
+            print("ipm", it, mu / fscale, kkt / fscale, alpha, imax, gmaxv / fscale,
+                  ratio, exact_ok, shift)
         for d in range(nx):
             x[d] = xt[d]
     work_it[0] += it
@@ -773,7 +818,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0)
+                       dd, g, grad5, hess5, dofs, 0.0, False)
         for d in range(nb):
             i = d // 2
             rb[bidx[i] + (d - 2 * i)] = -grad[d]
@@ -804,7 +849,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
         for m in range(mcount):
             if active[m]:
                 viol = max(viol, abs(g[m]))
-        if opts.shape[0] > 5 and opts[5] > 0:
+        if opts.shape[0] > N_OPTIONS and opts[N_OPTIONS] > 0:
             print("polish", _outer, kkt / fscale, viol, shift)
         if kkt <= 10.0 * tol and viol <= 1e-13:
             return True, stable
@@ -841,7 +886,7 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf):
 
 
 @njit(cache=True)
-def solve_one(n, prm, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face_cand, info):
+def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face_cand, info):
     """Solve one grasp in place.
 
     Parameters
@@ -871,6 +916,9 @@ def solve_one(n, prm, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face
         min gap, final mu.
     """
     nb = 2 * n
+    prm = np.empty(P_GAUGE + 1)
+    prm[:P_GAUGE] = prm_in[:P_GAUGE]
+    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
     bidx = _band_index(n)
     x0 = x.copy()
     q0 = x0[:nb].reshape(n, 2)
@@ -1006,6 +1054,34 @@ def solve_one(n, prm, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face
         if status == POLISH_FAIL:
             # keep the interior-point answer; the caller reports the reason
             break
+        if not changed and prm[P_GAUGE] > 0.0:
+            # release the rotation gauge: Newton on the contact set without it (its reaction is
+            # zero for a mirror-symmetric answer, small otherwise)
+            prm[P_GAUGE] = 0.0
+            for m in range(mcount):
+                active[m] = lam[m] > 0.0
+            xp = xs.copy()
+            lp = lam[:mcount].copy()
+            okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+                                  fscale, active, work_it)
+            good = okp
+            if okp:
+                _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+                for m in range(mcount):
+                    if active[m] and lp[m] < -1e-12 * fscale:
+                        good = False
+                    if (not active[m]) and gbuf[m] < -1e-10:
+                        good = False
+            if good:
+                for d in range(nb + 2):
+                    xs[d] = xp[d]
+                for m in range(mcount):
+                    lam[m] = max(lp[m], 0.0) if active[m] else 0.0
+            else:
+                changed = True
+                if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, 0, gbuf):
+                    status = POLISH_FAIL
+                    break
         if not changed and not stable and escapes < 3:
             # converged to a saddle (e.g. a symmetric squeeze past a bifurcation): perturb
             escapes += 1

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -25,6 +25,8 @@ __all__ = ["GraspResult", "simulate", "simulate_ramp", "METHODS", "result_from_s
 
 METHODS = ("newton", "slsqp", "nelder-mead")
 WARM_OPENING_RAD = 1e-3
+NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
+NESTED_FACTOR = 4
 
 
 @dataclass(frozen=True)
@@ -252,6 +254,45 @@ def _newton(
     )
 
 
+def _prolong(
+    scene: Scene, coarse: GraspResult, prob: ScaledProblem
+) -> tuple[np.ndarray, np.ndarray]:
+    """Fine-mesh start from a coarse solution: points on the coarse chords, forces spread."""
+    n, nc, r = prob.n, coarse.n_triangles, prob.length_m
+    qc = (coarse.points_m - scene.disk.center_m) / r
+    u = np.arange(n) * nc / n
+    k = np.floor(u).astype(int) % nc
+    k1 = (k + 1) % nc
+    t = (u - np.floor(u))[:, None]
+    x = np.empty(2 * n + 2)
+    x[: 2 * n] = ((1 - t) * qc[k] + t * qc[k1]).ravel()
+    x[2 * n :] = np.asarray(coarse.jaw_angles_rad) + WARM_OPENING_RAD
+    lam_c = coarse.contact_forces_n / prob.force_n
+    lam = ((1 - t.T) * lam_c[:, k] + t.T * lam_c[:, k1]) * nc / n
+    return x, lam
+
+
+def _solve_newton(
+    scene: Scene, prob: ScaledProblem, torque_nm: float, stiffness_rule: str, phase_rad: float
+) -> GraspResult:
+    """Newton solve from rest; fine meshes start from a coarser solution (nested iteration)."""
+    options = kernels.default_options()
+    if prob.n <= NESTED_ABOVE:
+        return _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
+    t0 = time.perf_counter()
+    nc = max(NESTED_ABOVE // 2, prob.n // NESTED_FACTOR)
+    coarse_prob = scaled_problem(scene, torque_nm, nc, stiffness_rule, phase_rad)
+    coarse = _solve_newton(scene, coarse_prob, torque_nm, stiffness_rule, phase_rad)
+    res = None
+    if coarse.converged:
+        x0, lam0 = _prolong(scene, coarse, prob)
+        res = _newton(scene, prob, torque_nm, stiffness_rule, x0, lam0, options)
+    if res is None or not res.converged:
+        res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
+    return replace(res, solve_time_s=time.perf_counter() - t0,
+                   iterations=res.iterations + coarse.iterations)
+
+
 def simulate(
     scene: Scene,
     torque_nm: float,
@@ -290,10 +331,8 @@ def simulate(
     _check_method(method)
     check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
     prob = scaled_problem(scene, torque_nm, n_triangles, stiffness_rule, phase_rad)
-    x0 = rest_state(prob)
     if method == "newton":
-        return _newton(scene, prob, torque_nm, stiffness_rule, x0, None,
-                       kernels.default_options())
+        return _solve_newton(scene, prob, torque_nm, stiffness_rule, phase_rad)
     from . import baselines
 
     return baselines.solve(scene, prob, torque_nm, stiffness_rule, method, time_limit_s)
@@ -346,7 +385,7 @@ def simulate_ramp(
             x0, lam0 = _warm_start(scene, prob, prev)
             res = _newton(scene, prob, t, stiffness_rule, x0, lam0, options)
         if res is None or not res.converged:
-            res = _newton(scene, prob, t, stiffness_rule, rest_state(prob), None, options)
+            res = _solve_newton(scene, prob, t, stiffness_rule, phase_rad)
         out.append(res)
         prev = res
     return out

@@ -1,0 +1,236 @@
+"""Baseline solvers on the same point-spring model, for honest comparisons.
+
+* ``"slsqp"``: SciPy's SLSQP minimising the potential energy subject to the contact gaps (face
+  constraints of every contour point on each finger, finger stops), with analytic gradients.
+  It does not model the corner-against-edge contact (the KKT check flags a penetrating corner).
+  Contact forces are recovered afterwards by non-negative least squares on the active gaps.
+* ``"nelder-mead"``: the paper's approach, a Nelder-Mead simplex minimising the squared residual
+  of the equilibrium equations, contact represented by a stiff penalty on penetration.
+
+Both return a :class:`envs.solver.GraspResult` checked by the same independent KKT check as the
+Newton solver, so a baseline that stops short is reported as not converged.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.optimize import minimize, nnls
+
+from .psm import (
+    P_C0X,
+    P_HW,
+    P_KC,
+    P_KR,
+    P_LMAX,
+    P_TAU,
+    P_THMIN,
+    ScaledProblem,
+    energy_scaled,
+    gradient_scaled,
+    rest_points,
+)
+from .scene import Scene
+
+__all__ = ["solve", "face_gaps", "face_gap_jacobian"]
+
+
+class _Timeout(Exception):
+    pass
+
+
+def _frames(theta: np.ndarray):
+    s, c = np.sin(theta), np.cos(theta)
+    e = np.array([[s[0], c[0]], [-s[1], c[1]]])
+    nrm = np.array([[-c[0], s[0]], [c[1], s[1]]])
+    return e, nrm
+
+
+def face_gaps(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np.ndarray:
+    """Scaled distance of points ``idx[j]`` to the gripping-face segment of finger ``j``.
+
+    Returns the concatenation over the two fingers (right first).
+    """
+    p, n = prob.params, prob.n
+    q = x[: 2 * n].reshape(n, 2)
+    e, nrm = _frames(x[2 * n : 2 * n + 2])
+    out = []
+    for j in range(2):
+        v = q[idx[j]] + p[P_C0X + 2 * j : P_C0X + 2 * j + 2]
+        s = v @ e[j]
+        m = v @ nrm[j] - p[P_HW]
+        sc = np.clip(s, 0.0, p[P_LMAX])
+        out.append(np.where(s == sc, m, np.hypot(s - sc, m)))
+    return np.concatenate(out)
+
+
+def face_gap_jacobian(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np.ndarray:
+    """Jacobian of :func:`face_gaps` with respect to ``x``."""
+    p, n = prob.params, prob.n
+    q = x[: 2 * n].reshape(n, 2)
+    e, nrm = _frames(x[2 * n : 2 * n + 2])
+    rows = []
+    for j in range(2):
+        ii = idx[j]
+        jac = np.zeros((len(ii), 2 * n + 2))
+        v = q[ii] + p[P_C0X + 2 * j : P_C0X + 2 * j + 2]
+        s = v @ e[j]
+        m = v @ nrm[j] - p[P_HW]
+        sc = np.clip(s, 0.0, p[P_LMAX])
+        inside = s == sc
+        dist = np.hypot(s - sc, m)
+        dist = np.where(dist > 0, dist, 1.0)
+        # gradient in world coordinates: n on the face, unit vector from the corner beyond it
+        gx = np.where(inside, nrm[j, 0], ((s - sc) * e[j, 0] + m * nrm[j, 0]) / dist)
+        gy = np.where(inside, nrm[j, 1], ((s - sc) * e[j, 1] + m * nrm[j, 1]) / dist)
+        # d/dtheta: face -> s; beyond -> u . (sc n - hw e)
+        dth_face = s
+        dwx = sc * nrm[j, 0] - p[P_HW] * e[j, 0]
+        dwy = sc * nrm[j, 1] - p[P_HW] * e[j, 1]
+        dth_end = gx * dwx + gy * dwy
+        jac[np.arange(len(ii)), 2 * ii] = gx
+        jac[np.arange(len(ii)), 2 * ii + 1] = gy
+        jac[:, 2 * n + j] = np.where(inside, dth_face, dth_end)
+        rows.append(jac)
+    return np.vstack(rows)
+
+
+def _candidates(x0: np.ndarray, prob: ScaledProblem) -> list[np.ndarray]:
+    n = prob.n
+    q = x0[: 2 * n].reshape(n, 2)
+    _, nrm = _frames(x0[2 * n :])
+    idx = []
+    for j in range(2):
+        near = q @ nrm[j] < 0.6
+        idx.append(np.flatnonzero(near))
+    gaps = face_gaps(x0, prob, idx)
+    k = 0
+    out = []
+    for j in range(2):
+        m = len(idx[j])
+        out.append(idx[j][gaps[k : k + m] > 0])
+        k += m
+    return out
+
+
+def _forces(x: np.ndarray, prob: ScaledProblem, idx: list[np.ndarray], tol: float):
+    """Contact forces by NNLS on the active constraints: grad Pi = sum lam grad g."""
+    n = prob.n
+    g = face_gaps(x, prob, idx)
+    jac = face_gap_jacobian(x, prob, idx)
+    stop_g = x[2 * n :] - prob.params[P_THMIN]
+    active = np.flatnonzero(g < tol)
+    stop_active = np.flatnonzero(stop_g < tol)
+    cols = [jac[active].T]
+    for j in stop_active:
+        col = np.zeros(2 * n + 2)
+        col[2 * n + j] = 1.0
+        cols.append(col[:, None])
+    a = np.hstack(cols) if cols else np.zeros((2 * n + 2, 0))
+    lam_face = np.zeros((2, n))
+    lam_stop = np.zeros(2)
+    if a.shape[1]:
+        sol, _ = nnls(a, gradient_scaled(x, prob))
+        split = np.concatenate([np.zeros(len(idx[0]), int), np.ones(len(idx[1]), int)])
+        pts = np.concatenate(idx)
+        for lam, m in zip(sol[: len(active)], active, strict=True):
+            lam_face[split[m], pts[m]] = lam
+        for lam, j in zip(sol[len(active) :], stop_active, strict=True):
+            lam_stop[j] = lam
+    return lam_face, lam_stop
+
+
+def _start(prob: ScaledProblem) -> np.ndarray:
+    x = np.empty(2 * prob.n + 2)
+    x[: 2 * prob.n] = rest_points(prob.n, prob.params[13]).ravel()
+    x[2 * prob.n :] = prob.params[11]
+    return x
+
+
+def _slsqp(prob: ScaledProblem, time_limit_s: float):
+    x0 = _start(prob)
+    idx = _candidates(x0, prob)
+    n = prob.n
+    t_end = time.perf_counter() + time_limit_s
+    scale = max(prob.params[P_TAU], 1e-12)
+
+    def callback(_xk):
+        if time.perf_counter() > t_end:
+            raise _Timeout
+
+    cons = [
+        {"type": "ineq", "fun": lambda x: face_gaps(x, prob, idx),
+         "jac": lambda x: face_gap_jacobian(x, prob, idx)},
+        {"type": "ineq", "fun": lambda x: x[2 * n :] - prob.params[P_THMIN],
+         "jac": lambda x: np.hstack([np.zeros((2, 2 * n)), np.eye(2)])},
+    ]
+    try:
+        res = minimize(
+            lambda x: energy_scaled(x, prob) / scale, x0,
+            jac=lambda x: gradient_scaled(x, prob) / scale, method="SLSQP",
+            constraints=cons, callback=callback, options={"maxiter": 2000, "ftol": 1e-14},
+        )
+        x, ok, msg, nit = res.x, bool(res.success), f"slsqp: {res.message}", int(res.nit)
+    except _Timeout:
+        return x0, idx, False, f"slsqp: time limit {time_limit_s:g} s reached", -1
+    return x, idx, ok, msg, nit
+
+
+def _nelder_mead(prob: ScaledProblem, time_limit_s: float):
+    x0 = _start(prob)
+    idx = _candidates(x0, prob)
+    k_pen = 1e4 * max(prob.params[P_KC], prob.params[P_KR])
+    scale = max(prob.params[P_TAU], 1e-12)
+    t_end = time.perf_counter() + time_limit_s
+    count = [0]
+
+    def residual_sq(x):
+        count[0] += 1
+        g = face_gaps(x, prob, idx)
+        pen = np.minimum(g, 0.0)
+        r = gradient_scaled(x, prob) + face_gap_jacobian(x, prob, idx).T @ (k_pen * pen)
+        return float(r @ r) / scale**2
+
+    def callback(_xk):
+        if time.perf_counter() > t_end:
+            raise _Timeout
+
+    try:
+        res = minimize(
+            residual_sq, x0, method="Nelder-Mead", callback=callback,
+            options={"maxfev": 10**9, "maxiter": 10**9, "xatol": 1e-13, "fatol": 1e-22,
+                     "adaptive": True},
+        )
+        x, ok, msg = res.x, bool(res.success), f"nelder-mead: {res.message}"
+    except _Timeout:
+        return x0, idx, False, f"nelder-mead: time limit {time_limit_s:g} s reached", count[0]
+    return x, idx, ok, msg, count[0]
+
+
+def solve(
+    scene: Scene,
+    prob: ScaledProblem,
+    torque_nm: float,
+    stiffness_rule: str,
+    method: str,
+    time_limit_s: float,
+):
+    """Run a baseline and wrap its answer in a checked :class:`envs.solver.GraspResult`."""
+    from .solver import result_from_scaled
+
+    t0 = time.perf_counter()
+    if method == "slsqp":
+        x, idx, ok, msg, nit = _slsqp(prob, time_limit_s)
+    elif method == "nelder-mead":
+        x, idx, ok, msg, nit = _nelder_mead(prob, time_limit_s)
+    else:
+        raise ValueError(f"baseline method {method!r} is unknown; allowed: slsqp, nelder-mead")
+    elapsed = time.perf_counter() - t0
+    lam_face, lam_stop = _forces(x, prob, idx, tol=1e-8)
+    if ok:
+        msg = "converged"
+    return result_from_scaled(
+        scene, prob, torque_nm, x, lam_face, np.zeros((2, 2)), -np.ones((2, 2), dtype=int),
+        lam_stop, ok, msg, nit, elapsed, method, stiffness_rule,
+    )
