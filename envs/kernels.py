@@ -33,7 +33,6 @@ from numba import njit, prange
 
 from .psm import (
     P_C0X,
-    P_C1X,
     P_H,
     P_HW,
     P_KAPPA,
@@ -646,16 +645,16 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     it = 0
     n_neg = 0
     while it < maxit:
-        # barrier-subproblem and overall convergence tests
+        # convergence test; reduce mu once the barrier subproblem is solved
         kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
                             res)
-        comp = 0.0
+        cmax = 0.0
         for m in range(mcount):
-            comp = max(comp, abs(lam[m] * g[m] - mu))
-        if kkt <= 10.0 * max(mu, tol) and comp <= 10.0 * max(mu, tol):
-            if mu <= mu_min:
-                work_it[0] += it
-                return OK, it
+            cmax = max(cmax, abs(lam[m] * g[m] - mu))
+        if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
+            work_it[0] += it
+            return OK, it
+        if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
             mu = max(mu_min, min(0.2 * mu, mu ** 1.5))
             continue
         it += 1
@@ -672,7 +671,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         rt[1] = -grad[nb + 1]
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
-        exact_ok = ok
         if ok:
             n_neg = 0
         else:
@@ -729,7 +727,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     accepted = True
                     break
             alpha *= 0.5
-        ratio = (phi0 - phi) / max(-alpha * slope * (1.0 - 0.5 * alpha), 1e-300)
         if not accepted:
             # tiny progress is impossible at this mu: accept if already stationary to round-off
             if kkt <= 1e3 * tol:
@@ -755,16 +752,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             lam_new = lam[m] + alpha_d * dlam[m]
             gm = gt[m]
             lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
-        if opts.shape[0] > N_OPTIONS and opts[N_OPTIONS] > 0:
-            imax = 0
-            for d in range(nx):
-                if abs(res[d]) > abs(res[imax]):
-                    imax = d
-            gmaxv = 0.0
-            for d in range(nx):
-                gmaxv = max(gmaxv, abs(grad[d]))
-            print("ipm", it, mu / fscale, kkt / fscale, alpha, imax, gmaxv / fscale,
-                  ratio, exact_ok, shift)
         for d in range(nx):
             x[d] = xt[d]
     work_it[0] += it
@@ -849,8 +836,6 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
         for m in range(mcount):
             if active[m]:
                 viol = max(viol, abs(g[m]))
-        if opts.shape[0] > N_OPTIONS and opts[N_OPTIONS] > 0:
-            print("polish", _outer, kkt / fscale, viol, shift)
         if kkt <= 10.0 * tol and viol <= 1e-13:
             return True, stable
     return False, stable
@@ -965,7 +950,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
             xs[d] = x0[d]
         _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
         # initial barrier parameter: from warm-start multipliers when given, else a force scale
-        mu0 = opts[O_MU0] * fscale * 0.05
+        mu0 = abs(opts[O_MU0]) * fscale * 0.05
         have_warm = False
         acc = 0.0
         cnt = 0

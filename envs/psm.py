@@ -136,7 +136,7 @@ def rest_points(n_triangles: int, phase_rad: float = math.pi / 2) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ScaledProblem:
-    """Non-dimensional grasp problem (lengths / ``r``, forces / ``s E t r``, torques / ``s E t r^2``).
+    """Non-dimensional grasp problem: lengths / r, forces / (s E t r), torques / (s E t r^2).
 
     Attributes
     ----------

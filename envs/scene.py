@@ -191,7 +191,7 @@ def closed_angle_rad(gripper: Gripper) -> float:
     stop. Solves ``d_3 + l sin(theta) - (w/2) cos(theta) = 0`` for ``theta`` in (-pi/2, 0].
     """
     d3, ln, hw = gripper.joint_offset_m, gripper.finger_length_m, gripper.finger_width_m / 2
-    # d3 + l sin t - hw cos t = 0  ->  R sin(t - phi) = -d3 with R = hypot(l, hw), phi = atan2(hw, l)
+    # l sin t - hw cos t = R sin(t - phi), R = hypot(l, hw), phi = atan2(hw, l)
     rr = math.hypot(ln, hw)
     return math.atan2(hw, ln) - math.asin(min(1.0, d3 / rr))
 

@@ -1,0 +1,107 @@
+"""Command line: ``psm-grasp simulate | demo | optimize``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from .scene import Scene
+    from .solver import simulate
+
+    scene = Scene.preset(args.scene)
+    res = simulate(scene, args.torque, args.triangles, args.method, stiffness_rule=args.rule)
+    if args.json:
+        data = res.to_dict()
+        data["scene"] = args.scene
+        print(json.dumps(data, indent=2))
+    else:
+        r, left = (math.degrees(a) for a in res.jaw_angles_rad)
+        print(f"scene {args.scene}, N = {args.triangles}, T_a = {args.torque:g} N·m, "
+              f"method {args.method}")
+        print(f"  converged      : {res.converged} ({res.message})")
+        print(f"  jaw angles     : right {r:.4f} deg, left {left:.4f} deg")
+        print(f"  contacts       : right {res.n_contacts[0]}, left {res.n_contacts[1]}")
+        print(f"  total force    : {res.total_force_n[0]:.4g} N, {res.total_force_n[1]:.4g} N")
+        print(f"  peak strain    : {res.peak_strain:.4%}")
+        print(f"  max disp / r   : {res.max_displacement_ratio:.4%}")
+        print(f"  stable         : {res.stable}")
+        print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
+              f"moment {res.kkt.moment_residual_rel:.1e}")
+        print(f"  solve time     : {res.solve_time_s * 1e3:.2f} ms, {res.iterations} iterations")
+    if args.plot:
+        from .render import grasp_figure
+
+        grasp_figure(scene, res, path=args.plot)
+        if not args.json:
+            print(f"  plot           : {args.plot}")
+    return 0 if res.converged else 1
+
+
+def _demo(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        from optim.cli import run_demo
+    except ImportError:
+        run_demo = None
+    if run_demo is not None:
+        return run_demo(out)
+    from .render import grasp_figure
+    from .scene import Scene
+    from .solver import simulate
+
+    scene = Scene.preset("paper-r070")
+    res = simulate(scene, 0.2, 20)
+    grasp_figure(scene, res, path=out / "grasp.png")
+    print(f"wrote {out / 'grasp.png'} (converged: {res.converged})")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .psm import STIFFNESS_RULES
+    from .scene import PRESETS
+    from .solver import METHODS
+
+    parser = argparse.ArgumentParser(prog="psm-grasp", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    sim = sub.add_parser("simulate", help="solve one grasp")
+    sim.add_argument("--scene", default="paper-r070", choices=sorted(PRESETS))
+    sim.add_argument("--triangles", type=int, default=20, help="number of fan triangles N")
+    sim.add_argument("--torque", type=float, default=0.2, help="actuation torque T_a [N·m]")
+    sim.add_argument("--method", default="newton", choices=METHODS)
+    sim.add_argument("--rule", default="van_gelder", choices=STIFFNESS_RULES)
+    sim.add_argument("--json", action="store_true", help="print the result as JSON")
+    sim.add_argument("--plot", metavar="PNG", help="write a drawing of the grasp")
+    sim.set_defaults(func=_simulate)
+    demo = sub.add_parser("demo", help="run the main job and write charts to --out")
+    demo.add_argument("--out", default="out")
+    demo.set_defaults(func=_demo)
+    try:
+        from optim.cli import add_optimize_parser
+    except ImportError:
+        add_optimize_parser = None
+    if add_optimize_parser is not None:
+        add_optimize_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``psm-grasp`` command."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except ValueError as exc:
+        print(f"psm-grasp: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
