@@ -513,6 +513,56 @@ def _straddle_edge(q, n, j, th, sc, prm):
 
 
 @njit(cache=True)
+def _corner_choice(q, n, j, th, sc, prm, current, lam, kinds, fj, fsc, mcount):
+    """Edge the corner should face at this solution (current one if still right, -1: none).
+
+    A loaded corner whose foot left its edge moves to the neighbouring edge on that side; an
+    unloaded corner faces the edge nearest to it when it penetrates the contour, else keeps its
+    edge (or the straddling one).
+    """
+    ex, ey, nx, ny = _frame(j, th)
+    hw = prm[P_HW]
+    kx = -prm[P_C0X + 2 * j] + sc * ex + hw * nx
+    ky = -prm[P_C0X + 2 * j + 1] + sc * ey + hw * ny
+    loaded = False
+    for m in range(mcount):
+        if kinds[m] == 1 and fj[m] == j and fsc[m] == sc and lam[m] > 0.0:
+            loaded = True
+    if current >= 0 and loaded:
+        k1 = current + 1 if current + 1 < n else 0
+        dx, dy = q[k1, 0] - q[current, 0], q[k1, 1] - q[current, 1]
+        t = ((kx - q[current, 0]) * dx + (ky - q[current, 1]) * dy) / (dx * dx + dy * dy)
+        if t < -1e-9:
+            return current - 1 if current > 0 else n - 1
+        if t > 1.0 + 1e-9:
+            return k1
+        return current
+    # unloaded: is the corner inside the contour? (crossing-number test)
+    inside = False
+    best = -1
+    bestd = 1e300
+    for k in range(n):
+        k1 = k + 1 if k + 1 < n else 0
+        ax, ay, bx, by = q[k, 0], q[k, 1], q[k1, 0], q[k1, 1]
+        if (ay > ky) != (by > ky):
+            xc = ax + (ky - ay) * (bx - ax) / (by - ay)
+            if xc > kx:
+                inside = not inside
+        dx, dy = bx - ax, by - ay
+        t = ((kx - ax) * dx + (ky - ay) * dy) / (dx * dx + dy * dy)
+        t = min(1.0, max(0.0, t))
+        d = math.hypot(kx - ax - t * dx, ky - ay - t * dy)
+        if d < bestd:
+            bestd = d
+            best = k
+    if inside:
+        return best
+    if current >= 0:
+        return current
+    return _straddle_edge(q, n, j, th, sc, prm)
+
+
+@njit(cache=True)
 def _near(q, i, j, th):
     ex, ey, nx, ny = _frame(j, th)
     return nx * q[i, 0] + ny * q[i, 1] < 0.6
@@ -615,7 +665,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     """Primal-dual interior point on a fixed constraint set. Returns (status, iterations)."""
     nb = 2 * n
     nx = nb + 2
-    tol = opts[O_TOL] * fscale
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
     maxit = int(opts[O_MAXIT])
     grad = np.zeros(nx)
     step = np.zeros(nx)
@@ -786,7 +836,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
     dofs = np.zeros(5, dtype=np.int64)
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
     rho = 1e2 * kscale
-    tol = opts[O_TOL] * fscale
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
         if not active[m]:
@@ -839,6 +889,44 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
         if kkt <= 10.0 * tol and viol <= 1e-13:
             return True, stable
     return False, stable
+
+
+@njit(cache=True)
+def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active,
+                work_it, gbuf, stable_out):
+    """Polish on a contact set, correcting the set (primal-dual active set) a few times.
+
+    Drops contacts that come out with a pulling force and adds constraints that come out
+    violated. On success ``xs`` and ``lam`` hold the polished answer; returns a status.
+    """
+    nb = 2 * n
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    for _attempt in range(6):
+        xp = xs.copy()
+        lp = lam[:mcount].copy()
+        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale,
+                              active, work_it)
+        stable_out[0] = stable
+        if not okp:
+            return POLISH_FAIL
+        _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        good = True
+        for m in range(mcount):
+            if active[m] and lp[m] < -1e-12 * fscale:
+                active[m] = False
+                good = False
+            elif (not active[m]) and gbuf[m] < -1e-10:
+                active[m] = True
+                good = False
+        if good:
+            for d in range(nb + 2):
+                xs[d] = xp[d]
+            for m in range(mcount):
+                lam[m] = max(lp[m], 0.0) if active[m] else 0.0
+            return OK
+    return POLISH_FAIL
 
 
 @njit(cache=True)
@@ -938,6 +1026,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                 if g > 1e-12:
                     corner_edge[j, c] = k
     lam_guess_face = lam_face.copy()
+    stable_out = np.ones(1, dtype=np.bool_)
     status = OK
     escapes = 0
     rounds = 0
@@ -988,27 +1077,9 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
         for m in range(mcount):
             active[m] = lam[m] > gbuf[m] * fscale and gbuf[m] < 1e-5
         if opts[O_POLISH] > 0.0:
-            xp = xs.copy()
-            lp = lam[:mcount].copy()
-            okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
-                                  fscale, active, work_it)
-            if okp:
-                _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
-                good = True
-                for m in range(mcount):
-                    if active[m] and lp[m] < -1e-12 * fscale:
-                        good = False
-                    if (not active[m]) and gbuf[m] < -1e-10:
-                        good = False
-                if good:
-                    for d in range(nb + 2):
-                        xs[d] = xp[d]
-                    for m in range(mcount):
-                        lam[m] = max(lp[m], 0.0) if active[m] else 0.0
-                else:
-                    status = POLISH_FAIL
-            else:
-                status = POLISH_FAIL
+            status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+                                 fscale, active, work_it, gbuf, stable_out)
+            stable = stable_out[0]
         # check the candidate set against the solution
         changed = False
         q = xs[:nb].reshape(n, 2)
@@ -1024,14 +1095,13 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                             changed = True
             for c in range(2):
                 sc = prm[P_LMAX] if c == 0 else 0.0
-                k = _straddle_edge(q, n, j, th, sc, prm)
-                if k != corner_edge[j, c] and k >= 0:
-                    gk = _corner_eval(q, k, j, th, sc, prm, grad5, hess5)
-                    old_active = False
-                    for m in range(mcount):
-                        if kinds[m] == 1 and fj[m] == j and fsc[m] == sc and lam[m] > 0.0:
-                            old_active = True
-                    if gk < 1e-9 or old_active:
+                k = _corner_choice(q, n, j, th, sc, prm, corner_edge[j, c], lam, kinds, fj,
+                                   fsc, mcount)
+                if k != corner_edge[j, c]:
+                    if k < 0:
+                        corner_edge[j, c] = -1
+                        changed = True
+                    else:
                         g0 = _corner_eval(q0, k, j, x0[nb + j], sc, prm, grad5, hess5)
                         if g0 > 1e-12:
                             corner_edge[j, c] = k
@@ -1045,24 +1115,16 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
             prm[P_GAUGE] = 0.0
             for m in range(mcount):
                 active[m] = lam[m] > 0.0
-            xp = xs.copy()
-            lp = lam[:mcount].copy()
-            okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
-                                  fscale, active, work_it)
-            good = okp
-            if okp:
-                _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
-                for m in range(mcount):
-                    if active[m] and lp[m] < -1e-12 * fscale:
-                        good = False
-                    if (not active[m]) and gbuf[m] < -1e-10:
-                        good = False
-            if good:
+            xkeep = xs.copy()
+            lkeep = lam.copy()
+            good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+                               fscale, active, work_it, gbuf, stable_out) == OK
+            stable = stable_out[0]
+            if not good:
                 for d in range(nb + 2):
-                    xs[d] = xp[d]
+                    xs[d] = xkeep[d]
                 for m in range(mcount):
-                    lam[m] = max(lp[m], 0.0) if active[m] else 0.0
-            else:
+                    lam[m] = lkeep[m]
                 changed = True
                 if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, 0, gbuf):
                     status = POLISH_FAIL

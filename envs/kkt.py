@@ -146,8 +146,6 @@ def kkt_check(
                 gap = math.hypot(*vec)
                 direction = vec / gap if gap > 0 else normal
                 at = corner
-                if m[i] < hw:
-                    gap = math.inf  # beyond the end and behind the face line: no contact
             lam = face_forces_n[j, i]
             if 0.0 <= s[i] <= g.finger_length_m:
                 max_pen = max(max_pen, -gap)

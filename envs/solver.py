@@ -275,22 +275,62 @@ def _prolong(
 def _solve_newton(
     scene: Scene, prob: ScaledProblem, torque_nm: float, stiffness_rule: str, phase_rad: float
 ) -> GraspResult:
-    """Newton solve from rest; fine meshes start from a coarser solution (nested iteration)."""
+    """Newton solve from rest; fine meshes start from a coarser solution (nested iteration).
+
+    A solve that fails is retried by continuation: the torque is ramped from zero with
+    adaptive steps, each started from the previous equilibrium.
+    """
     options = kernels.default_options()
-    if prob.n <= NESTED_ABOVE:
-        return _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
     t0 = time.perf_counter()
-    nc = max(NESTED_ABOVE // 2, prob.n // NESTED_FACTOR)
-    coarse_prob = scaled_problem(scene, torque_nm, nc, stiffness_rule, phase_rad)
-    coarse = _solve_newton(scene, coarse_prob, torque_nm, stiffness_rule, phase_rad)
-    res = None
-    if coarse.converged:
-        x0, lam0 = _prolong(scene, coarse, prob)
-        res = _newton(scene, prob, torque_nm, stiffness_rule, x0, lam0, options)
-    if res is None or not res.converged:
+    if prob.n <= NESTED_ABOVE:
         res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
-    return replace(res, solve_time_s=time.perf_counter() - t0,
-                   iterations=res.iterations + coarse.iterations)
+        extra = 0
+    else:
+        nc = max(NESTED_ABOVE // 2, prob.n // NESTED_FACTOR)
+        coarse_prob = scaled_problem(scene, torque_nm, nc, stiffness_rule, phase_rad)
+        coarse = _solve_newton(scene, coarse_prob, torque_nm, stiffness_rule, phase_rad)
+        extra = coarse.iterations
+        res = None
+        if coarse.converged:
+            x0, lam0 = _prolong(scene, coarse, prob)
+            res = _newton(scene, prob, torque_nm, stiffness_rule, x0, lam0, options)
+        if res is None or not res.converged:
+            res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
+    if not res.converged and torque_nm > 0:
+        failed = res
+        res = _continuation(scene, prob.n, torque_nm, stiffness_rule, phase_rad, options)
+        extra += failed.iterations
+        if not res.converged:
+            res = replace(res, message=f"{failed.message}; continuation: {res.message}")
+    return replace(res, solve_time_s=time.perf_counter() - t0, iterations=res.iterations + extra)
+
+
+def _continuation(
+    scene: Scene, n: int, torque_nm: float, stiffness_rule: str, phase_rad: float,
+    options: np.ndarray, first_step: float = 0.125, min_step: float = 1e-4,
+) -> GraspResult:
+    """Ramp the torque from 0 to ``torque_nm`` with adaptive steps and warm starts."""
+    done, step = 0.0, first_step * torque_nm
+    prev: GraspResult | None = None
+    iterations = 0
+    last = None
+    while done < torque_nm:
+        t = min(torque_nm, done + step)
+        prob = scaled_problem(scene, t, n, stiffness_rule, phase_rad)
+        if prev is None:
+            x0, lam0 = rest_state(prob), None
+        else:
+            x0, lam0 = _warm_start(scene, prob, prev)
+        last = _newton(scene, prob, t, stiffness_rule, x0, lam0, options)
+        iterations += last.iterations
+        if last.converged:
+            prev, done, step = last, t, step * 1.5
+        else:
+            step /= 4.0
+            if step < min_step * torque_nm:
+                return replace(last, message=f"failed at T = {t:.4g} N·m: {last.message}",
+                               iterations=iterations)
+    return replace(last, iterations=iterations)
 
 
 def simulate(

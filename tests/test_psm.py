@@ -1,0 +1,139 @@
+"""Stiffness rules and exact derivatives of the compiled model (against finite differences)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from envs import kernels as K
+from envs.psm import rest_points, scaled_problem, spring_stiffness
+from envs.scene import Scene
+
+
+def test_van_gelder_matches_conventions():
+    for n in (4, 12, 20, 60):
+        k_int, k_ext = spring_stiffness(n, 0.07)
+        area = 0.5 * math.sin(2 * math.pi / n)
+        h = 2 * math.sin(math.pi / n)
+        assert k_int == pytest.approx(2 * area)
+        assert k_ext == pytest.approx(area / h**2)
+
+
+def test_cst_fit_is_poisson_aware_and_positive():
+    a = spring_stiffness(20, 0.07, "cst_fit", 0.2)
+    b = spring_stiffness(20, 0.07, "cst_fit", 0.45)
+    assert min(a + b) > 0
+    assert abs(a[0] - b[0]) > 1e-3 * a[0]
+
+
+@pytest.mark.parametrize("n", [3, 2, 20001])
+def test_bad_triangle_counts_raise(n):
+    with pytest.raises(ValueError, match="n_triangles"):
+        spring_stiffness(n, 0.07)
+
+
+def test_unknown_rule_raises():
+    with pytest.raises(ValueError, match="stiffness rule"):
+        spring_stiffness(20, 0.07, "magic")
+
+
+def _state(n=12, seed=0):
+    rng = np.random.default_rng(seed)
+    prob = scaled_problem(Scene.preset("paper-r070"), 0.3, n)
+    x = np.empty(2 * n + 2)
+    x[: 2 * n] = (rest_points(n) * (1 + 0.05 * rng.standard_normal((n, 1)))).ravel()
+    x[: 2 * n] += 0.02 * rng.standard_normal(2 * n)
+    x[2 * n :] = 0.6 + 0.05 * rng.standard_normal(2)
+    return prob, x
+
+
+def _fd_check(fun, x, grad, hess, eps=1e-6):
+    for a in range(len(x)):
+        xp, xm = x.copy(), x.copy()
+        xp[a] += eps
+        xm[a] -= eps
+        gp, gradp = fun(xp)
+        gm, gradm = fun(xm)
+        assert (gp - gm) / (2 * eps) == pytest.approx(grad[a], abs=1e-6, rel=1e-6)
+        np.testing.assert_allclose((gradp - gradm) / (2 * eps), hess[:, a], atol=1e-5, rtol=1e-5)
+
+
+@pytest.mark.parametrize("sc_kind", ["face", "beyond_tip", "behind_root"])
+def test_face_constraint_derivatives(sc_kind):
+    prob, x = _state()
+    n = prob.n
+    q = x[: 2 * n].reshape(n, 2).copy()
+    prm = prob.params.copy()
+    if sc_kind == "beyond_tip":
+        prm[K.P_LMAX] = 1.0  # short finger: the point lies beyond its tip
+    i, j = 8, 0
+    if sc_kind == "behind_root":
+        i = 14 % n
+
+    def fun(z):
+        qq = q.copy()
+        qq[i] = z[:2]
+        g5, h5 = np.zeros(5), np.zeros((5, 5))
+        val = K._face_eval(qq, i, j, z[2], prm, g5, h5)
+        return val, g5[:3].copy()
+
+    z = np.array([q[i, 0], q[i, 1], x[2 * n + j]])
+    g5, h5 = np.zeros(5), np.zeros((5, 5))
+    K._face_eval(q, i, j, z[2], prm, g5, h5)
+    _fd_check(fun, z, g5[:3], h5[:3, :3])
+
+
+@pytest.mark.parametrize("sc", [0.0, 2.5])
+def test_corner_constraint_derivatives(sc):
+    prob, x = _state()
+    n = prob.n
+    q = x[: 2 * n].reshape(n, 2).copy()
+    k, j = 9, 1
+
+    def fun(z):
+        qq = q.copy()
+        qq[k] = z[:2]
+        qq[(k + 1) % n] = z[2:4]
+        g5, h5 = np.zeros(5), np.zeros((5, 5))
+        val = K._corner_eval(qq, k, j, z[4], sc, prob.params, g5, h5)
+        return val, g5.copy()
+
+    z = np.array([*q[k], *q[(k + 1) % n], x[2 * n + j]])
+    g5, h5 = np.zeros(5), np.zeros((5, 5))
+    K._corner_eval(q, k, j, z[4], sc, prob.params, g5, h5)
+    _fd_check(fun, z, g5, h5)
+
+
+def test_energy_gradient_and_banded_hessian():
+    prob, x = _state(n=10)
+    n = prob.n
+    prm = np.append(prob.params, 0.3)  # with a gauge spring
+
+    def grad_of(z):
+        gr = np.zeros(2 * n + 2)
+        dummy = np.zeros((1, 1))
+        K._spring_terms(z, n, prm, np.zeros(n, dtype=np.int64), gr, dummy, dummy, dummy, False)
+        return K._energy(z, n, prm), gr
+
+    e, gr = grad_of(x)
+    bidx = K._band_index(n)
+    ab, bb, dd = np.zeros((2 * n, K.BW + 1)), np.zeros((2 * n, 2)), np.zeros((2, 2))
+    K._spring_terms(x, n, prm, bidx, np.zeros(2 * n + 2), ab, bb, dd, True)
+    # rebuild the dense Hessian in natural order from the band storage
+    dense_b = np.zeros((2 * n + 2, 2 * n + 2))
+    for p in range(2 * n):
+        for kk in range(K.BW + 1):
+            if p - kk >= 0:
+                dense_b[p, p - kk] = dense_b[p - kk, p] = ab[p, kk]
+    dense_b[2 * n :, 2 * n :] = dd
+    perm = np.array([bidx[i] + c for i in range(n) for c in range(2)] + [2 * n, 2 * n + 1])
+    dense = dense_b[np.ix_(perm, perm)]
+    _fd_check(grad_of, x, gr, dense)
+
+
+def test_band_ordering_keeps_neighbours_within_bandwidth():
+    for n in (4, 5, 20, 21, 1000):
+        idx = K._band_index(n)
+        assert sorted(idx // 2) == list(range(n))
+        for i in range(n):
+            assert abs(idx[i] - idx[(i + 1) % n]) + 1 <= K.BW

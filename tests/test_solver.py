@@ -1,0 +1,210 @@
+"""Physics of the grasp solver: analytic limits, symmetry, independent checks, convergence in N."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from envs.kkt import kkt_check
+from envs.psm import rest_points
+from envs.scene import Scene, finger_frame
+from envs.solver import simulate, simulate_ramp
+
+R070 = Scene.preset("paper-r070")
+
+
+def _contact_angle(scene: Scene, n: int) -> float:
+    """Largest finger angle at which the rigid (undeformed) polygon touches the right face."""
+    g, d = scene.gripper, scene.disk
+    pts = d.center_m + d.radius_m * rest_points(n)
+
+    def gap(theta):
+        joint, axis, normal = finger_frame(g, 0, theta)
+        rel = pts - joint
+        s = rel @ axis
+        on_face = (s >= 0) & (s <= g.finger_length_m)
+        return np.min((rel @ normal)[on_face]) - g.finger_width_m / 2
+
+    return brentq(gap, 0.05, g.rest_angle_rad)
+
+
+def test_free_closing_before_contact_is_exact():
+    g = R070.gripper
+    t_touch = g.torsion_stiffness_nm_per_rad * (g.rest_angle_rad - _contact_angle(R070, 20))
+    for torque in (0.0, 0.3 * t_touch, 0.9 * t_touch):
+        res = simulate(R070, torque, 20)
+        assert res.converged, res.message
+        expected = g.rest_angle_rad - torque / g.torsion_stiffness_nm_per_rad
+        assert res.jaw_angles_rad == pytest.approx((expected, expected), abs=1e-12)
+        assert res.n_contacts == (0, 0) and res.peak_strain < 1e-12
+
+
+def test_grazing_contact_onset():
+    g = R070.gripper
+    theta_c = _contact_angle(R070, 20)
+    t_touch = g.torsion_stiffness_nm_per_rad * (g.rest_angle_rad - theta_c)
+    for factor in (1 - 1e-9, 1 + 1e-9, 1 + 1e-6):
+        res = simulate(R070, t_touch * factor, 20)
+        assert res.converged, res.message
+        assert res.jaw_angles_rad[0] == pytest.approx(theta_c, abs=1e-7)
+
+
+def test_rigid_limit_flat_edge_contact_closed_form():
+    # A very stiff 20-gon whose edges lie flat on both faces at theta = 36 deg (vertices at
+    # -45 and -27 deg, phase 9 deg). The jaws stop at 36 deg, the polygon stays rigid, and the
+    # two edge end points carry the net closing moment about the joint.
+    g = R070.gripper
+    r, theta = 0.07, math.radians(36.0)
+    hw = g.finger_width_m / 2
+    d1 = (r * math.cos(math.pi / 20) + hw - g.joint_offset_m * math.cos(theta)) / math.sin(
+        theta) - r
+    scene = Scene(g, replace(R070.disk, radius_m=r, distance_m=d1, youngs_modulus_pa=1e9))
+    torque = 0.1
+    res = simulate(scene, torque, 20, phase_rad=math.radians(9.0))
+    assert res.converged and res.stable, res.message
+    assert res.jaw_angles_rad == pytest.approx((theta, theta), abs=1e-5)
+    joint, axis, _ = finger_frame(g, 0, res.jaw_angles_rad[0])
+    closing = torque - g.torsion_stiffness_nm_per_rad * (g.rest_angle_rad - res.jaw_angles_rad[0])
+    touching = np.flatnonzero(res.contact_forces_n[0])
+    assert len(touching) == 2
+    stations = (res.points_m[touching] - joint) @ axis
+    moment = float(res.contact_forces_n[0][touching] @ stations)
+    assert moment == pytest.approx(closing, rel=1e-7)
+    assert res.peak_strain < 1e-4
+
+
+def test_symmetric_mesh_gives_mirror_symmetric_grasp():
+    res = simulate(R070, 0.2, 20)
+    assert res.converged and res.stable
+    assert res.jaw_angles_rad[0] == pytest.approx(res.jaw_angles_rad[1], abs=1e-10)
+    mirrored = res.points_m * np.array([-1.0, 1.0])
+    # point i mirrors to point (N/2 - i) for a contour starting at the top
+    n = 20
+    order = [(n - i) % n for i in range(n)]
+    np.testing.assert_allclose(mirrored[order], res.points_m, atol=1e-10 * 0.07)
+
+
+def test_asymmetric_equilibrium_is_physical_and_its_mirror_too():
+    # a squeezed octagon rotates about its pin; the mirror image is an equilibrium as well
+    res = simulate(R070, 0.2, 8)
+    assert res.converged and res.stable
+    n = 8
+    order = [(n - i) % n for i in range(n)]
+    pts = (res.points_m * np.array([-1.0, 1.0]))[order]
+    face = res.contact_forces_n[::-1][:, order]
+    corner = res.corner_forces_n[::-1]
+    edges = res.corner_edges[::-1].copy()
+    edges[edges >= 0] = (n - 1 - edges[edges >= 0]) % n
+    mirror = kkt_check(
+        R070, 0.2, n, "van_gelder", pts, res.jaw_angles_rad[::-1], face, corner, edges,
+        res.stop_torques_nm[::-1],
+    )
+    assert mirror.passed, mirror.reason
+
+
+def test_kkt_check_rejects_a_tampered_answer():
+    res = simulate(R070, 0.2, 20)
+    pts = res.points_m.copy()
+    pts[12] += 1e-6
+    bad = kkt_check(
+        R070, 0.2, 20, "van_gelder", pts, res.jaw_angles_rad, res.contact_forces_n,
+        res.corner_forces_n, res.corner_edges, res.stop_torques_nm,
+    )
+    assert not bad.passed and "force residual" in bad.reason
+
+
+def test_newton_agrees_with_slsqp_on_small_meshes():
+    for n in (12, 20):
+        a = simulate(R070, 0.2, n)
+        b = simulate(R070, 0.2, n, "slsqp", time_limit_s=20)
+        assert a.converged
+        assert a.jaw_angles_rad == pytest.approx(b.jaw_angles_rad, abs=1e-6)
+        np.testing.assert_allclose(a.points_m, b.points_m, atol=1e-6 * 0.07)
+
+
+def test_random_scenes_converge_and_pass_independent_check():
+    rng = np.random.default_rng(7)
+    base = Scene.preset("paper-r070")
+    done = 0
+    while done < 25:
+        g = replace(
+            base.gripper,
+            finger_length_m=rng.uniform(0.12, 0.3),
+            rest_angle_rad=rng.uniform(0.5, 1.0),
+            joint_offset_m=rng.uniform(0.0, 0.04),
+            finger_width_m=rng.uniform(0.003, 0.02),
+        )
+        d = replace(base.disk, radius_m=rng.uniform(0.04, 0.1), distance_m=rng.uniform(0, 0.04),
+                    youngs_modulus_pa=10 ** rng.uniform(4.5, 6))
+        try:
+            scene = Scene(g, d)
+        except ValueError:
+            continue
+        n = int(rng.choice([12, 16, 20, 24, 32]))
+        res = simulate(scene, rng.uniform(0.01, 0.5), n)
+        assert res.converged, (g, d, n, res.message)
+        assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
+        assert res.kkt.max_penetration_m <= 1e-9 * d.radius_m
+        done += 1
+
+
+@pytest.mark.parametrize("name", ["paper-r050", "paper-r070", "paper-r100"])
+def test_large_squeeze_up_to_forty_percent_strain(name):
+    scene = Scene.preset(name)
+    torques = np.geomspace(0.05, 20.0, 12)
+    reached = 0.0
+    for t in torques:
+        res = simulate(scene, t, 20)
+        assert res.converged, (name, t, res.message)
+        reached = max(reached, res.peak_strain)
+        if reached >= 0.4:
+            break
+    assert reached >= 0.4
+
+
+def test_ramp_is_monotone_and_matches_single_solves():
+    torques = np.linspace(0.0, 0.5, 11)
+    ramp = simulate_ramp(R070, torques, 20)
+    angles = [r.jaw_gap_angle_rad for r in ramp]
+    assert all(r.converged for r in ramp)
+    assert np.all(np.diff(angles) < 0)
+    single = simulate(R070, 0.5, 20)
+    assert ramp[-1].jaw_angles_rad == pytest.approx(single.jaw_angles_rad, abs=1e-9)
+
+
+def test_jaw_angle_converges_in_n_at_a_fitted_rate():
+    ref = simulate(R070, 0.2, 320).jaw_gap_angle_rad
+    ns = np.array([20, 40, 80, 160])
+    err = np.array([abs(simulate(R070, 0.2, int(n)).jaw_gap_angle_rad - ref) for n in ns])
+    rate = -np.polyfit(np.log(ns), np.log(err), 1)[0]
+    assert rate > 1.2, (err, rate)
+
+
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"torque_nm": -0.1}, "torque_nm"),
+        ({"torque_nm": math.nan}, "torque_nm"),
+        ({"n_triangles": 3}, "n_triangles"),
+        ({"n_triangles": 20.5}, "n_triangles"),
+        ({"method": "bfgs"}, "method"),
+        ({"stiffness_rule": "magic"}, "stiffness rule"),
+    ],
+)
+def test_bad_solver_input_raises(kwargs, match):
+    args = {"torque_nm": 0.2, "n_triangles": 20}
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        simulate(R070, **args)
+
+
+def test_ramp_rejects_decreasing_torques():
+    with pytest.raises(ValueError, match="non-decreasing"):
+        simulate_ramp(R070, [0.2, 0.1])
+
+
+def test_nelder_mead_baseline_reports_failure_honestly():
+    res = simulate(R070, 0.2, 8, "nelder-mead", time_limit_s=0.5)
+    assert not res.converged and res.message
