@@ -40,13 +40,14 @@ from .psm import (
     P_KR,
     P_LMAX,
     P_PHASE,
+    P_RHO,
     P_TAU,
     P_TH0,
     P_THMIN,
 )
 
 BW = 5  # half bandwidth of the interleaved point ordering
-P_GAUGE = 14  # extra slot of the kernel's parameter copy: gauge spring stiffness
+P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
 
 # status codes
 OK = 0
@@ -116,30 +117,28 @@ def _face_eval(q, i, j, th, prm, grad, hess):
         for b in range(3):
             hess[a, b] = 0.0
     if s < 0.0 or s > prm[P_LMAX]:
-        # beyond an end of the face: distance to that corner (s_c = 0 or lmax)
+        # beyond an end of the face: distance to that (rounded) corner, whose centre sits at
+        # (s_c, hw - rho) in finger coordinates, minus its radius rho
         sc = 0.0 if s < 0.0 else prm[P_LMAX]
+        rho = prm[P_RHO]
+        hc = hw - rho
         ds = s - sc
-        dm = m - hw
+        dm = m - hc
         g = math.sqrt(ds * ds + dm * dm)
         if g < 1e-300:
-            return 0.0
-        # w = ds*e + dm*n ; dw/dq = I (in (e,n) basis), dw/dtheta: ds' = e'.v = -n.v = -m,
-        # dm' = n'.v = e.v = s ; the corner moves too: d(sc e + hw n)/dtheta = -sc n + hw e
-        # so d(ds)/dth = -m - hw... computed in world coordinates below.
+            return -rho
         wx = ds * ex + dm * nx
         wy = ds * ey + dm * ny
-        # world vector from corner to point: p - (sc e + hw n) with p = v; w = v - sc e - hw n
-        # dw/dtheta = sc n - hw e
-        dwx = sc * nx - hw * ex
-        dwy = sc * ny - hw * ey
+        # w = v - sc e - hc n ; dw/dtheta = sc n - hc e ; d2w/dtheta2 = sc e + hc n
+        dwx = sc * nx - hc * ex
+        dwy = sc * ny - hc * ey
         ux = wx / g
         uy = wy / g
         grad[0] = ux
         grad[1] = uy
         grad[2] = ux * dwx + uy * dwy
-        # Hessian of |w|: (I - u u^T)/g in w; d2w/dtheta2 = sc e' - hw n' = -sc n - hw e
-        d2x = sc * ex + hw * nx
-        d2y = sc * ey + hw * ny
+        d2x = sc * ex + hc * nx
+        d2y = sc * ey + hc * ny
         pxx = (1.0 - ux * ux) / g
         pxy = (-ux * uy) / g
         pyy = (1.0 - uy * uy) / g
@@ -152,7 +151,7 @@ def _face_eval(q, i, j, th, prm, grad, hess):
         hess[2, 0] = hess[0, 2]
         hess[2, 1] = hess[1, 2]
         hess[2, 2] = dwx * hess[0, 2] + dwy * hess[1, 2] + ux * d2x + uy * d2y
-        return g
+        return g - rho
     grad[0] = nx
     grad[1] = ny
     grad[2] = s
@@ -169,12 +168,15 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
     """Corner of finger j at axial position sc vs contour edge k -> k+1.
 
     Local variables (ax, ay, bx, by, theta). Value: signed distance of the corner from the edge
-    line, positive outside the (counter-clockwise) polygon.
+    line (positive outside the counter-clockwise polygon) where its foot lies on the edge, and
+    its distance to the nearer end point beyond the edge (a C1 continuation: no fictitious
+    extended line).
     """
     n = q.shape[0]
     k1 = k + 1 if k + 1 < n else 0
     ex, ey, nx, ny = _frame(j, th)
-    hw = prm[P_HW]
+    rho = prm[P_RHO]
+    hw = prm[P_HW] - rho  # centre of the rounded corner
     cx = prm[P_C0X + 2 * j]
     cy = prm[P_C0X + 2 * j + 1]
     kx = -cx + sc * ex + hw * nx
@@ -186,6 +188,39 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
     ax, ay = q[k, 0], q[k, 1]
     ux, uy = kx - ax, ky - ay
     dx, dy = q[k1, 0] - ax, q[k1, 1] - ay
+    tpar = (ux * dx + uy * dy) / (dx * dx + dy * dy)
+    if tpar < 0.0 or tpar > 1.0:
+        # beyond an end: distance between the end point v and the corner K
+        for a in range(5):
+            grad[a] = 0.0
+            for b in range(5):
+                hess[a, b] = 0.0
+        off = 0 if tpar < 0.0 else 2
+        vx, vy = q[k, 0], q[k, 1]
+        if off == 2:
+            vx, vy = q[k1, 0], q[k1, 1]
+        wx, wy = kx - vx, ky - vy
+        g = math.sqrt(wx * wx + wy * wy)
+        if g < 1e-300:
+            return -rho
+        ux_, uy_ = wx / g, wy / g
+        pxx, pxy, pyy = (1.0 - ux_ * ux_) / g, -ux_ * uy_ / g, (1.0 - uy_ * uy_) / g
+        grad[off] = -ux_
+        grad[off + 1] = -uy_
+        grad[4] = ux_ * k1x + uy_ * k1y
+        hess[off, off] = pxx
+        hess[off, off + 1] = pxy
+        hess[off + 1, off] = pxy
+        hess[off + 1, off + 1] = pyy
+        hx = -(pxx * k1x + pxy * k1y)
+        hy = -(pxy * k1x + pyy * k1y)
+        hess[off, 4] = hx
+        hess[4, off] = hx
+        hess[off + 1, 4] = hy
+        hess[4, off + 1] = hy
+        hess[4, 4] = (k1x * (pxx * k1x + pxy * k1y) + k1y * (pxy * k1x + pyy * k1y)
+                      + ux_ * k2x + uy_ * k2y)
+        return g - rho
     L = math.sqrt(dx * dx + dy * dy)
     cr = ux * dy - uy * dx
     g = cr / L
@@ -241,7 +276,7 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
                 ub0, ub1, db0, db1 = k1x, k1y, 0.0, 0.0
             hess[a, b] = ub0 * mu0 + ub1 * mu1 + db0 * md0 + db1 * md1
     hess[4, 4] += gux * k2x + guy * k2y
-    return g
+    return g - rho
 
 
 # --------------------------------------------------------------------------------------------
@@ -690,6 +725,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     dofs = np.zeros(5, dtype=np.int64)
     mu = mu0
     mu_min = 1e-3 * tol
+    shrink = 0.01
     shift_last = 0.0
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     it = 0
@@ -705,7 +741,10 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             work_it[0] += it
             return OK, it
         if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
-            mu = max(mu_min, min(0.2 * mu, mu ** 1.5))
+            mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
+            # active gaps scale with mu: let them shrink by that factor in one step
+            shrink = min(0.01, 0.1 * mu_new / mu)
+            mu = mu_new
             continue
         it += 1
         for m in range(mcount):
@@ -770,7 +809,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             if phi < math.inf:
                 feasible = True
                 for m in range(mcount):
-                    if gt[m] < 0.01 * g[m]:
+                    if gt[m] < shrink * g[m]:
                         feasible = False
                         break
                 if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
@@ -802,6 +841,8 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             lam_new = lam[m] + alpha_d * dlam[m]
             gm = gt[m]
             lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
+        if opts.shape[0] > N_OPTIONS:
+            print("ipm", it, mu / fscale, kkt / fscale, alpha, shift, ok, mcount)
         for d in range(nx):
             x[d] = xt[d]
     work_it[0] += it
@@ -930,7 +971,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscal
 
 
 @njit(cache=True)
-def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf):
+def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening=0.01):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
     grad5 = np.zeros(5)
@@ -943,8 +984,7 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf):
         qx, qy = xs[2 * i], xs[2 * i + 1]
         x0[2 * i] = c * qx - s * qy
         x0[2 * i + 1] = s * qx + c * qy
-    opening = 0.01
-    for _k in range(8):
+    for _k in range(16):
         for j in range(2):
             x0[nb + j] = min(xs[nb + j] + opening, prm[P_TH0])
         _all_gaps(x0, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
@@ -989,8 +1029,9 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
         min gap, final mu.
     """
     nb = 2 * n
-    prm = np.empty(P_GAUGE + 1)
-    prm[:P_GAUGE] = prm_in[:P_GAUGE]
+    prm = np.zeros(P_GAUGE + 1)
+    npr = min(prm_in.shape[0], P_GAUGE)
+    prm[:npr] = prm_in[:npr]
     prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
     bidx = _band_index(n)
     x0 = x.copy()
@@ -1027,6 +1068,12 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                     corner_edge[j, c] = k
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
+    last_kinds = np.zeros(mmax, dtype=np.int64)
+    last_fj = np.zeros(mmax, dtype=np.int64)
+    last_fidx = np.zeros(mmax, dtype=np.int64)
+    last_fsc = np.zeros(mmax)
+    last_m = 0
+    saddle = False
     status = OK
     escapes = 0
     rounds = 0
@@ -1062,6 +1109,11 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
             break
         status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0,
                          work_it)
+        last_m = mcount
+        last_kinds[:mcount] = kinds[:mcount]
+        last_fj[:mcount] = fj[:mcount]
+        last_fidx[:mcount] = fidx[:mcount]
+        last_fsc[:mcount] = fsc[:mcount]
         if status == SADDLE and escapes < 3:
             escapes += 1
             if _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, escapes, gbuf):
@@ -1069,6 +1121,10 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                     if kinds[m] == 0:
                         lam_guess_face[fj[m], fidx[m]] = lam[m]
                 continue
+        if status == SADDLE:
+            # escapes exhausted: polish where we are; the answer is reported as not stable
+            status = OK
+            saddle = True
         if status != OK:
             break
         # identify the contact set and polish
@@ -1139,21 +1195,42 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                 continue
         if not changed:
             break
-        # warm start the next round from this round's multipliers
+        # warm start the next round from this round's answer (fingers opened slightly so that
+        # the new candidate set is strictly feasible) and its multipliers
         for m in range(mcount):
             if kinds[m] == 0:
                 lam_guess_face[fj[m], fidx[m]] = lam[m]
+        mnew = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+        xprev = x0.copy()
+        if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mnew, 0, gbuf, 1e-4):
+            for d in range(nb + 2):
+                x0[d] = xprev[d]
         if rnd >= int(opts[O_MAXROUND]) + escapes - 1:
             status = CONTACT_CYCLE
             break
-    # outputs
+    # outputs, on the constraint list the last solve used (the loop may have changed the
+    # candidate sets after it)
     for d in range(nb + 2):
         x[d] = xs[d]
     lam_face[:, :] = 0.0
     lam_corner[:, :] = 0.0
     lam_stop[:] = 0.0
-    mcount = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+    mcount = last_m
+    kinds[:mcount] = last_kinds[:mcount]
+    fj[:mcount] = last_fj[:mcount]
+    fidx[:mcount] = last_fidx[:mcount]
+    fsc[:mcount] = last_fsc[:mcount]
     _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+    if status == POLISH_FAIL:
+        # keep the interior-point answer with the multipliers of open gaps dropped; the
+        # independent check decides whether it is an equilibrium
+        for m in range(mcount):
+            if gbuf[m] > 1e-9:
+                lam[m] = 0.0
+        status = OK
+    for d in range(2):
+        corner_edge[d, 0] = -1
+        corner_edge[d, 1] = -1
     gmin = 1e300
     gact = 0.0
     for m in range(mcount):
@@ -1163,7 +1240,9 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
         if kinds[m] == 0:
             lam_face[fj[m], fidx[m]] = lam[m]
         elif kinds[m] == 1:
-            lam_corner[fj[m], 0 if fsc[m] > 0.0 else 1] = lam[m]
+            c = 0 if fsc[m] > 0.0 else 1
+            lam_corner[fj[m], c] = lam[m]
+            corner_edge[fj[m], c] = fidx[m]
         else:
             lam_stop[fj[m]] = lam[m]
     res = np.zeros(nb + 2)
@@ -1172,7 +1251,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     info[0] = status
     info[1] = work_it[0]
     info[2] = rounds
-    info[3] = 1.0 if stable else 0.0
+    info[3] = 1.0 if (stable and not saddle) else 0.0
     info[4] = kkt / fscale
     info[5] = gact
     info[6] = gmin

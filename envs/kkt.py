@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .psm import spring_stiffness
+from .psm import corner_radius, spring_stiffness
 from .scene import Scene, closed_angle_rad, finger_frame
 
 __all__ = ["KKTReport", "kkt_check", "FORCE_TOL", "GAP_TOL"]
@@ -123,6 +123,7 @@ def kkt_check(
     min_force = math.inf
     contact_scale = [0.0]
     hw = g.finger_width_m / 2
+    rho = corner_radius(g.finger_width_m, r)  # rounded end corners, centres at hw - rho
     for j in range(2):
         theta = jaw_angles_rad[j]
         joint, axis, normal = finger_frame(g, j, theta)
@@ -141,10 +142,11 @@ def kkt_check(
                 at = p[i]
             else:
                 sc = 0.0 if s[i] < 0 else g.finger_length_m
-                corner = joint + sc * axis + hw * normal
+                corner = joint + sc * axis + (hw - rho) * normal
                 vec = p[i] - corner
-                gap = math.hypot(*vec)
-                direction = vec / gap if gap > 0 else normal
+                dist = math.hypot(*vec)
+                gap = dist - rho
+                direction = vec / dist if dist > 0 else normal
                 at = corner
             lam = face_forces_n[j, i]
             if 0.0 <= s[i] <= g.finger_length_m:
@@ -158,9 +160,10 @@ def kkt_check(
                 contact_scale.append(abs(lam) * math.hypot(*arm))
         for c in range(2):
             sc = g.finger_length_m if c == 0 else 0.0
-            corner = joint + sc * axis + hw * normal
-            if _point_in_polygon(corner, p):
-                max_pen = max(max_pen, _dist_to_polygon(corner, p))
+            corner = joint + sc * axis + (hw - rho) * normal
+            depth = _dist_to_polygon(corner, p)
+            depth = rho + depth if _point_in_polygon(corner, p) else rho - depth
+            max_pen = max(max_pen, depth)
             k = int(corner_edges[j, c])
             lam = corner_forces_n[j, c]
             if k < 0 or lam == 0.0:
@@ -168,13 +171,18 @@ def kkt_check(
             a, b = p[k], p[(k + 1) % n]
             dvec = b - a
             length = math.hypot(*dvec)
-            nu = np.array([dvec[1], -dvec[0]]) / length  # outward normal of a CCW contour
             t = float((corner - a) @ dvec) / length**2
-            gap = float((corner - a) @ nu)
+            if 0.0 <= t <= 1.0:
+                nu = np.array([dvec[1], -dvec[0]]) / length  # outward normal of a CCW contour
+                gap = float((corner - a) @ nu) - rho
+            else:  # beyond the edge: the corner bears on the nearer end point
+                t = 0.0 if t < 0.0 else 1.0
+                vec = corner - (a if t == 0.0 else b)
+                dist = math.hypot(*vec)
+                gap = dist - rho
+                nu = vec / dist if dist > 0 else np.zeros(2)
             min_force = min(min_force, lam)
             max_gap = max(max_gap, abs(gap))
-            if not -1e-9 <= t <= 1 + 1e-9:
-                max_gap = max(max_gap, r)  # corner force on an edge it does not face
             force[k] -= (1 - t) * lam * nu
             force[(k + 1) % n] -= t * lam * nu
             arm = corner - joint

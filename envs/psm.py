@@ -23,6 +23,7 @@ __all__ = [
     "spring_stiffness",
     "rest_points",
     "ScaledProblem",
+    "corner_radius",
     "scaled_problem",
     "spring_strains",
     "energy_scaled",
@@ -169,8 +170,17 @@ class ScaledProblem:
 
 # Layout of ScaledProblem.params (shared with envs.kernels).
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
-P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE = range(9, 14)
-N_PARAMS = 14
+P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO = range(9, 15)
+N_PARAMS = 15
+# Finger end corners are rounded with this radius (fraction of the disk radius, at most a tenth
+# of the half width): it makes point-on-corner contact differentiable; its effect on the
+# geometry is below 1e-3 r.
+CORNER_ROUNDING = 1e-3
+
+
+def corner_radius(finger_width_m: float, radius_m: float) -> float:
+    """Rounding radius of the finger end corners [m] (see :data:`CORNER_ROUNDING`)."""
+    return min(CORNER_ROUNDING * radius_m, 0.05 * finger_width_m)
 
 
 def scaled_problem(
@@ -215,6 +225,7 @@ def scaled_problem(
     p[P_TH0] = g.rest_angle_rad
     p[P_THMIN] = closed_angle_rad(g)
     p[P_PHASE] = phase_rad
+    p[P_RHO] = corner_radius(g.finger_width_m, r) / r
     return ScaledProblem(n, p, r, k_unit * r, k_unit * r**2)
 
 

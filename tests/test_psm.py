@@ -83,12 +83,13 @@ def test_face_constraint_derivatives(sc_kind):
     _fd_check(fun, z, g5[:3], h5[:3, :3])
 
 
-@pytest.mark.parametrize("sc", [0.0, 2.5])
-def test_corner_constraint_derivatives(sc):
+@pytest.mark.parametrize("sc,k", [(0.0, 9), (2.5, 9), (0.0, 3), (2.5, 0), (1.2, 6)])
+def test_corner_constraint_derivatives(sc, k):
+    # covers both the edge-interior branch and the end-point branch of the corner gap
     prob, x = _state()
     n = prob.n
     q = x[: 2 * n].reshape(n, 2).copy()
-    k, j = 9, 1
+    j = 1
 
     def fun(z):
         qq = q.copy()
