@@ -1,0 +1,47 @@
+"""Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
+
+Importing the package registers ``GripperDesign-v0`` with Gymnasium::
+
+    import gymnasium as gym
+    import envs
+
+    env = gym.make("GripperDesign-v0")
+    vec = gym.make_vec("GripperDesign-v0", num_envs=64, vectorization_mode="vector_entry_point")
+"""
+
+from __future__ import annotations
+
+import gymnasium
+
+from .design_env import GripperDesignEnv, GripperDesignVectorEnv, ObjectDistribution
+from .evaluate import Design, DesignBounds, RewardWeights, evaluate_designs
+from .scene import PRESETS, Gripper, Scene, SoftDisk
+from .solver import GraspResult, simulate, simulate_ramp
+
+__all__ = [
+    "Gripper",
+    "SoftDisk",
+    "Scene",
+    "PRESETS",
+    "simulate",
+    "simulate_ramp",
+    "GraspResult",
+    "evaluate_designs",
+    "Design",
+    "DesignBounds",
+    "RewardWeights",
+    "ObjectDistribution",
+    "GripperDesignEnv",
+    "GripperDesignVectorEnv",
+    "ENV_ID",
+]
+
+ENV_ID = "GripperDesign-v0"
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        id=ENV_ID,
+        entry_point="envs.design_env:GripperDesignEnv",
+        vector_entry_point="envs.design_env:GripperDesignVectorEnv",
+        max_episode_steps=1,
+    )

@@ -1,0 +1,636 @@
+"""GripperDesign-v0: one step designs a gripper for a soft disk; a thin adapter over physics.
+
+The physics and the reward live in :func:`envs.evaluate.evaluate_designs`; this module only maps
+actions to designs, draws objects, builds observations and ``info``, and renders.
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import ResetNeeded
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from .evaluate import (
+    METRIC_KEYS,
+    N_DESIGN,
+    DesignBounds,
+    RewardWeights,
+    evaluate_designs,
+)
+from .scene import Gripper, Scene, SoftDisk, check_range
+
+__all__ = [
+    "OBS_FIELDS",
+    "ObjectDistribution",
+    "observe",
+    "GripperDesignEnv",
+    "GripperDesignVectorEnv",
+]
+
+# (name, transform, low, high): the observation is the transformed value mapped linearly from
+# [low, high] to [-1, 1]; objects outside these ranges are rejected at reset.
+OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
+    ("radius_m", "log10", -3.0, 0.0),
+    ("effective_modulus_pa", "log10", 3.0, 9.0),
+    ("thickness_m", "log10", -4.0, -1.0),
+    ("poisson_ratio", "linear", -1.0, 0.5),
+    ("strain_limit", "linear", 0.0, 1.0),
+)
+OBJECT_INFO_KEYS = (
+    "radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m", "stiffness_scale",
+    "strain_limit",
+)
+RENDER_FPS = 4
+
+
+@dataclass(frozen=True)
+class ObjectDistribution:
+    """Distribution of the object drawn at reset.
+
+    Parameters
+    ----------
+    radii_m
+        Radii drawn uniformly among these values [m] (default: the three paper disks).
+    youngs_modulus_range_pa
+        Young's modulus drawn log-uniformly in this range [Pa].
+    strain_limit_range
+        Admissible strain drawn uniformly in this range [-], inside (0, 1].
+    poisson_ratio
+        Poisson's ratio of every object [-].
+    thickness_m
+        Thickness of every object [m].
+    stiffness_scale
+        Calibration scale ``s`` of every object [-].
+    """
+
+    radii_m: tuple[float, ...] = (0.05, 0.07, 0.10)
+    youngs_modulus_range_pa: tuple[float, float] = (30e3, 1e6)
+    strain_limit_range: tuple[float, float] = (0.05, 0.25)
+    poisson_ratio: float = 0.45
+    thickness_m: float = 0.01
+    stiffness_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        radii = tuple(check_range("radii_m[i]", r, 0.0, math.inf, low_open=True)
+                      for r in self.radii_m)
+        if not radii:
+            raise ValueError("radii_m must hold at least one radius")
+        object.__setattr__(self, "radii_m", radii)
+        for name, low, high in (("youngs_modulus_range_pa", 0.0, math.inf),
+                                ("strain_limit_range", 0.0, 1.0)):
+            pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=True)
+                         for v in getattr(self, name))
+            if len(pair) != 2 or pair[0] > pair[1]:
+                raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
+            object.__setattr__(self, name, pair)
+        # a SoftDisk validates the material fields
+        SoftDisk(radii[0], 0.0, self.youngs_modulus_range_pa[0], self.poisson_ratio,
+                 self.thickness_m, self.stiffness_scale)
+
+    def sample(self, rng: np.random.Generator) -> tuple[SoftDisk, float]:
+        """Draw an object and its strain limit (always three draws, in a fixed order).
+
+        The disk's ``distance_m`` is 0: the design's ``distance_m`` replaces it.
+        """
+        radius = self.radii_m[int(rng.integers(len(self.radii_m)))]
+        lo, hi = self.youngs_modulus_range_pa
+        modulus = float(np.exp(rng.uniform(math.log(lo), math.log(hi))))
+        limit = float(rng.uniform(*self.strain_limit_range))
+        disk = SoftDisk(radius, 0.0, modulus, self.poisson_ratio, self.thickness_m,
+                        self.stiffness_scale)
+        return disk, limit
+
+
+def observe(disk: SoftDisk, strain_limit: float) -> np.ndarray:
+    """Normalized observation of an object, float32 (5,) in [-1, 1] (see :data:`OBS_FIELDS`).
+
+    Raises
+    ------
+    ValueError
+        If a value lies outside the observable range (the message names it).
+    """
+    check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
+    values = {
+        "radius_m": disk.radius_m,
+        "effective_modulus_pa": disk.stiffness_scale * disk.youngs_modulus_pa,
+        "thickness_m": disk.thickness_m,
+        "poisson_ratio": disk.poisson_ratio,
+        "strain_limit": strain_limit,
+    }
+    obs = np.empty(len(OBS_FIELDS), dtype=np.float32)
+    for i, (name, transform, low, high) in enumerate(OBS_FIELDS):
+        v = values[name]
+        t = math.log10(v) if transform == "log10" else v
+        if not low <= t <= high:
+            shown = f"[{10**low:g}, {10**high:g}]" if transform == "log10" else f"[{low}, {high}]"
+            raise ValueError(f"{name} = {v!r} is outside the observable range {shown}")
+        obs[i] = 2.0 * (t - low) / (high - low) - 1.0
+    return np.clip(obs, -1.0, 1.0)
+
+
+def _object_info(disk: SoftDisk, strain_limit: float) -> dict[str, float]:
+    return {
+        "radius_m": disk.radius_m,
+        "youngs_modulus_pa": disk.youngs_modulus_pa,
+        "poisson_ratio": disk.poisson_ratio,
+        "thickness_m": disk.thickness_m,
+        "stiffness_scale": disk.stiffness_scale,
+        "strain_limit": float(strain_limit),
+    }
+
+
+def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Validate actions; return them clipped to [-1, 1] (float64) and a per-row clipped flag."""
+    try:
+        a = np.array(actions, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"action must be numeric with shape {shape}: {exc}") from None
+    if a.shape != shape:
+        raise ValueError(f"action must have shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action must be finite (no NaN or inf), got {a.tolist()}")
+    clipped = np.any((a < -1.0) | (a > 1.0), axis=-1)
+    return np.clip(a, -1.0, 1.0), np.asarray(clipped)
+
+
+def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
+    options = dict(options or {})
+    unknown = set(options) - {"disk", "strain_limit"}
+    if unknown:
+        raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: disk, strain_limit")
+    if "disk" in options and not isinstance(options["disk"], SoftDisk):
+        raise ValueError(f"options['disk'] must be a SoftDisk, got {type(options['disk'])}")
+    return options
+
+
+def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
+                 options: dict[str, Any]) -> tuple[SoftDisk, float, np.ndarray]:
+    # always draw, so the random stream does not depend on the options
+    disk, limit = distribution.sample(rng)
+    disk = options.get("disk", disk)
+    limit = float(options.get("strain_limit", limit))
+    return disk, limit, observe(disk, limit)
+
+
+def _spaces() -> tuple[spaces.Box, spaces.Box]:
+    action = spaces.Box(-1.0, 1.0, shape=(N_DESIGN,), dtype=np.float32)
+    obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
+    return action, obs
+
+
+def _info_value(v: np.ndarray):
+    """Per-row info entry: Python scalar for scalars, small array otherwise."""
+    if v.ndim == 0:
+        return v.item()
+    return v.copy()
+
+
+def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float,
+                  n_triangles: int, torsion: float, cache: dict) -> np.ndarray:
+    """Off-screen frame (uint8 H x W x 3) of a design on a disk; re-solves with simulate()."""
+    from matplotlib.figure import Figure
+
+    from .render import draw_design, figure_rgb_array, grasp_figure
+    from .solver import simulate
+
+    if design is None:
+        fig = Figure(figsize=(5.0, 5.0), dpi=80)
+        draw_design(fig.add_subplot(), np.array([0.2, math.radians(45.0), 0.025, 0.01, 0.0, 0.0]),
+                    disk.radius_m, title="no design yet: call step()")
+        return figure_rgb_array(fig)
+    ln, th0, d3, w, torque, d1 = design.tolist()
+    try:
+        scene = Scene(Gripper(ln, th0, d3, w, torsion),
+                      SoftDisk(disk.radius_m, d1, disk.youngs_modulus_pa, disk.poisson_ratio,
+                               disk.thickness_m, disk.stiffness_scale))
+    except ValueError as exc:
+        fig = Figure(figsize=(5.0, 5.0), dpi=80)
+        draw_design(fig.add_subplot(), design, disk.radius_m,
+                    title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
+        return figure_rgb_array(fig)
+    key = (tuple(design.tolist()), disk, n_triangles, torsion)
+    if cache.get("key") != key:
+        cache.clear()
+        cache["key"], cache["result"] = key, simulate(scene, torque, n_triangles)
+    fig = grasp_figure(scene, cache["result"], strain_limit=strain_limit, dpi=80)
+    return figure_rgb_array(fig)
+
+
+class GripperDesignEnv(gym.Env):
+    """
+    ## Description
+
+    Design an angular two-finger gripper for a soft disk. Each episode presents one object (a
+    soft 2-D disk with a radius, a stiffness and a strain limit); the agent answers with one
+    design (finger length, rest angle, joint offset, finger width, actuation torque and where the
+    object sits), the grasp is solved with the point-spring model of the disk (quasi-static,
+    frictionless contact, ``N`` fan triangles) and the episode ends. It is a contextual bandit:
+    one step is one grasp. The physics is :func:`envs.evaluate.evaluate_designs`; this class is
+    only the Gymnasium adapter (the same function evaluates populations for optimizers).
+
+    Frame: x to the right, y up, the gripper's symmetry axis is the y axis, the finger joints are
+    at ``(+-d_3, 0)``, the disk centre at ``(0, d_1 + r)``.
+
+    ## Action Space
+
+    The action is a `ndarray` with shape `(6,)`, float32 in `[-1, 1]`, mapped linearly to the
+    box of `bounds` (a :class:`~envs.evaluate.DesignBounds`; defaults below). Values outside
+    `[-1, 1]` are clipped (reported in `info["clipped"]`); NaN, inf or a wrong shape raise
+    `ValueError`.
+
+    | Num | Action                          | Unit | Min (-1) | Max (+1) |
+    |-----|---------------------------------|------|----------|----------|
+    | 0   | finger length `l`               | m    | 0.05     | 0.30     |
+    | 1   | rest angle `theta_a0`           | rad  | 0.2618 (15 deg) | 1.3090 (75 deg) |
+    | 2   | joint offset `d_3`              | m    | 0.0      | 0.05     |
+    | 3   | finger width `w`                | m    | 0.002    | 0.03     |
+    | 4   | actuation torque `T_a`          | N·m  | 0.0      | 1.0      |
+    | 5   | object placement `d_1`          | m    | 0.0      | 0.06     |
+
+    ## Observation Space
+
+    The observation is a float32 `ndarray` with shape `(5,)` describing the object, each value
+    mapped linearly from the range below to `[-1, 1]` (a reset with an object outside these
+    ranges raises `ValueError`).
+
+    | Num | Observation                                   | Transform | Min    | Max   |
+    |-----|-----------------------------------------------|-----------|--------|-------|
+    | 0   | radius `r` [m]                                | log10     | 1e-3   | 1.0   |
+    | 1   | effective Young's modulus `s E` [Pa]          | log10     | 1e3    | 1e9   |
+    | 2   | thickness `t` [m]                             | log10     | 1e-4   | 0.1   |
+    | 3   | Poisson's ratio `nu` [-]                      | linear    | -1.0   | 0.5   |
+    | 4   | strain limit `eps_max` [-]                    | linear    | 0.0    | 1.0   |
+
+    ## Rewards
+
+    With the weights `w` of :class:`~envs.evaluate.RewardWeights` (defaults in brackets):
+
+    *r = w_contact min(c, c_max) - w_deform min(eps / eps_max, q_max) - w_miss m
+    - w_invalid [invalid] - w_fail [not converged]*
+
+    - `c`: contact score, `(contacts on the right face + contacts on the left face) / N`, the
+      fraction of the contour in contact, nearly independent of `N`
+      (`w_contact = 1`, `c_max = 0.5`);
+    - `eps`: peak spring strain, `eps_max` the object's strain limit (`w_deform = 0.25`,
+      `q_max = 4`);
+    - `m`: number of fingers that do not touch the disk (`w_miss = 0.5`);
+    - invalid: the fingers overlap the disk at rest, or the design is otherwise impossible
+      (`w_invalid = 3`, nothing is solved);
+    - not converged: the solver failed (`w_fail = 2.5`, metrics reported as 0).
+
+    Each signed term is in `info` (`reward_contact`, `reward_deform`, `penalty_miss`,
+    `penalty_invalid`, `penalty_fail`). The reward is finite and lies in `[-3, 0.5]`.
+
+    ## Starting State
+
+    At reset an object is drawn from `distribution` (an :class:`ObjectDistribution`; default:
+    radius uniformly among the paper disks {0.05, 0.07, 0.10} m, Young's modulus log-uniform in
+    [30 kPa, 1 MPa], strain limit uniform in [0.05, 0.25], `nu = 0.45`, `t = 0.01` m, `s = 1`).
+    `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1})` fixes either or both (the
+    disk's `distance_m` is ignored: `d_1` is part of the action).
+
+    ## Episode End
+
+    The episode terminates after its single step (`terminated=True`); it is registered with
+    `max_episode_steps=1`, so under `gymnasium.make` the step is also reported as truncated by
+    the `TimeLimit` wrapper. Stepping again without a reset evaluates another design on the same
+    object.
+
+    ## Arguments
+
+    - `render_mode`: `None`, `"rgb_array"` (off-screen Agg frame) or `"human"` (matplotlib
+      window). The frame shows the jaws at rest and closed, the rest and deformed disk, the
+      contacts and the springs coloured by strain; it re-solves the last design with
+      :func:`envs.solver.simulate` (same kernel).
+    - `bounds`: :class:`~envs.evaluate.DesignBounds` of the action mapping.
+    - `distribution`: :class:`ObjectDistribution` of the objects drawn at reset.
+    - `weights`: :class:`~envs.evaluate.RewardWeights`.
+    - `n_triangles`: number of fan triangles `N` of the disk model (default 20).
+    - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` (default 0.073 N·m/rad).
+
+    `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
+    `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
+    `clipped`, the physical `design` (6 values in SI units, action order) and the object.
+
+    ## Version History
+
+    * v0: Initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": RENDER_FPS}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        bounds: DesignBounds | None = None,
+        distribution: ObjectDistribution | None = None,
+        weights: RewardWeights | None = None,
+        n_triangles: int = 20,
+        torsion_stiffness_nm_per_rad: float = 0.073,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode {render_mode!r} is not one of "
+                             f"{self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.bounds = DesignBounds() if bounds is None else bounds
+        self.distribution = ObjectDistribution() if distribution is None else distribution
+        self.weights = RewardWeights() if weights is None else weights
+        self.n_triangles = int(n_triangles)
+        self.torsion_stiffness_nm_per_rad = check_range(
+            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
+            low_open=True)
+        self.action_space, self.observation_space = _spaces()
+        self._disk: SoftDisk | None = None
+        self._strain_limit = 0.0
+        self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
+        self._last_design: np.ndarray | None = None
+        self._render_cache: dict = {}
+        self._figure = None
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        opts = _parse_options(options)
+        self._disk, self._strain_limit, self._obs = _draw_object(
+            self.np_random, self.distribution, opts)
+        self._last_design = None
+        if self.render_mode == "human":
+            self.render()
+        return self._obs.copy(), _object_info(self._disk, self._strain_limit)
+
+    def step(self, action):
+        if self._disk is None:
+            raise ResetNeeded("call reset() before step()")
+        act, clipped = _check_actions(action, (N_DESIGN,))
+        design = self.bounds.scale(act)
+        out = evaluate_designs(
+            design[None, :], self._disk, strain_limits=self._strain_limit,
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            n_triangles=self.n_triangles, weights=self.weights,
+        )
+        info = {key: _info_value(v[0]) for key, v in out.items()}
+        info["clipped"] = bool(clipped)
+        info["design"] = design
+        info.update(_object_info(self._disk, self._strain_limit))
+        self._last_design = design
+        if self.render_mode == "human":
+            self.render()
+        return self._obs.copy(), float(out["reward"][0]), True, False, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; set it at construction")
+            return None
+        if self._disk is None:
+            raise ResetNeeded("call reset() before render()")
+        frame = _render_frame(self._last_design, self._disk, self._strain_limit,
+                              self.n_triangles, self.torsion_stiffness_nm_per_rad,
+                              self._render_cache)
+        if self.render_mode == "rgb_array":
+            return frame
+        self._show(frame)
+        return None
+
+    def _show(self, frame: np.ndarray) -> None:
+        import matplotlib.pyplot as plt
+
+        if self._figure is None or not plt.fignum_exists(self._figure.number):
+            self._figure = plt.figure("GripperDesign-v0")
+            self._image = self._figure.add_subplot().imshow(frame)
+            self._figure.axes[0].set_axis_off()
+        else:
+            self._image.set_data(frame)
+        plt.pause(1.0 / self.metadata["render_fps"])
+
+    def close(self) -> None:
+        if self._figure is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._figure)
+            self._figure = None
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_figure"] = None  # GUI objects do not pickle; a new window opens on render
+        state.pop("_image", None)
+        state["_render_cache"] = {}
+        return state
+
+
+class GripperDesignVectorEnv(VectorEnv):
+    """``num_envs`` copies of :class:`GripperDesignEnv` stepped with ONE batched evaluation.
+
+    All designs of a step go through a single :func:`~envs.evaluate.evaluate_designs` call (the
+    compiled solver runs the rows in parallel threads), so this is much cheaper than
+    ``SyncVectorEnv`` or ``AsyncVectorEnv`` over single envs, and gives the same results: sub-env
+    ``i`` reset with ``seed + i`` draws the same objects as a single env reset with that seed.
+
+    Autoreset (``autoreset_mode``, see https://farama.org/Vector-Autoreset-Mode):
+
+    - ``NEXT_STEP`` (default, as Gymnasium's own vector envs): every episode is one step, so
+      steps alternate: a step evaluating the designs (reward, ``terminated=True``) is followed
+      by a step that resets the sub-envs and ignores their actions (reward 0,
+      ``terminated=False``).
+    - ``SAME_STEP`` (recommended here: no wasted steps): every step evaluates the designs and
+      returns the observation of the next object; the evaluated object's observation and info
+      are in ``info["final_obs"]`` and ``info["final_info"]``.
+    - ``DISABLED``: the caller resets with ``reset(options={"reset_mask": mask})``.
+
+    ``truncated`` mirrors the ``TimeLimit`` wrapper of ``make``: True on the evaluation step when
+    ``max_episode_steps`` is 1 (the registered value).
+
+    Parameters
+    ----------
+    num_envs
+        Number of sub-environments.
+    render_mode
+        ``None`` or ``"rgb_array"`` (``render()`` returns one frame per sub-env).
+    bounds, distribution, weights, n_triangles, torsion_stiffness_nm_per_rad
+        As for :class:`GripperDesignEnv`.
+    max_episode_steps
+        Passed by ``gymnasium.make_vec``; see ``truncated`` above.
+    autoreset_mode
+        An :class:`gymnasium.vector.AutoresetMode` (or its value).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": RENDER_FPS,
+                "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        *,
+        render_mode: str | None = None,
+        bounds: DesignBounds | None = None,
+        distribution: ObjectDistribution | None = None,
+        weights: RewardWeights | None = None,
+        n_triangles: int = 20,
+        torsion_stiffness_nm_per_rad: float = 0.073,
+        max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+    ) -> None:
+        if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode {render_mode!r} is not one of "
+                             f"{self.metadata['render_modes']}")
+        if max_episode_steps is not None and max_episode_steps < 1:
+            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps!r}")
+        self.num_envs = int(num_envs)
+        self.render_mode = render_mode
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
+        self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
+        self.bounds = DesignBounds() if bounds is None else bounds
+        self.distribution = ObjectDistribution() if distribution is None else distribution
+        self.weights = RewardWeights() if weights is None else weights
+        self.n_triangles = int(n_triangles)
+        self.torsion_stiffness_nm_per_rad = check_range(
+            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
+            low_open=True)
+        self.max_episode_steps = max_episode_steps
+        self.single_action_space, self.single_observation_space = _spaces()
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        n = self.num_envs
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._disks: list[SoftDisk | None] = [None] * n
+        self._limits = np.zeros(n)
+        self._obs = np.zeros((n, len(OBS_FIELDS)), dtype=np.float32)
+        self._autoreset = np.zeros(n, dtype=np.bool_)
+        self._last_designs: list[np.ndarray | None] = [None] * n
+        self._render_caches: list[dict] = [{} for _ in range(n)]
+
+    # --- helpers -------------------------------------------------------------------------------
+
+    def _reset_rows(self, rows: np.ndarray, seeds: list[int | None], options: dict) -> None:
+        for i in rows.tolist():
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(seeds[i])
+            disk, limit, obs = _draw_object(self._rngs[i], self.distribution, options)
+            self._disks[i], self._limits[i], self._obs[i] = disk, limit, obs
+            self._last_designs[i] = None
+        self._autoreset[rows] = False
+
+    def _object_infos(self, rows: np.ndarray) -> dict[str, np.ndarray]:
+        info: dict[str, np.ndarray] = {}
+        for key in OBJECT_INFO_KEYS:
+            arr = np.zeros(self.num_envs)
+            for i in rows.tolist():
+                arr[i] = _object_info(self._disks[i], self._limits[i])[key]
+            info[key] = arr
+            info[f"_{key}"] = self._mask(rows)
+        return info
+
+    def _mask(self, rows: np.ndarray) -> np.ndarray:
+        mask = np.zeros(self.num_envs, dtype=np.bool_)
+        mask[rows] = True
+        return mask
+
+    def _evaluate(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, dict]:
+        act, clipped = _check_actions(actions[rows], (rows.size, N_DESIGN))
+        designs = self.bounds.scale(act)
+        out = evaluate_designs(
+            designs, [self._disks[i] for i in rows.tolist()], strain_limits=self._limits[rows],
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            n_triangles=self.n_triangles, weights=self.weights,
+        )
+        info: dict[str, np.ndarray] = {}
+        mask = self._mask(rows)
+        for key, (dtype, shape) in METRIC_KEYS.items():
+            arr = np.zeros((self.num_envs, *shape), dtype=dtype)
+            arr[rows] = out[key]
+            info[key], info[f"_{key}"] = arr, mask.copy()
+        for key, values, dtype in (("clipped", clipped, np.bool_), ("design", designs, float)):
+            arr = np.zeros((self.num_envs, *values.shape[1:]), dtype=dtype)
+            arr[rows] = values
+            info[key], info[f"_{key}"] = arr, mask.copy()
+        for k, i in enumerate(rows.tolist()):
+            self._last_designs[i] = designs[k]
+        return out["reward"], info
+
+    # --- API -----------------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | list[int | None] | None = None,
+              options: dict[str, Any] | None = None):
+        n = self.num_envs
+        if seed is None:
+            seeds: list[int | None] = [None] * n
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if mask is None:
+            mask = np.ones(n, dtype=np.bool_)
+        mask = np.asarray(mask)
+        if mask.shape != (n,) or mask.dtype != np.bool_ or not mask.any():
+            raise ValueError(f"options['reset_mask'] must be a bool array of shape ({n},) with "
+                             "at least one True value")
+        rows = np.flatnonzero(mask)
+        self._reset_rows(rows, seeds, _parse_options(options))
+        return self._obs.copy(), self._object_infos(rows)
+
+    def step(self, actions):
+        n = self.num_envs
+        if any(d is None for d in self._disks):
+            raise ResetNeeded("call reset() before step()")
+        actions = np.asarray(actions)
+        if actions.shape != (n, N_DESIGN):
+            raise ValueError(f"actions must have shape ({n}, {N_DESIGN}), got {actions.shape}")
+        rewards = np.zeros(n)
+        terminated = np.zeros(n, dtype=np.bool_)
+        truncated = np.zeros(n, dtype=np.bool_)
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
+            resets = self._autoreset.copy()
+        else:
+            if self.autoreset_mode == AutoresetMode.DISABLED and self._autoreset.any():
+                raise RuntimeError("sub-envs "
+                                   f"{np.flatnonzero(self._autoreset).tolist()} ended: reset "
+                                   "them with reset(options={'reset_mask': mask})")
+            resets = np.zeros(n, dtype=np.bool_)
+        rows = np.flatnonzero(~resets)
+        info: dict[str, Any] = {}
+        if rows.size:
+            rewards[rows], info = self._evaluate(rows, actions)
+            terminated[rows] = True
+            truncated[rows] = self.max_episode_steps is not None and self.max_episode_steps <= 1
+            info.update(self._object_infos(rows))
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP and resets.any():
+            self._reset_rows(np.flatnonzero(resets), [None] * n, {})
+            # object keys cover both the evaluated rows and the freshly reset ones
+            info.update(self._object_infos(np.arange(n)))
+        elif self.autoreset_mode == AutoresetMode.SAME_STEP and rows.size:
+            final_obs = np.full(n, None, dtype=object)
+            for i in rows.tolist():
+                final_obs[i] = self._obs[i].copy()
+            info = {"final_obs": final_obs, "_final_obs": self._mask(rows),
+                    "final_info": info, "_final_info": self._mask(rows)}
+            self._reset_rows(rows, [None] * n, {})
+            info.update(self._object_infos(rows))
+        self._autoreset = terminated | truncated
+        return self._obs.copy(), rewards, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; set it at construction")
+            return None
+        if any(d is None for d in self._disks):
+            raise ResetNeeded("call reset() before render()")
+        return tuple(
+            _render_frame(self._last_designs[i], self._disks[i], float(self._limits[i]),
+                          self.n_triangles, self.torsion_stiffness_nm_per_rad,
+                          self._render_caches[i])
+            for i in range(self.num_envs)
+        )

@@ -1,0 +1,259 @@
+"""Drawings of a grasp shared by the design environment, the CLI and the scripts.
+
+:func:`draw_grasp` draws on a matplotlib ``Axes``: the fingers at rest (dashed) and at the grasp
+angles, the rest and the deformed disk, the springs coloured by strain and the contact points.
+:func:`grasp_figure` makes a stand-alone figure (saved as PNG when given a path) and
+:func:`grasp_rgb_array` renders one off-screen with the Agg canvas, so no pyplot state or GUI
+backend is involved.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Polygon
+
+from .scene import Gripper, Scene, SoftDisk
+
+__all__ = [
+    "draw_grasp",
+    "draw_design",
+    "grasp_figure",
+    "grasp_rgb_array",
+    "figure_rgb_array",
+    "spring_segments",
+]
+
+STRAIN_CMAP = "coolwarm"
+REST_STYLE = {"fill": False, "linestyle": "--", "linewidth": 0.8, "edgecolor": "0.55"}
+
+
+def _finger_polygon(length: float, angle: float, offset: float, width: float, side: int
+                    ) -> np.ndarray:
+    """Corners of one finger bar [m], side 0 right, 1 left (conventions of scene.finger_frame)."""
+    s, c = math.sin(angle), math.cos(angle)
+    joint = np.array([offset, 0.0]) if side == 0 else np.array([-offset, 0.0])
+    axis = np.array([s, c]) if side == 0 else np.array([-s, c])
+    normal = np.array([-c, s]) if side == 0 else np.array([c, s])
+    hw = width / 2
+    return np.array([joint + a * axis + m * normal
+                     for a, m in ((0.0, -hw), (length, -hw), (length, hw), (0.0, hw))])
+
+
+def spring_segments(points_m: np.ndarray, center_m: np.ndarray, radius_m: float):
+    """Radial and contour spring segments and their strains ``(L - L0) / L0``.
+
+    Parameters
+    ----------
+    points_m
+        Contour points [m], shape (N, 2).
+    center_m
+        Disk centre [m].
+    radius_m
+        Rest radius [m] (radial rest length); the contour rest length is ``2 r sin(pi/N)``.
+
+    Returns
+    -------
+    segments : numpy.ndarray
+        Shape (2N, 2, 2): N radial then N contour springs.
+    strains : numpy.ndarray
+        Shape (2N,).
+    """
+    pts = np.asarray(points_m, dtype=float)
+    n = pts.shape[0]
+    nxt = np.roll(pts, -1, axis=0)
+    centre = np.broadcast_to(np.asarray(center_m, dtype=float), pts.shape)
+    radial = np.stack([centre, pts], axis=1)
+    contour = np.stack([pts, nxt], axis=1)
+    h = 2 * radius_m * math.sin(math.pi / n)
+    strains = np.concatenate([
+        np.linalg.norm(pts - centre, axis=1) / radius_m - 1.0,
+        np.linalg.norm(nxt - pts, axis=1) / h - 1.0,
+    ])
+    return np.concatenate([radial, contour]), strains
+
+
+def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float) -> None:
+    pts = np.concatenate([*fingers, center + radius * np.array([[-1, -1], [1, 1]])])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = 0.08 * float(np.max(hi - lo))
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(min(lo[1], 0.0) - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
+def draw_design(ax, design, radius_m: float, *, title: str | None = None) -> None:
+    """Draw a design at rest from raw numbers, without validating it (for invalid designs).
+
+    Parameters
+    ----------
+    ax
+        Matplotlib axes.
+    design
+        Six numbers in :data:`envs.evaluate.DESIGN_FIELDS` order (SI units).
+    radius_m
+        Disk radius [m].
+    title
+        Axes title.
+    """
+    ln, th0, d3, w, _, d1 = (float(v) for v in np.asarray(design, dtype=float))
+    center = np.array([0.0, d1 + radius_m])
+    fingers = [_finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
+    for poly in fingers:
+        ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.8))
+    ax.add_patch(Circle(center, radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    _frame(ax, fingers, center, radius_m)
+    if title:
+        ax.set_title(title, fontsize=9)
+
+
+def draw_grasp(
+    ax,
+    scene: Scene,
+    result: Any | None = None,
+    *,
+    strain_limit: float | None = None,
+    show_rest: bool = True,
+    show_springs: bool = True,
+    cmap: str = STRAIN_CMAP,
+    title: str | None = None,
+):
+    """Draw a grasp: fingers, rest and deformed disk, springs coloured by strain, contacts.
+
+    Parameters
+    ----------
+    ax
+        Matplotlib axes.
+    scene
+        Gripper and disk.
+    result
+        Anything with ``points_m`` (N, 2) [m], ``jaw_angles_rad`` (2,) and ``contact_mask``
+        (2, N), e.g. a :class:`~envs.solver.GraspResult`; ``None`` draws the scene at rest.
+    strain_limit
+        Strain mapped to the ends of the colour scale [-]; default: the largest |strain|.
+    show_rest
+        Also draw the fingers and the disk at rest (dashed).
+    show_springs
+        Draw the radial and contour springs coloured by strain.
+    cmap
+        Diverging colour map for the strain (blue: compressed, red: stretched).
+    title
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.collections.LineCollection or None
+        The spring collection (for a colour bar), ``None`` without a result.
+    """
+    g: Gripper = scene.gripper
+    d: SoftDisk = scene.disk
+    center = d.center_m
+    rest_fingers = [_finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+                                    g.finger_width_m, side) for side in (0, 1)]
+    angles = (g.rest_angle_rad, g.rest_angle_rad) if result is None else result.jaw_angles_rad
+    fingers = [_finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
+                               g.finger_width_m, side) for side in (0, 1)]
+    if show_rest and result is not None:
+        for poly in rest_fingers:
+            ax.add_patch(Polygon(poly, closed=True, **REST_STYLE))
+        ax.add_patch(Circle(center, d.radius_m, **REST_STYLE))
+    for poly in fingers:
+        ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.9,
+                             zorder=3))
+    joints = np.array([[g.joint_offset_m, 0.0], [-g.joint_offset_m, 0.0]])
+    ax.plot(joints[:, 0], joints[:, 1], "o", color="k", markersize=4, zorder=4)
+    ax.plot(*center, "+", color="k", markersize=8, zorder=4)
+    lines = None
+    if result is None:
+        ax.add_patch(Circle(center, d.radius_m, facecolor="tab:orange", alpha=0.3,
+                            edgecolor="k"))
+    else:
+        pts = np.asarray(result.points_m, dtype=float)
+        ax.add_patch(Polygon(pts, closed=True, facecolor="tab:orange", alpha=0.15,
+                             edgecolor="0.2", linewidth=2.4, zorder=1))
+        if show_springs:
+            segs, strains = spring_segments(pts, center, d.radius_m)
+            lim = strain_limit if strain_limit else max(float(np.max(np.abs(strains))), 1e-6)
+            widths = np.r_[np.full(len(pts), 1.0), np.full(len(pts), 1.8)]
+            lines = LineCollection(segs, cmap=cmap, norm=Normalize(-lim, lim),
+                                   linewidths=widths, zorder=2)
+            lines.set_array(strains)
+            ax.add_collection(lines)
+        mask = np.asarray(result.contact_mask, dtype=bool)
+        for side, colour in ((0, "tab:red"), (1, "tab:purple")):
+            hit = pts[mask[side]]
+            ax.plot(hit[:, 0], hit[:, 1], "o", color=colour, markersize=5, zorder=5)
+    _frame(ax, rest_fingers + fingers, center, d.radius_m)
+    if title:
+        ax.set_title(title, fontsize=9)
+    return lines
+
+
+def _summary(result: Any) -> str:
+    nc = np.asarray(result.contact_mask).sum(axis=1)
+    status = "converged" if getattr(result, "converged", True) else "NOT converged"
+    return (f"T = {result.torque_nm:.3g} N·m, contacts {int(nc[0])}/{int(nc[1])}\n"
+            f"peak strain {result.peak_strain:.3g} ({status})")
+
+
+def grasp_figure(
+    scene: Scene,
+    result: Any | None = None,
+    path: str | Path | None = None,
+    *,
+    strain_limit: float | None = None,
+    title: str | None = None,
+    figsize: tuple[float, float] = (5.0, 5.0),
+    dpi: int = 100,
+) -> Figure:
+    """A stand-alone figure of a grasp with a strain colour bar, saved as PNG if ``path``.
+
+    Parameters
+    ----------
+    scene
+        Gripper and disk.
+    result
+        A :class:`~envs.solver.GraspResult` (or a look-alike, see :func:`draw_grasp`); ``None``
+        draws the scene at rest.
+    path
+        Where to write the PNG (parent folders are created).
+    strain_limit, title
+        See :func:`draw_grasp`; the default title summarizes the result.
+    figsize, dpi
+        Figure size [in] and resolution.
+    """
+    fig = Figure(figsize=figsize, dpi=dpi)
+    ax = fig.add_subplot()
+    if title is None and result is not None and hasattr(result, "torque_nm"):
+        title = _summary(result)
+    lines = draw_grasp(ax, scene, result, strain_limit=strain_limit, title=title)
+    if lines is not None:
+        fig.colorbar(lines, ax=ax, shrink=0.7, label="spring strain [-]")
+    fig.tight_layout()
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, format="png")
+    return fig
+
+
+def figure_rgb_array(fig: Figure) -> np.ndarray:
+    """Render a figure off-screen with the Agg canvas; uint8 array (H, W, 3)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+def grasp_rgb_array(scene: Scene, result: Any | None = None, **kwargs) -> np.ndarray:
+    """:func:`grasp_figure` rendered off-screen; uint8 array (H, W, 3)."""
+    return figure_rgb_array(grasp_figure(scene, result, **kwargs))

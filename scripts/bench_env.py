@@ -1,0 +1,152 @@
+"""Benchmark GripperDesign-v0: the plain step loop against batched ``evaluate_designs``.
+
+Prints a summary and writes ``out/bench_env.json``. Both paths draw designs uniformly from the
+default :class:`envs.DesignBounds` (so part of them are invalid at rest and are not solved, in
+both paths alike) on the paper-r070 disk, at N = 20. numba is warmed up before any timing.
+
+Targets of the project's issue 3: batched >= 20,000 designs/s and >= 10x the step loop.
+
+Usage::
+
+    python scripts/bench_env.py [--steps 300] [--batch-sizes 1000 10000] [--out out]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from envs import DesignBounds, GripperDesignEnv, SoftDisk, evaluate_designs
+from envs.scene import PRESETS
+
+TARGET_DESIGNS_PER_S = 20_000
+TARGET_RATIO = 10.0
+
+
+def paper_disk() -> SoftDisk:
+    """The object of the paper-r070 scene."""
+    return PRESETS["paper-r070"][1]
+
+
+def warm_up(n_triangles: int) -> None:
+    """Compile (or load from the cache) every kernel the timed code uses."""
+    g, disk = PRESETS["paper-r070"]
+    row = [g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m, 0.2,
+           disk.distance_m]
+    evaluate_designs(np.array([row]), disk, n_triangles=n_triangles)  # solve_one
+    evaluate_designs(np.array([row, row]), disk, n_triangles=n_triangles)  # solve_batch
+    env = GripperDesignEnv(n_triangles=n_triangles)
+    env.reset(seed=0)
+    env.step(np.zeros(6))
+
+
+def bench_step_loop(n_steps: int, n_triangles: int, seed: int) -> dict:
+    """``reset`` + ``step`` with a random action, ``n_steps`` times."""
+    env = GripperDesignEnv(n_triangles=n_triangles)
+    env.action_space.seed(seed)
+    actions = [env.action_space.sample() for _ in range(n_steps)]
+    valid = converged = 0
+    t0 = time.perf_counter()
+    for k, action in enumerate(actions):
+        env.reset(seed=seed + k, options={"disk": paper_disk()})
+        *_, info = env.step(action)
+        valid += info["valid_at_rest"]
+        converged += info["converged"]
+    elapsed = time.perf_counter() - t0
+    return {
+        "steps": n_steps,
+        "seconds": elapsed,
+        "steps_per_s": n_steps / elapsed,
+        "valid_fraction": valid / n_steps,
+        "converged_fraction_of_valid": converged / max(valid, 1),
+    }
+
+
+def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
+    """One ``evaluate_designs`` call on ``batch`` random designs."""
+    designs = DesignBounds().sample(np.random.default_rng(seed), batch)
+    t0 = time.perf_counter()
+    out = evaluate_designs(designs, paper_disk(), n_triangles=n_triangles)
+    elapsed = time.perf_counter() - t0
+    valid = out["valid_at_rest"]
+    solved = int(valid.sum())
+    status = out["status"][valid]
+    return {
+        "batch": batch,
+        "seconds": elapsed,
+        "designs_per_s": batch / elapsed,
+        "solved_designs_per_s": solved / elapsed,
+        "valid_fraction": float(valid.mean()),
+        "converged_fraction_of_valid": float(out["converged"][valid].mean()) if solved else 0.0,
+        "status_counts_of_valid": {str(s): int(c) for s, c in zip(*np.unique(status,
+                                                                            return_counts=True),
+                                                                  strict=True)},
+        "mean_iterations_of_valid": float(out["iterations"][valid].mean()) if solved else 0.0,
+        "finite": bool(all(np.all(np.isfinite(np.asarray(v, dtype=float)))
+                           for v in out.values())),
+    }
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=300, help="step-loop iterations")
+    parser.add_argument("--batch-sizes", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--n-triangles", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=Path("out"))
+    args = parser.parse_args(argv)
+
+    t0 = time.perf_counter()
+    warm_up(args.n_triangles)
+    warm_s = time.perf_counter() - t0
+    loop = bench_step_loop(args.steps, args.n_triangles, args.seed)
+    batches = [bench_batch(b, args.n_triangles, args.seed) for b in args.batch_sizes]
+    best = max(batches, key=lambda r: r["designs_per_s"])
+    ratio = best["designs_per_s"] / loop["steps_per_s"]
+    report = {
+        "n_triangles": args.n_triangles,
+        "disk": "paper-r070",
+        "numba_threads": numba.get_num_threads(),
+        "numba_threading_layer": numba.threading_layer(),
+        "cpu": platform.processor() or platform.machine(),
+        "warm_up_s": warm_s,
+        "step_loop": loop,
+        "batched": batches,
+        "batched_over_step_loop": ratio,
+        "targets": {
+            "designs_per_s": TARGET_DESIGNS_PER_S,
+            "ratio": TARGET_RATIO,
+            "designs_per_s_met": best["designs_per_s"] >= TARGET_DESIGNS_PER_S,
+            "ratio_met": ratio >= TARGET_RATIO,
+        },
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    path = args.out / "bench_env.json"
+    path.write_text(json.dumps(report, indent=2))
+
+    print(f"numba threads: {report['numba_threads']} ({report['numba_threading_layer']}), "
+          f"N = {args.n_triangles}, warm-up {warm_s:.1f} s")
+    print(f"step loop (reset + step): {loop['steps_per_s']:9.1f} steps/s   "
+          f"valid {loop['valid_fraction']:.2f}, converged "
+          f"{loop['converged_fraction_of_valid']:.3f} of valid")
+    for r in batches:
+        print(f"batched B={r['batch']:>6}:      {r['designs_per_s']:9.1f} designs/s "
+              f"({r['solved_designs_per_s']:.1f} solved/s)   valid {r['valid_fraction']:.2f}, "
+              f"converged {r['converged_fraction_of_valid']:.3f} of valid, "
+              f"status {r['status_counts_of_valid']}")
+    print(f"batched / step loop: {ratio:.2f}x "
+          f"(target {TARGET_RATIO:g}x: {'met' if report['targets']['ratio_met'] else 'NOT met'}); "
+          f"{best['designs_per_s']:.0f} designs/s (target {TARGET_DESIGNS_PER_S}: "
+          f"{'met' if report['targets']['designs_per_s_met'] else 'NOT met'})")
+    print(f"wrote {path}")
+    return report
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,365 @@
+"""GripperDesign-v0 and evaluate_designs: API checkers, determinism, batching, reward order."""
+
+from __future__ import annotations
+
+import math
+import pickle
+from concurrent.futures import ThreadPoolExecutor
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode
+
+import envs
+from envs import (
+    Design,
+    DesignBounds,
+    GripperDesignEnv,
+    GripperDesignVectorEnv,
+    RewardWeights,
+    Scene,
+    SoftDisk,
+    evaluate_designs,
+)
+from envs.evaluate import METRIC_KEYS, _disk_table, _pack
+from envs.psm import scaled_problem
+from envs.scene import PRESETS, Gripper
+
+GRIPPER, DISK = PRESETS["paper-r070"]
+PAPER = np.array([GRIPPER.finger_length_m, GRIPPER.rest_angle_rad, GRIPPER.joint_offset_m,
+                  GRIPPER.finger_width_m, 0.2, DISK.distance_m])
+ACTIONS = np.array([
+    [0.2, 0.0, 0.0, -0.4, -0.5, -0.5],
+    [-0.3, -0.2, 0.1, 0.0, 0.1, 0.3],
+    [0.5, 0.4, -0.6, 0.2, 0.8, -0.2],
+])
+
+
+def paper_designs(torques) -> np.ndarray:
+    des = np.tile(PAPER, (len(torques), 1))
+    des[:, 4] = torques
+    return des
+
+
+def assert_outputs_equal(a: dict, b: dict) -> None:
+    assert a.keys() == b.keys()
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def assert_all_finite(out: dict) -> None:
+    for key, v in out.items():
+        assert np.all(np.isfinite(np.asarray(v, dtype=float))), key
+
+
+# --- evaluate_designs --------------------------------------------------------------------------
+
+
+def test_outputs_have_documented_keys_shapes_and_paper_values():
+    out = evaluate_designs(paper_designs([0.1, 0.2]), DISK)
+    assert list(out) == list(METRIC_KEYS)
+    for key, (dtype, shape) in METRIC_KEYS.items():
+        assert out[key].shape == (2, *shape), key
+        assert out[key].dtype == dtype, key
+    assert out["converged"].all() and out["valid_at_rest"].all()
+    np.testing.assert_array_equal(out["n_contacts"], [[3, 3], [3, 3]])
+    np.testing.assert_allclose(out["contact_score"], 0.3)
+    total = (out["reward_contact"] + out["reward_deform"] + out["penalty_miss"]
+             + out["penalty_invalid"] + out["penalty_fail"])
+    np.testing.assert_array_equal(out["reward"], total)
+
+
+def test_matches_simulate_on_the_paper_scene():
+    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, 20)
+    out = evaluate_designs(paper_designs([0.2]), DISK)
+    np.testing.assert_allclose(out["jaw_angles_rad"][0], res.jaw_angles_rad, rtol=1e-12)
+    np.testing.assert_allclose(out["peak_strain"][0], res.peak_strain, rtol=1e-10)
+    np.testing.assert_allclose(out["total_force_n"][0], res.total_force_n, rtol=1e-9)
+    np.testing.assert_array_equal(out["n_contacts"][0], res.n_contacts)
+
+
+def test_vectorized_validity_and_params_match_scene_and_scaled_problem():
+    rng = np.random.default_rng(7)
+    designs = DesignBounds().sample(rng, 400)
+    valid, prm = _pack(designs, _disk_table(DISK, 400), np.full(400, 20), np.full(400, 0.073))
+    assert 0.2 < valid.mean() < 0.95
+    for i, row in enumerate(designs):
+        ln, th0, d3, w, torque, d1 = row.tolist()
+        try:
+            scene = Scene(Gripper(ln, th0, d3, w, 0.073), SoftDisk(DISK.radius_m, d1))
+        except ValueError:
+            assert not valid[i]
+            continue
+        assert valid[i]
+        np.testing.assert_array_equal(prm[i], scaled_problem(scene, torque, 20).params)
+
+
+def test_batched_and_single_evaluation_agree_exactly():
+    designs = paper_designs([0.0, 0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 0.3])
+    designs[7, 1] = math.radians(20.0)  # invalid row in the batch
+    designs[6, 5] = 0.02
+    batch = evaluate_designs(designs, DISK)
+    assert not batch["valid_at_rest"][7]
+    for i in range(len(designs)):
+        single = evaluate_designs(designs[i : i + 1], DISK)
+        for key in batch:
+            np.testing.assert_array_equal(batch[key][i], single[key][0], err_msg=key)
+
+
+def test_executor_chunks_and_per_row_n_agree_with_in_process():
+    designs = paper_designs([0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8])
+    n_tri = np.array([12, 20, 12, 20, 16, 20, 12])
+    ref = evaluate_designs(designs, DISK, n_triangles=n_tri)
+    with ThreadPoolExecutor(2) as pool:
+        chunked = evaluate_designs(designs, DISK, n_triangles=n_tri, executor=pool, chunk_size=3)
+    assert_outputs_equal(ref, chunked)
+    for n in (12, 16, 20):
+        rows = n_tri == n
+        alone = evaluate_designs(designs[rows], DISK, n_triangles=n)
+        for key in ref:
+            np.testing.assert_array_equal(ref[key][rows], alone[key], err_msg=key)
+
+
+def test_design_objects_and_per_row_disks():
+    designs = [Design.from_array(row) for row in paper_designs([0.1, 0.2])]
+    np.testing.assert_array_equal(designs[1].to_array(), PAPER)
+    disks = [DISK, SoftDisk(0.05, 0.0)]
+    out = evaluate_designs(designs, disks)
+    ref = evaluate_designs(paper_designs([0.2]), SoftDisk(0.05, 0.123))
+    np.testing.assert_array_equal(out["peak_strain"][1], ref["peak_strain"][0])
+
+
+def test_contact_score_barely_depends_on_n():
+    out = evaluate_designs(paper_designs([0.2, 0.2]), DISK, n_triangles=np.array([20, 40]))
+    assert out["converged"].all()
+    assert abs(out["contact_score"][0] - out["contact_score"][1]) <= 0.1
+
+
+def test_reward_prefers_a_grasp_over_a_miss():
+    out = evaluate_designs(paper_designs([1e-4, 0.1]), DISK)
+    assert out["converged"].all()
+    np.testing.assert_array_equal(out["n_contacts"][0], [0, 0])  # too weak to reach the disk
+    assert np.all(out["n_contacts"][1] > 0)
+    assert out["penalty_miss"][0] == -2 * RewardWeights().miss
+    assert out["reward"][1] > out["reward"][0]
+
+
+def test_reward_prefers_a_gentle_grasp_at_equal_contacts():
+    torques = np.linspace(0.05, 0.8, 16)
+    out = evaluate_designs(paper_designs(torques), DISK)
+    assert out["converged"].all()
+    groups: dict[tuple[int, int], list[int]] = {}
+    for i, nc in enumerate(map(tuple, out["n_contacts"].tolist())):
+        groups.setdefault(nc, []).append(i)
+    pairs = 0
+    for rows in groups.values():
+        rows = sorted(rows, key=lambda i: out["peak_strain"][i])
+        for gentle, crushing in zip(rows, rows[1:], strict=False):
+            if out["peak_strain"][crushing] > out["peak_strain"][gentle]:
+                assert out["reward"][gentle] > out["reward"][crushing]
+                pairs += 1
+    assert pairs >= 2
+
+
+def test_invalid_design_gets_the_penalty_and_finite_values():
+    bad = PAPER.copy()
+    bad[1], bad[5] = math.radians(15.0), 0.0  # fingers overlap the disk at rest
+    with pytest.raises(ValueError):
+        Scene(Gripper(*bad[:4], 0.073), SoftDisk(DISK.radius_m, bad[5]))
+    nan_row = PAPER.copy()
+    nan_row[0] = np.nan
+    out = evaluate_designs(np.stack([bad, nan_row]), DISK)
+    assert not out["valid_at_rest"].any() and not out["converged"].any()
+    np.testing.assert_array_equal(out["penalty_invalid"], -RewardWeights().invalid)
+    np.testing.assert_array_equal(out["reward"], -RewardWeights().invalid)
+    np.testing.assert_array_equal(out["status"], -1)
+    assert_all_finite(out)
+
+
+def test_malformed_inputs_raise():
+    with pytest.raises(ValueError):
+        evaluate_designs(PAPER, DISK)  # 1-D
+    with pytest.raises(ValueError):
+        evaluate_designs(paper_designs([0.1]), [DISK, DISK])
+    with pytest.raises(ValueError):
+        evaluate_designs(paper_designs([0.1]), DISK, n_triangles=3)
+    with pytest.raises(ValueError):
+        evaluate_designs(paper_designs([0.1]), DISK, strain_limits=0.0)
+
+
+def test_bounds_scale_round_trip():
+    bounds = DesignBounds()
+    a = np.random.default_rng(0).uniform(-1, 1, (5, 6))
+    np.testing.assert_allclose(bounds.unscale(bounds.scale(a)), a, atol=1e-14)
+    np.testing.assert_allclose(bounds.scale(-np.ones(6)), bounds.low)
+    assert np.all((bounds.low_array <= PAPER) & (PAPER <= bounds.high_array))
+    with pytest.raises(ValueError, match="finger_length_m"):
+        DesignBounds(low=(0.3, 0.2, 0.0, 0.002, 0.0, 0.0))
+
+
+# --- the environment ---------------------------------------------------------------------------
+
+
+def test_gymnasium_check_env():
+    check_env(GripperDesignEnv(), skip_render_check=True)
+    check_env(gym.make("GripperDesign-v0", render_mode="rgb_array").unwrapped)
+
+
+def test_sb3_check_env():
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    sb3_checker.check_env(GripperDesignEnv(), warn=True)
+
+
+def test_same_seed_gives_identical_rollouts():
+    def rollout(seed: int):
+        env = GripperDesignEnv()
+        env.action_space.seed(seed)
+        steps = []
+        for k in range(4):
+            obs, _ = env.reset(seed=seed if k == 0 else None)
+            steps.append((obs, *env.step(env.action_space.sample())))
+        return steps
+
+    a, b = rollout(3), rollout(3)
+    for sa, sb in zip(a, b, strict=True):
+        np.testing.assert_array_equal(sa[0], sb[0])
+        assert sa[2] == sb[2]
+        for key in sa[5]:
+            np.testing.assert_array_equal(sa[5][key], sb[5][key], err_msg=key)
+    assert not np.array_equal(rollout(4)[0][0], a[0][0])
+
+
+def test_env_pickles():
+    env = GripperDesignEnv(render_mode="rgb_array")
+    env.reset(seed=5)
+    env.step(ACTIONS[0])
+    clone = pickle.loads(pickle.dumps(env))
+    r1 = env.step(ACTIONS[1])
+    r2 = clone.step(ACTIONS[1])
+    assert r1[1] == r2[1]
+    np.testing.assert_array_equal(r1[0], r2[0])
+    np.testing.assert_array_equal(env.reset()[0], clone.reset()[0])
+
+
+@pytest.mark.parametrize(
+    "action",
+    [np.full(6, np.nan), np.array([0, 0, 0, 0, np.inf, 0.0]), np.zeros(5), np.zeros((1, 6)),
+     "abc"],
+)
+def test_bad_actions_raise(action):
+    env = GripperDesignEnv()
+    env.reset(seed=0)
+    with pytest.raises(ValueError):
+        env.step(action)
+
+
+def test_clipping_is_reported():
+    env = GripperDesignEnv()
+    env.reset(seed=0)
+    *_, info = env.step(np.zeros(6))
+    assert info["clipped"] is False
+    *_, info = env.step(np.array([1.5, 0, 0, 0, -3.0, 0]))
+    assert info["clipped"] is True
+    assert info["design"][0] == env.bounds.high[0]
+    assert info["design"][4] == env.bounds.low[4]
+
+
+def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
+    env = GripperDesignEnv()
+    obs, info = env.reset(seed=0, options={"disk": DISK, "strain_limit": 0.1})
+    assert info["radius_m"] == DISK.radius_m and info["strain_limit"] == 0.1
+    action = env.bounds.unscale(PAPER)
+    _, reward, terminated, truncated, info = env.step(action)
+    assert terminated and not truncated and info["converged"]
+    ref = evaluate_designs(env.bounds.scale(np.clip(action, -1, 1))[None], DISK,
+                           strain_limits=0.1)
+    assert reward == ref["reward"][0]
+    bad = PAPER.copy()
+    bad[1], bad[5] = math.radians(15.0), 0.0
+    _, reward, *_, info = env.step(env.bounds.unscale(bad))
+    assert reward == -RewardWeights().invalid and not info["valid_at_rest"]
+    with pytest.raises(ValueError):
+        env.reset(options={"disk": SoftDisk(2.0, 0.0)})  # outside the observable range
+    with pytest.raises(ValueError):
+        env.reset(options={"colour": "red"})
+
+
+def test_render_rgb_array_and_grasp_figure(tmp_path):
+    from envs.render import grasp_figure
+
+    env = GripperDesignEnv(render_mode="rgb_array")
+    env.reset(seed=0, options={"disk": DISK})
+    before = env.render()
+    env.step(env.bounds.unscale(PAPER))
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+    assert frame.shape == before.shape and not np.array_equal(frame, before)
+    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, 20)
+    grasp_figure(Scene(GRIPPER, DISK), res, tmp_path / "grasp.png")
+    assert (tmp_path / "grasp.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# --- vector environments -----------------------------------------------------------------------
+
+
+def _run_vec(env, n_steps: int = 3):
+    obs, _ = env.reset(seed=11)
+    trace = [obs]
+    for _ in range(n_steps):
+        obs, rew, term, trunc, info = env.step(ACTIONS)
+        trace.append((obs, rew, term, trunc, info))
+    env.close()
+    return trace
+
+
+def _assert_same_trace(a, b, info_keys=("peak_strain", "_peak_strain", "radius_m")):
+    np.testing.assert_array_equal(a[0], b[0])
+    for sa, sb in zip(a[1:], b[1:], strict=True):
+        for x, y in zip(sa[:4], sb[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+        for key in info_keys:
+            if key in sa[4] or key in sb[4]:
+                np.testing.assert_array_equal(sa[4][key], sb[4][key], err_msg=key)
+
+
+def test_make_vec_modes_agree():
+    # load the kernel in this process first so forked async workers inherit it
+    evaluate_designs(paper_designs([0.1]), DISK)
+    traces = {
+        mode: _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode))
+        for mode in ("sync", "async", "vector_entry_point")
+    }
+    vec = gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode="vector_entry_point")
+    assert isinstance(vec.unwrapped, GripperDesignVectorEnv)
+    steps = traces["vector_entry_point"][1:]
+    assert steps[0][2].all() and steps[0][3].all()  # 1-step episodes, TimeLimit(1) semantics
+    assert not steps[1][2].any() and np.all(steps[1][1] == 0.0)  # next-step autoreset
+    for mode in ("sync", "async"):
+        _assert_same_trace(traces[mode], traces["vector_entry_point"])
+
+
+def test_same_step_autoreset_agrees_with_sync():
+    same = AutoresetMode.SAME_STEP
+    sync = _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode="sync",
+                                 vector_kwargs={"autoreset_mode": same}))
+    ours = _run_vec(GripperDesignVectorEnv(3, max_episode_steps=1, autoreset_mode=same))
+    _assert_same_trace(sync, ours, info_keys=("radius_m", "_radius_m", "_final_obs"))
+    for sa, sb in zip(sync[1:], ours[1:], strict=True):
+        assert sb[2].all()
+        np.testing.assert_array_equal(np.stack(sa[4]["final_obs"]),
+                                      np.stack(sb[4]["final_obs"]))
+        np.testing.assert_array_equal(sa[4]["final_info"]["reward"],
+                                      sb[4]["final_info"]["reward"])
+
+
+def test_vector_env_rejects_bad_actions():
+    env = GripperDesignVectorEnv(2)
+    env.reset(seed=0)
+    with pytest.raises(ValueError):
+        env.step(np.zeros((3, 6)))
+    bad = np.zeros((2, 6))
+    bad[1, 2] = np.nan
+    with pytest.raises(ValueError):
+        env.step(bad)
