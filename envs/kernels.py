@@ -79,7 +79,7 @@ def default_options() -> np.ndarray:
     return np.array([1e-11, 300.0, 12.0, 1e-2, 1.0, 1.0])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _frame(j, th):
     s = math.sin(th)
     c = math.cos(th)
@@ -88,7 +88,7 @@ def _frame(j, th):
     return -s, c, c, s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _band_index(n):
     """Scalar index of component 0 of each point in the interleaved (banded) ordering."""
     idx = np.empty(n, dtype=np.int64)
@@ -103,7 +103,7 @@ def _band_index(n):
 # constraints
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _face_eval(q, i, j, th, prm, grad, hess):
     """Face constraint of point i on finger j: value, local grad/Hessian over (qx, qy, theta)."""
     ex, ey, nx, ny = _frame(j, th)
@@ -163,7 +163,7 @@ def _face_eval(q, i, j, th, prm, grad, hess):
     return m - hw
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _corner_eval(q, k, j, th, sc, prm, grad, hess):
     """Corner of finger j at axial position sc vs contour edge k -> k+1.
 
@@ -283,7 +283,7 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
 # energy, gradient, Hessian
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _energy(x, n, prm):
     e = 0.0
     kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
@@ -306,7 +306,7 @@ def _energy(x, n, prm):
     return e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _add(ab, bb, dd, nb, p, r, v):
     """Add v to the symmetric Newton matrix entry (p, r) (band-ordered; >= nb is an angle)."""
     if p < nb and r < nb:
@@ -324,7 +324,7 @@ def _add(ab, bb, dd, nb, p, r, v):
             dd[r - nb, p - nb] += v
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Spring and finger energy gradient (natural order) and Hessian (band order)."""
     kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
@@ -397,7 +397,7 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
 # and corner position sc. Gradients/Hessians are evaluated on demand.
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
@@ -425,7 +425,7 @@ def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
     return th - prm[P_THMIN], 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _to_band(d, n, bidx):
     if d >= 2 * n:
         return d
@@ -433,7 +433,7 @@ def _to_band(d, n, bidx):
     return bidx[i] + (d - 2 * i)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _all_gaps(x, n, prm, kinds, fj, fidx, fsc, gout, grad5, hess5, dofs):
     q = x[: 2 * n].reshape(n, 2)
     for m in range(kinds.shape[0]):
@@ -445,7 +445,7 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, fsc, gout, grad5, hess5, dofs):
 # banded Cholesky with a 2x2 bordered Schur complement
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _chol_band(ab, lb, nb, shift):
     for p in range(nb):
         for k in range(BW, 0, -1):
@@ -468,7 +468,7 @@ def _chol_band(ab, lb, nb, shift):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _solve_band(lb, nb, rhs, out):
     for p in range(nb):
         acc = rhs[p]
@@ -482,7 +482,7 @@ def _solve_band(lb, nb, rhs, out):
         out[p] = acc / lb[p, 0]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
     """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
     if not _chol_band(ab, lb, nb, shift):
@@ -520,7 +520,7 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
 # candidate constraints
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _straddle_edge(q, n, j, th, sc, prm):
     """Contour edge crossed by the line through finger j's corner at axial position sc.
 
@@ -547,7 +547,7 @@ def _straddle_edge(q, n, j, th, sc, prm):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _corner_choice(q, n, j, th, sc, prm, current, lam, kinds, fj, fsc, mcount):
     """Edge the corner should face at this solution (current one if still right, -1: none).
 
@@ -597,13 +597,13 @@ def _corner_choice(q, n, j, th, sc, prm, current, lam, kinds, fj, fsc, mcount):
     return _straddle_edge(q, n, j, th, sc, prm)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _near(q, i, j, th):
     ex, ey, nx, ny = _frame(j, th)
     return nx * q[i, 0] + ny * q[i, 1] < 0.6
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
     m = 0
     for j in range(2):
@@ -635,7 +635,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
 # the interior-point Newton solve for a fixed candidate set
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
                    g_out, grad5, hess5, dofs, barrier_mu, psd):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
@@ -661,11 +661,15 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
             pa = _to_band(dofs[a], n, bidx)
             for b in range(a + 1):
                 pb = _to_band(dofs[b], n, bidx)
-                v = sig[m] * grad5[a] * grad5[b] - lam[m] * hess5[a, b]
+                v = sig[m] * grad5[a] * grad5[b]
+                if not psd:
+                    # constraint curvature; dropped in the convexified fallback, where the
+                    # curved (corner-distance) gaps would make the matrix badly indefinite
+                    v -= lam[m] * hess5[a, b]
                 _add(ab, bb, dd, nb, pa, pb, v)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs):
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
@@ -678,11 +682,11 @@ def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs
     return e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs, res):
     res[:] = 0.0
-    ab = np.zeros((1, 1))
-    _spring_terms(x, n, prm, np.zeros(n, dtype=np.int64), res, ab, ab, ab, False)
+    none = np.zeros((1, 1))
+    _spring_terms(x, n, prm, np.zeros(1, dtype=np.int64), res, none, none, none, False)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
@@ -695,7 +699,7 @@ def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hes
     return r
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, work_it):
     """Primal-dual interior point on a fixed constraint set. Returns (status, iterations)."""
     nb = 2 * n
@@ -849,7 +853,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     return ITER_LIMIT, it
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active, work_it):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 
@@ -932,7 +936,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
     return False, stable
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active,
                 work_it, gbuf, stable_out):
     """Polish on a contact set, correcting the set (primal-dual active set) a few times.
@@ -970,7 +974,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscal
     return POLISH_FAIL
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening=0.01):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
@@ -998,7 +1002,7 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face_cand, info):
     """Solve one grasp in place.
 
@@ -1106,6 +1110,10 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                 lam[m] = lam_guess_face[fj[m], fidx[m]]
         if not feasible:
             status = INFEASIBLE_START
+            break
+        if work_it[0] > 2 * int(opts[O_MAXIT]):
+            # bound the cost of a hopeless solve over all rounds
+            status = ITER_LIMIT
             break
         status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0,
                          work_it)
@@ -1258,7 +1266,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     info[7] = 0.0
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_edge, face_cand, infos):
     """:func:`solve_one` over a batch (first axis), in parallel threads."""
     for b in prange(prms.shape[0]):

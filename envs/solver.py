@@ -27,6 +27,7 @@ METHODS = ("newton", "slsqp", "nelder-mead")
 WARM_OPENING_RAD = 1e-3
 NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
 NESTED_FACTOR = 4
+CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does not help
 
 
 @dataclass(frozen=True)
@@ -296,7 +297,7 @@ def _solve_newton(
             res = _newton(scene, prob, torque_nm, stiffness_rule, x0, lam0, options)
         if res is None or not res.converged:
             res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
-    if not res.converged and torque_nm > 0:
+    if not res.converged and torque_nm > 0 and prob.n <= CONTINUATION_MAX_N:
         failed = res
         res = _continuation(scene, prob.n, torque_nm, stiffness_rule, phase_rad, options)
         extra += failed.iterations

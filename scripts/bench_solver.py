@@ -1,0 +1,111 @@
+"""Benchmark the grasp solvers side by side; writes out/bench_solver.json.
+
+For each mesh size N and method: median solve time, iterations and whether it converged (the
+independent KKT check included), on the paper's r = 0.07 scene at T = 0.2 N·m. Baselines are run
+until they need more than ``--baseline-limit`` seconds. Ratios are measured in this same run.
+A second sweep counts converged solves on the three paper scenes for torques up to 40 % peak
+strain.
+
+Usage: ``python scripts/bench_solver.py [--quick] [--repeats 5]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from envs.scene import Scene
+from envs.solver import simulate
+
+ALL_N = [4, 8, 12, 20, 40, 60, 100, 200, 500, 1000, 2000]
+
+
+def _time(scene, torque, n, method, repeats, limit):
+    times, last = [], None
+    for _ in range(repeats):
+        last = simulate(scene, torque, n, method, time_limit_s=limit)
+        times.append(last.solve_time_s)
+    return statistics.median(times), last
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true", help="N <= 200 and a small strain sweep")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--baseline-limit", type=float, default=30.0)
+    ap.add_argument("--out", default="out/bench_solver.json")
+    args = ap.parse_args()
+    ns = [n for n in ALL_N if not args.quick or n <= 200]
+    scene = Scene.preset("paper-r070")
+    simulate(scene, 0.2, 20)  # compile
+    rows = []
+    give_up = {"slsqp": False, "nelder-mead": False}
+    for n in ns:
+        for method in ("newton", "slsqp", "nelder-mead"):
+            if method != "newton" and give_up[method]:
+                continue
+            reps = args.repeats if method == "newton" and n <= 200 else 1
+            t, res = _time(scene, 0.2, n, method, reps, args.baseline_limit)
+            rows.append({
+                "n": n, "method": method, "median_time_s": t, "iterations": res.iterations,
+                "converged": res.converged, "message": res.message,
+                "jaw_angles_rad": list(res.jaw_angles_rad),
+                "kkt_force_residual": res.kkt.force_residual_rel,
+            })
+            print(f"N={n:5d} {method:12s} {t * 1e3:10.2f} ms  it={res.iterations:6d}  "
+                  f"converged={res.converged}  {res.message[:60]}")
+            if method != "newton" and t > args.baseline_limit:
+                give_up[method] = True
+
+    def t_of(method, n):
+        for r in rows:
+            if r["method"] == method and r["n"] == n:
+                return r["median_time_s"]
+        return None
+
+    ratios = {}
+    tn = t_of("newton", 20)
+    for m in ("slsqp", "nelder-mead"):
+        tb = t_of(m, 20)
+        if tb is not None:
+            ratios[f"{m}_over_newton_at_N20"] = tb / tn
+    if t_of("newton", 1000) and t_of("newton", 100):
+        ratios["newton_t1000_over_t100"] = t_of("newton", 1000) / t_of("newton", 100)
+    print("ratios:", json.dumps(ratios, indent=1))
+
+    # convergence sweep up to 40 % peak strain on the three paper scenes
+    sweep = []
+    sweep_n = [n for n in ns if n <= (200 if args.quick else 500)]
+    torques = np.geomspace(0.01, 20.0, 8 if args.quick else 14)
+    for name in ("paper-r050", "paper-r070", "paper-r100"):
+        sc = Scene.preset(name)
+        for n in sweep_n:
+            for t in torques:
+                t0 = time.perf_counter()
+                res = simulate(sc, float(t), n)
+                sweep.append({"scene": name, "n": n, "torque_nm": float(t),
+                              "converged": res.converged, "stable": res.stable,
+                              "peak_strain": res.peak_strain, "message": res.message,
+                              "time_s": time.perf_counter() - t0})
+                if res.converged and res.peak_strain >= 0.4:
+                    break
+    ok = sum(r["converged"] for r in sweep)
+    print(f"convergence sweep: {ok}/{len(sweep)} converged "
+          f"(N in {sweep_n}, torques up to 40 % peak strain)")
+    for r in sweep:
+        if not r["converged"]:
+            print(f"  failed: {r['scene']} N={r['n']} T={r['torque_nm']:.3g}: {r['message'][:80]}")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps({"rows": rows, "ratios": ratios, "sweep": sweep,
+                               "converged_fraction": ok / len(sweep)}, indent=1))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
