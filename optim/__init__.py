@@ -1,0 +1,33 @@
+"""Optimizers for the gripper design, compared side by side on one machine or a Dask cluster.
+
+Every method shares one interface and one result type::
+
+    from optim import DesignProblem, optimize
+
+    problem = DesignProblem.from_scene("paper-r070", strain_limit=0.15)
+    result = optimize("cmaes", problem, budget=2000, seed=0)
+    result.to_json("out/cmaes.json")
+
+Methods (:data:`METHODS`): ``cmaes`` (pycma), ``ga`` and ``nsga2`` (pymoo), ``random``, ``ppo``
+and ``sac`` (stable-baselines3). Their heavy dependencies are imported only when used.
+Populations are evaluated in-process by default, or through an executor of
+:mod:`optim.executors` (local processes, Dask).
+"""
+
+from __future__ import annotations
+
+from .optimize import METHODS, Optimizer, get_optimizer, optimize
+from .problem import DEFAULT_STRAIN_LIMIT, BudgetExhaustedError, DesignProblem, paper_design
+from .result import OptimResult
+
+__all__ = [
+    "METHODS",
+    "DEFAULT_STRAIN_LIMIT",
+    "BudgetExhaustedError",
+    "DesignProblem",
+    "OptimResult",
+    "Optimizer",
+    "get_optimizer",
+    "optimize",
+    "paper_design",
+]

@@ -1,0 +1,193 @@
+"""Charts of optimizer results: convergence, best grasp, Pareto front.
+
+Figures are built with :class:`matplotlib.figure.Figure` (Agg, no pyplot state), like
+:mod:`envs.render`, and saved as PNG.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from envs.evaluate import DESIGN_FIELDS
+from envs.render import draw_design, draw_grasp, grasp_figure
+from envs.scene import Gripper, Scene, SoftDisk
+
+from .result import OptimResult
+
+__all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure"]
+
+METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
+                  "random": "tab:gray", "ppo": "tab:purple", "sac": "tab:pink"}
+
+
+def _save(fig: Figure, path: str | Path | None) -> Figure:
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, format="png")
+    return fig
+
+
+def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
+    """The :class:`~envs.scene.Scene` of a design (dict in SI units) on a result's object.
+
+    Raises
+    ------
+    ValueError
+        If the design is invalid at rest (the fingers overlap the disk, ...).
+    """
+    gripper = Gripper(design["finger_length_m"], design["rest_angle_rad"],
+                      design["joint_offset_m"], design["finger_width_m"],
+                      obj.get("torsion_stiffness_nm_per_rad", 0.073))
+    disk = SoftDisk(obj["radius_m"], design["distance_m"], obj["youngs_modulus_pa"],
+                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"])
+    return Scene(gripper, disk)
+
+
+def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title: str) -> None:
+    """Solve and draw a design's grasp; fall back to the bare design if it is invalid."""
+    from envs.solver import simulate
+
+    try:
+        scene = scene_of(design, obj)
+    except ValueError:
+        row = np.array([design[k] for k in DESIGN_FIELDS])
+        draw_design(ax, row, obj["radius_m"], title=title + " (invalid)")
+        return
+    res = simulate(scene, design["torque_nm"], int(obj.get("n_triangles", 20)))
+    draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title)
+
+
+def convergence_figure(results: Sequence[OptimResult], path: str | Path | None = None, *,
+                       reference: float | None = None, reference_label: str = "paper gripper",
+                       title: str | None = None) -> Figure:
+    """Best reward so far against evaluations, one step line per result.
+
+    Parameters
+    ----------
+    results
+        Results to draw (colour by method).
+    path
+        Where to write the PNG.
+    reference
+        A reward drawn as a horizontal dashed line (e.g. the paper's gripper).
+    reference_label, title
+        Labels.
+    """
+    fig = Figure(figsize=(6.4, 4.2), dpi=110)
+    ax = fig.add_subplot()
+    for r in results:
+        if not r.history_evaluations:
+            continue
+        label = f"{r.method} (seed {r.seed}): {r.best_reward:.4f}"
+        ax.step(r.history_evaluations, r.history_best_reward, where="post",
+                color=METHOD_COLOURS.get(r.method), label=label)
+    if reference is not None:
+        ax.axhline(reference, color="k", linestyle="--", linewidth=1,
+                   label=f"{reference_label}: {reference:.4f}")
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("best reward so far")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title(title or "convergence", fontsize=10)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Figure:
+    """The best design of a result, re-solved with :func:`envs.solver.simulate` and drawn."""
+    from envs.solver import simulate
+
+    obj = result.object
+    d, m = result.best_design, result.best_metrics
+    title = (f"{result.method} (seed {result.seed}) best: reward {result.best_reward:.4f}, "
+             f"contact {m.get('contact_score', math.nan):.2f}, "
+             f"strain {m.get('peak_strain', math.nan):.3f}\n"
+             f"l = {d['finger_length_m']:.3f} m, θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
+             f"d3 = {d['joint_offset_m']:.4f} m\n"
+             f"w = {d['finger_width_m']:.4f} m, T = {d['torque_nm']:.3f} N·m, "
+             f"d1 = {d['distance_m']:.4f} m")
+    try:
+        scene = scene_of(result.best_design, obj)
+    except ValueError:
+        fig = Figure(figsize=(5.5, 5.5), dpi=100)
+        row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
+        draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)")
+        return _save(fig, path)
+    res = simulate(scene, result.best_design["torque_nm"], int(obj.get("n_triangles", 20)))
+    fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
+                       figsize=(6.0, 6.0))
+    return _save(fig, path)
+
+
+def _front_picks(front: Sequence[dict[str, Any]], n: int) -> list[int]:
+    if not front:
+        return []
+    idx = np.unique(np.linspace(0, len(front) - 1, min(n, len(front))).round().astype(int))
+    return idx.tolist()
+
+
+def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
+                  archive: dict[str, np.ndarray] | None = None,
+                  others: Sequence[OptimResult] = (), n_drawn: int = 3) -> Figure:
+    """NSGA-II front (contact score up, peak strain down) with a few of its designs drawn.
+
+    Parameters
+    ----------
+    result
+        A result with a ``pareto_front``.
+    path
+        Where to write the PNG.
+    archive
+        Every evaluated point (:meth:`~optim.problem.DesignProblem.archive`), drawn in grey.
+    others
+        Single-objective results whose best designs are marked on the chart.
+    n_drawn
+        Front designs drawn beside the chart (spread along the front).
+    """
+    front = list(result.pareto_front)
+    picks = _front_picks(front, n_drawn)
+    fig = Figure(figsize=(4.2 + 3.0 * max(1, len(picks)), 4.4), dpi=100)
+    grid = fig.add_gridspec(1, 1 + max(1, len(picks)), width_ratios=[1.5] + [1] * max(
+        1, len(picks)))
+    ax = fig.add_subplot(grid[0, 0])
+    if archive is not None and len(archive["reward"]):
+        ok = archive["feasible"]
+        ax.scatter(archive["peak_strain"][ok], archive["contact_score"][ok], s=4, color="0.75",
+                   label="feasible evaluated")
+    if front:
+        strain = [p["peak_strain"] for p in front]
+        contact = [p["contact_score"] for p in front]
+        ax.step(strain, contact, where="post", color="tab:red", linewidth=1)
+        ax.plot(strain, contact, "o", color="tab:red", markersize=4, label="NSGA-II front")
+        for k, i in enumerate(picks):
+            ax.annotate(chr(ord("A") + k), (strain[i], contact[i]), textcoords="offset points",
+                        xytext=(5, -10), fontsize=9, color="tab:red")
+    for r in others:
+        m = r.best_metrics
+        if "peak_strain" in m:
+            ax.plot(m["peak_strain"], m["contact_score"], "*", markersize=11,
+                    color=METHOD_COLOURS.get(r.method, "k"),
+                    label=f"best {r.method} (s{r.seed}): {r.best_reward:.3f}")
+    limit = result.object.get("strain_limit")
+    if limit:
+        ax.axvline(limit, color="k", linestyle=":", linewidth=1, label="strain limit")
+    ax.set_xlabel("peak strain [-] (down)")
+    ax.set_ylabel("contact score [-] (up)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_title(f"Pareto front, {result.method} seed {result.seed}", fontsize=10)
+    for k, i in enumerate(picks):
+        sub = fig.add_subplot(grid[0, 1 + k])
+        p = front[i]
+        _draw_design_grasp(sub, p["design"], result.object,
+                           f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
+                           f"strain {p['peak_strain']:.3f}")
+    fig.tight_layout()
+    return _save(fig, path)

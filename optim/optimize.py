@@ -1,0 +1,88 @@
+"""The one interface shared by every optimizer driver, and the registry of methods.
+
+A driver is a function ``run_x(problem, *, budget, seed, **options) -> OptimResult``: it calls
+``problem.start(budget)``, asks the problem to evaluate whole populations until the budget is
+spent (truncating its last population so that exactly ``budget`` evaluations are made) and
+returns ``problem.result(...)``. Drivers are imported lazily, so that ``cma``, ``pymoo`` and
+``torch`` load only when used.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any, Protocol
+
+from .problem import DesignProblem, check_budget, check_seed
+from .result import OptimResult
+
+__all__ = ["METHODS", "Optimizer", "get_optimizer", "optimize"]
+
+# method -> (module, function, pip extra holding its dependency)
+_DRIVERS: dict[str, tuple[str, str, str]] = {
+    "cmaes": ("optim.cmaes", "run_cmaes", "optim"),
+    "ga": ("optim.ga", "run_ga", "optim"),
+    "nsga2": ("optim.ga", "run_nsga2", "optim"),
+    "random": ("optim.random_search", "run_random_search", "optim"),
+    "ppo": ("optim.rl", "run_ppo", "rl"),
+    "sac": ("optim.rl", "run_sac", "rl"),
+}
+METHODS: tuple[str, ...] = tuple(_DRIVERS)
+
+
+class Optimizer(Protocol):
+    """What every driver is: a function of a problem, a budget and a seed."""
+
+    def __call__(self, problem: DesignProblem, *, budget: int, seed: int,
+                 **options: Any) -> OptimResult:
+        """Spend ``budget`` evaluations of ``problem``; return the run's result."""
+        ...
+
+
+def get_optimizer(method: str) -> Optimizer:
+    """The driver of a method name from :data:`METHODS`.
+
+    Raises
+    ------
+    ValueError
+        For an unknown method (the message lists the allowed ones).
+    ImportError
+        When the method's optional dependency is missing (with the install hint).
+    """
+    if method not in _DRIVERS:
+        raise ValueError(f"unknown method {method!r}; allowed: {', '.join(METHODS)}")
+    module_name, func_name, extra = _DRIVERS[method]
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ImportError(
+            f"method {method!r} needs {exc.name!r}: pip install 'psm-grasp[{extra}]'"
+        ) from exc
+    return getattr(module, func_name)
+
+
+def optimize(method: str, problem: DesignProblem, *, budget: int, seed: int = 0,
+             **options: Any) -> OptimResult:
+    """Run one optimizer on a problem.
+
+    Parameters
+    ----------
+    method
+        One of :data:`METHODS`.
+    problem
+        The design problem (object, strain limit, executor).
+    budget
+        Evaluations to spend, >= 1.
+    seed
+        Seed of the run, in [0, 2**32).
+    **options
+        Method options (see each driver).
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, a bad budget or seed, or bad options.
+    """
+    driver = get_optimizer(method)
+    if not isinstance(problem, DesignProblem):
+        raise ValueError(f"problem must be a DesignProblem, got {type(problem).__name__}")
+    return driver(problem, budget=check_budget(budget), seed=check_seed(seed), **options)

@@ -1,0 +1,406 @@
+"""The design problem every optimizer solves: one fixed object, designs in [-1, 1]^6.
+
+:class:`DesignProblem` wraps :func:`envs.evaluate.evaluate_designs` for a fixed object (a soft
+disk and its strain limit). Like pymoo's ``Problem`` it evaluates a whole population per call;
+unlike it, it also keeps the bookkeeping shared by every driver: the evaluation budget, the
+count, the best design so far, the history (best so far vs evaluations and vs wall time) and an
+archive of every evaluated point (for Pareto fronts). Parallelism is injected with ``executor``
+(see :mod:`optim.executors`), never hard-coded.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from envs.evaluate import (
+    DESIGN_FIELDS,
+    METRIC_KEYS,
+    N_DESIGN,
+    DesignBounds,
+    RewardWeights,
+    evaluate_designs,
+)
+from envs.scene import PRESETS, Scene, SoftDisk, check_range
+
+from .result import OptimResult, to_jsonable
+
+__all__ = [
+    "DEFAULT_STRAIN_LIMIT",
+    "BudgetExhaustedError",
+    "DesignProblem",
+    "check_budget",
+    "check_seed",
+    "pareto_mask",
+    "paper_design",
+]
+
+DEFAULT_STRAIN_LIMIT = 0.15
+DEFAULT_CHUNK_SIZE = 256
+MIN_CHUNK_SIZE = 8  # rows per task at least: one solve is ~5 ms, a dask task costs ~1-5 ms
+# metric keys copied into OptimResult.best_metrics
+BEST_METRIC_KEYS = (
+    "valid_at_rest", "converged", "stable", "n_contacts", "touching", "total_force_n",
+    "jaw_angles_rad", "contact_score", "peak_strain", "max_displacement_ratio", "strain_limit",
+    "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
+    "reward",
+)
+
+ProgressHook = Callable[[int, float], None]
+
+
+class BudgetExhaustedError(RuntimeError):
+    """A driver asked for more evaluations than the budget has left."""
+
+
+def check_budget(budget: Any) -> int:
+    """Validate an evaluation budget: an integer >= 1.
+
+    Raises
+    ------
+    ValueError
+        Naming the value and the allowed range.
+    """
+    if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
+        raise ValueError(f"budget must be an integer >= 1 (evaluations), got {budget!r}")
+    return int(budget)
+
+
+def check_seed(seed: Any) -> int:
+    """Validate a seed: an integer in [0, 2**32)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
+        0 <= seed < 2**32
+    ):
+        raise ValueError(f"seed must be an integer in [0, 2**32), got {seed!r}")
+    return int(seed)
+
+
+def check_strain_limit(strain_limit: Any) -> float:
+    """Validate the object's admissible strain, in (0, 1]."""
+    return check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
+
+
+def paper_design(scene: str | Scene = "paper-r070", torque_nm: float = 0.1) -> np.ndarray:
+    """The scene's own gripper and placement as a design row (6,) in SI units.
+
+    Parameters
+    ----------
+    scene
+        A preset name (see :data:`envs.scene.PRESETS`) or a :class:`~envs.scene.Scene`.
+    torque_nm
+        Actuation torque ``T_a`` [N·m] (the paper does not fix one; 0.1 N·m grasps the r = 0.07
+        m disk without exceeding a 0.15 strain limit).
+    """
+    sc = Scene.preset(scene) if isinstance(scene, str) else scene
+    g, d = sc.gripper, sc.disk
+    return np.array([g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
+                     float(torque_nm), d.distance_m])
+
+
+def pareto_mask(objectives: np.ndarray) -> np.ndarray:
+    """Non-dominated rows of a (n, 2) array of objectives to minimize.
+
+    A row is dominated when another row is <= in both objectives and < in one. Exact duplicates
+    keep their first occurrence only. O(n log n): sort by the first objective, sweep the second.
+    """
+    f = np.asarray(objectives, dtype=np.float64)
+    if f.ndim != 2 or f.shape[1] != 2:
+        raise ValueError(f"objectives must have shape (n, 2), got {f.shape}")
+    order = np.lexsort((f[:, 1], f[:, 0]))  # by f0, then f1
+    mask = np.zeros(f.shape[0], dtype=bool)
+    best_f1 = math.inf
+    for i in order.tolist():
+        if f[i, 1] < best_f1:
+            mask[i] = True
+            best_f1 = f[i, 1]
+    return mask
+
+
+def _describe_executor(executor: Any) -> str:
+    if executor is None:
+        return "in-process"
+    return str(getattr(executor, "description", type(executor).__name__))
+
+
+class DesignProblem:
+    """Gripper design for one fixed object, in the normalized space [-1, 1]^6.
+
+    Row ``x`` maps to the physical design ``bounds.scale(x)`` (columns of
+    :data:`envs.evaluate.DESIGN_FIELDS`); values outside [-1, 1] are clipped. The objective of
+    the single-objective methods is the reward of :func:`envs.evaluate.evaluate_designs`
+    (maximized). A design is *feasible* (for NSGA-II) when its grasp converged, both fingers
+    touch the disk and the peak strain does not exceed the strain limit.
+
+    Parameters
+    ----------
+    disk
+        The object (its ``distance_m`` is replaced by each design's ``distance_m``).
+    strain_limit
+        Admissible strain of the object [-], in (0, 1].
+    torsion_stiffness_nm_per_rad
+        Joint torsion spring ``k_f`` [N·m/rad], > 0.
+    n_triangles
+        Fan triangles ``N`` of the disk model.
+    bounds
+        Box mapping [-1, 1]^6 to physical designs (default :class:`~envs.evaluate.DesignBounds`).
+    weights
+        Reward weights (default :class:`~envs.evaluate.RewardWeights`).
+    executor
+        ``None`` (in-process batched: the compiled solver runs the rows in threads) or an object
+        with ``.map(fn, iterable)`` from :mod:`optim.executors`.
+    chunk_size
+        Rows per task with an executor; default: the population split evenly over the
+        executor's ``n_workers``, at least :data:`MIN_CHUNK_SIZE` rows per task.
+    progress
+        Called as ``progress(n_new_evaluations, best_reward)`` after every batch.
+    name
+        Name of the object (e.g. the scene preset), stored in the result.
+    """
+
+    n_var = N_DESIGN
+
+    def __init__(
+        self,
+        disk: SoftDisk,
+        strain_limit: float = DEFAULT_STRAIN_LIMIT,
+        *,
+        torsion_stiffness_nm_per_rad: float = 0.073,
+        n_triangles: int = 20,
+        bounds: DesignBounds | None = None,
+        weights: RewardWeights | None = None,
+        executor: Any = None,
+        chunk_size: int | None = None,
+        progress: ProgressHook | None = None,
+        name: str | None = None,
+    ) -> None:
+        if not isinstance(disk, SoftDisk):
+            raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
+        self.disk = disk
+        self.strain_limit = check_strain_limit(strain_limit)
+        self.torsion_stiffness_nm_per_rad = check_range(
+            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
+            low_open=True)
+        if isinstance(n_triangles, bool) or int(n_triangles) != n_triangles:
+            raise ValueError(f"n_triangles must be an integer, got {n_triangles!r}")
+        self.n_triangles = int(n_triangles)
+        self.bounds = DesignBounds() if bounds is None else bounds
+        self.weights = RewardWeights() if weights is None else weights
+        if executor is not None and not callable(getattr(executor, "map", None)):
+            raise ValueError("executor must be None or have a .map(fn, iterable) method")
+        self.executor = executor
+        if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
+            raise ValueError(f"chunk_size must be None or an integer >= 1, got {chunk_size!r}")
+        self.chunk_size = None if chunk_size is None else int(chunk_size)
+        self.progress = progress
+        self.name = name
+        self.start(None)
+
+    @classmethod
+    def from_scene(cls, scene: str | Scene = "paper-r070",
+                   strain_limit: float = DEFAULT_STRAIN_LIMIT, **kwargs: Any) -> DesignProblem:
+        """The object and the joint spring of a scene preset (or a :class:`Scene`).
+
+        Raises
+        ------
+        ValueError
+            For an unknown preset name (the message lists the allowed ones).
+        """
+        if isinstance(scene, str):
+            if scene not in PRESETS:
+                raise ValueError(f"unknown scene {scene!r}; allowed: {sorted(PRESETS)}")
+            kwargs.setdefault("name", scene)
+            scene = Scene.preset(scene)
+        if not isinstance(scene, Scene):
+            raise ValueError(f"scene must be a preset name or a Scene, got {scene!r}")
+        kwargs.setdefault("torsion_stiffness_nm_per_rad",
+                          scene.gripper.torsion_stiffness_nm_per_rad)
+        return cls(scene.disk, strain_limit, **kwargs)
+
+    # --- bookkeeping --------------------------------------------------------------------------
+
+    def start(self, budget: int | None) -> None:
+        """Reset the count, best, history, archive and clock; set the budget (None: unlimited)."""
+        self.budget = None if budget is None else check_budget(budget)
+        self.n_evaluations = 0
+        self.best_reward = -math.inf
+        self.best_x: np.ndarray | None = None
+        self.best_metrics: dict[str, Any] = {}
+        self.history_evaluations: list[int] = []
+        self.history_best_reward: list[float] = []
+        self.history_wall_time_s: list[float] = []
+        self._archive: list[dict[str, np.ndarray]] = []
+        self._t0 = time.perf_counter()
+
+    @property
+    def remaining(self) -> int:
+        """Evaluations left in the budget (a large number when unlimited)."""
+        if self.budget is None:
+            return 2**62
+        return self.budget - self.n_evaluations
+
+    @property
+    def elapsed_s(self) -> float:
+        """Wall time since :meth:`start` [s]."""
+        return time.perf_counter() - self._t0
+
+    def _chunk_size_for(self, batch: int) -> int:
+        if self.chunk_size is not None:
+            return self.chunk_size
+        workers = int(getattr(self.executor, "n_workers", 0) or 0)
+        if workers <= 0:
+            return DEFAULT_CHUNK_SIZE
+        return max(MIN_CHUNK_SIZE, math.ceil(batch / workers))
+
+    # --- evaluation ---------------------------------------------------------------------------
+
+    def to_physical(self, x: Any) -> np.ndarray:
+        """Normalized rows (..., 6), clipped to [-1, 1], in physical units (SI)."""
+        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0))
+
+    def design_dict(self, x: Any) -> dict[str, float]:
+        """One normalized row as ``{field: value}`` in physical units."""
+        row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(N_DESIGN))
+        return dict(zip(DESIGN_FIELDS, row.tolist(), strict=True))
+
+    def evaluate_physical(self, designs: Any) -> dict[str, np.ndarray]:
+        """Evaluate physical designs (B, 6) on this object without counting them."""
+        designs = np.asarray(designs, dtype=np.float64)
+        return evaluate_designs(
+            designs, self.disk, strain_limits=self.strain_limit,
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            n_triangles=self.n_triangles, weights=self.weights, executor=self.executor,
+            chunk_size=self._chunk_size_for(designs.shape[0]),
+        )
+
+    def evaluate(self, x: Any) -> dict[str, np.ndarray]:
+        """Evaluate a population of normalized designs and record it.
+
+        Parameters
+        ----------
+        x
+            Array (B, 6) of normalized designs (clipped to [-1, 1]).
+
+        Returns
+        -------
+        dict[str, numpy.ndarray]
+            The metrics of :func:`envs.evaluate.evaluate_designs`, first axis B.
+
+        Raises
+        ------
+        BudgetExhaustedError
+            If B exceeds :attr:`remaining` (drivers truncate their last population).
+        """
+        x = np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0)
+        if x.ndim != 2 or x.shape[1] != N_DESIGN:
+            raise ValueError(f"x must have shape (B, {N_DESIGN}), got {x.shape}")
+        if x.shape[0] > self.remaining:
+            raise BudgetExhaustedError(
+                f"{x.shape[0]} evaluations asked, {self.remaining} left in the budget")
+        if x.shape[0] == 0:
+            return {k: np.zeros((0, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
+        out = self.evaluate_physical(self.bounds.scale(x))
+        self._record(x, out)
+        return out
+
+    def add_external_evaluations(self, count: int) -> None:
+        """Count evaluations done elsewhere (RL training steps on other objects)."""
+        count = int(count)
+        if count < 0 or count > self.remaining:
+            raise BudgetExhaustedError(
+                f"{count} external evaluations, {self.remaining} left in the budget")
+        self.n_evaluations += count
+        if self.progress is not None and count:
+            self.progress(count, self.best_reward)
+
+    def _record(self, x: np.ndarray, out: dict[str, np.ndarray]) -> None:
+        reward = out["reward"]
+        i = int(np.argmax(reward))  # first maximum: ties keep the earliest design
+        if reward[i] > self.best_reward:
+            self.best_reward = float(reward[i])
+            self.best_x = x[i].copy()
+            self.best_metrics = {k: to_jsonable(out[k][i]) for k in BEST_METRIC_KEYS}
+        self.n_evaluations += x.shape[0]
+        self.history_evaluations.append(self.n_evaluations)
+        self.history_best_reward.append(self.best_reward)
+        self.history_wall_time_s.append(self.elapsed_s)
+        self._archive.append({
+            "x": x.copy(),
+            "reward": reward.copy(),
+            "contact_score": out["contact_score"].copy(),
+            "peak_strain": out["peak_strain"].copy(),
+            "feasible": self.feasible(out),
+        })
+        if self.progress is not None:
+            self.progress(x.shape[0], self.best_reward)
+
+    def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
+        """Grasps that converged, touch with both fingers and respect the strain limit."""
+        return (out["converged"] & np.all(out["touching"], axis=1)
+                & (out["peak_strain"] <= self.strain_limit))
+
+    def archive(self) -> dict[str, np.ndarray]:
+        """Every evaluated point: ``x`` (n, 6), ``reward``, ``contact_score``,
+        ``peak_strain``, ``feasible`` (n,), in evaluation order."""
+        keys = ("x", "reward", "contact_score", "peak_strain", "feasible")
+        if not self._archive:
+            return {k: np.zeros((0, N_DESIGN) if k == "x" else (0,)) for k in keys}
+        return {k: np.concatenate([a[k] for a in self._archive]) for k in keys}
+
+    def pareto_front(self) -> list[dict[str, Any]]:
+        """Non-dominated feasible evaluated designs (contact score up, peak strain down),
+        sorted by contact score."""
+        arc = self.archive()
+        rows = np.flatnonzero(arc["feasible"])
+        if rows.size == 0:
+            return []
+        obj = np.column_stack([-arc["contact_score"][rows], arc["peak_strain"][rows]])
+        front = rows[pareto_mask(obj)]
+        front = front[np.argsort(arc["contact_score"][front], kind="stable")]
+        return [{
+            "design": self.design_dict(arc["x"][i]),
+            "contact_score": float(arc["contact_score"][i]),
+            "peak_strain": float(arc["peak_strain"][i]),
+            "reward": float(arc["reward"][i]),
+        } for i in front.tolist()]
+
+    def object_info(self) -> dict[str, Any]:
+        """The fixed object as plain data."""
+        d = self.disk
+        return {
+            "name": self.name,
+            "radius_m": d.radius_m,
+            "youngs_modulus_pa": d.youngs_modulus_pa,
+            "poisson_ratio": d.poisson_ratio,
+            "thickness_m": d.thickness_m,
+            "stiffness_scale": d.stiffness_scale,
+            "strain_limit": self.strain_limit,
+            "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
+            "n_triangles": self.n_triangles,
+        }
+
+    def result(self, method: str, seed: int, *, options: dict[str, Any] | None = None,
+               pareto: bool = False, extra: dict[str, Any] | None = None) -> OptimResult:
+        """Freeze the bookkeeping of the current run into an :class:`OptimResult`."""
+        best_design = ({} if self.best_x is None else self.design_dict(self.best_x))
+        return OptimResult(
+            method=method,
+            seed=seed,
+            budget=self.budget if self.budget is not None else self.n_evaluations,
+            best_design=best_design,
+            best_reward=self.best_reward,
+            best_metrics=dict(self.best_metrics),
+            history_evaluations=tuple(self.history_evaluations),
+            history_best_reward=tuple(self.history_best_reward),
+            history_wall_time_s=tuple(self.history_wall_time_s),
+            n_evaluations=self.n_evaluations,
+            wall_time_s=self.elapsed_s,
+            object=self.object_info(),
+            pareto_front=tuple(self.pareto_front()) if pareto else (),
+            options=to_jsonable(dict(options or {})),
+            executor=_describe_executor(self.executor),
+            extra=to_jsonable(dict(extra or {})),
+        )

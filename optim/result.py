@@ -1,0 +1,170 @@
+"""The one result type of every optimizer driver, with a JSON round trip."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["OptimResult", "to_jsonable"]
+
+RESULT_VERSION = 1
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert numpy scalars/arrays, tuples and nested containers to plain JSON types."""
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+@dataclass(frozen=True)
+class OptimResult:
+    """Outcome of one optimizer run on one object.
+
+    The history has one point per evaluated batch (a CMA-ES generation, a GA generation, a random
+    batch, an RL policy probe): the best reward seen so far after that many evaluations and that
+    much wall time.
+
+    Parameters
+    ----------
+    method
+        Name of the optimizer (``"cmaes"``, ``"ga"``, ``"nsga2"``, ``"random"``, ``"ppo"``,
+        ``"sac"``).
+    seed
+        Seed of the run (>= 0).
+    budget
+        Evaluation budget of the run (>= 1).
+    best_design
+        Best design found, in physical units: ``{"finger_length_m": ..., "rest_angle_rad": ...,
+        "joint_offset_m": ..., "finger_width_m": ..., "torque_nm": ..., "distance_m": ...}``.
+    best_reward
+        Reward of ``best_design`` [-].
+    best_metrics
+        Metrics of ``best_design`` from :func:`envs.evaluate.evaluate_designs` (``contact_score``,
+        ``peak_strain``, ``n_contacts``, ``total_force_n``, ``converged``, reward terms, ...).
+    history_evaluations
+        Evaluations done after each batch (increasing).
+    history_best_reward
+        Best reward so far after each batch (non-decreasing).
+    history_wall_time_s
+        Wall time since the start of the run after each batch [s].
+    n_evaluations
+        Evaluations done in total (<= ``budget``).
+    wall_time_s
+        Wall time of the whole run [s].
+    object
+        The fixed object: disk fields in SI units, ``strain_limit`` and the scene name if any.
+    pareto_front
+        NSGA-II only: the non-dominated feasible designs (contact score up, peak strain down),
+        each ``{"design": {...}, "contact_score": ..., "peak_strain": ..., "reward": ...}``,
+        sorted by contact score.
+    options
+        The method's options as used (population size, sigma0, ...).
+    executor
+        How the populations were evaluated (``"in-process"``, ``"processes(2)"``,
+        ``"dask(tcp://...)"``).
+    extra
+        Method-specific extras (e.g. the number of CMA-ES restarts).
+    """
+
+    method: str
+    seed: int
+    budget: int
+    best_design: dict[str, float]
+    best_reward: float
+    best_metrics: dict[str, Any]
+    history_evaluations: tuple[int, ...]
+    history_best_reward: tuple[float, ...]
+    history_wall_time_s: tuple[float, ...]
+    n_evaluations: int
+    wall_time_s: float
+    object: dict[str, Any] = field(default_factory=dict)
+    pareto_front: tuple[dict[str, Any], ...] = ()
+    options: dict[str, Any] = field(default_factory=dict)
+    executor: str = "in-process"
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name, kind in (("seed", int), ("budget", int), ("n_evaluations", int),
+                           ("best_reward", float), ("wall_time_s", float)):
+            object.__setattr__(self, name, kind(getattr(self, name)))
+        object.__setattr__(self, "history_evaluations",
+                           tuple(int(v) for v in self.history_evaluations))
+        object.__setattr__(self, "history_best_reward",
+                           tuple(float(v) for v in self.history_best_reward))
+        object.__setattr__(self, "history_wall_time_s",
+                           tuple(float(v) for v in self.history_wall_time_s))
+        object.__setattr__(self, "pareto_front", tuple(self.pareto_front))
+        n = len(self.history_evaluations)
+        if len(self.history_best_reward) != n or len(self.history_wall_time_s) != n:
+            raise ValueError(
+                "history_evaluations, history_best_reward and history_wall_time_s must have the "
+                f"same length, got {n}, {len(self.history_best_reward)}, "
+                f"{len(self.history_wall_time_s)}"
+            )
+        if self.n_evaluations > self.budget:
+            raise ValueError(
+                f"n_evaluations = {self.n_evaluations} exceeds the budget {self.budget}"
+            )
+
+    # --- serialization -----------------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-JSON dictionary of every field (plus a format version)."""
+        data = to_jsonable(asdict(self))
+        data["version"] = RESULT_VERSION
+        return data
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> OptimResult:
+        """Inverse of :meth:`to_dict` (unknown keys raise ``ValueError``)."""
+        data = dict(data)
+        data.pop("version", None)
+        names = {f.name for f in fields(cls)}
+        unknown = set(data) - names
+        if unknown:
+            raise ValueError(f"unknown OptimResult fields {sorted(unknown)}")
+        data["pareto_front"] = tuple(data.get("pareto_front", ()))
+        return cls(**data)
+
+    def to_json(self, path: str | Path) -> Path:
+        """Write the result as JSON (parent folders are created); return the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+        return path
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> OptimResult:
+        """Read a result written by :meth:`to_json`."""
+        return cls.from_dict(json.loads(Path(path).read_text()))
+
+    # --- convenience -------------------------------------------------------------------------
+
+    @property
+    def evaluations_per_s(self) -> float:
+        """Evaluation throughput of the run [1/s]."""
+        return self.n_evaluations / self.wall_time_s if self.wall_time_s > 0 else math.inf
+
+    def summary(self) -> str:
+        """One line: method, seed, best reward, contact score, peak strain, time."""
+        m = self.best_metrics
+        return (
+            f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f} "
+            f"(contact {m.get('contact_score', float('nan')):.3f}, "
+            f"peak strain {m.get('peak_strain', float('nan')):.4f}) after "
+            f"{self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
+        )
