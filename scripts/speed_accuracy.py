@@ -1,0 +1,180 @@
+"""Accuracy against speed: every (method, N) of the PSM and the FEM at its own cost.
+
+Case: the r = 0.07 paper disk at three torques (0.1, 0.25, 0.5 N·m). Reference: the FEM on a
+fine mesh (r / 24). The PSM stiffness scale is fitted once on that reference (at N = 60, started
+from the N = 20 fit) and used by every method and N. Accuracy of a point = RMS over the torques
+of the relative error of the jaw closing angle ``theta_a0 - theta`` against the reference; cost =
+wall time per torque of a loading ramp through the three torques (``simulate_ramp``, median of
+3 runs for Newton up to N = 80; for the baselines each torque is an independent solve from rest,
+under a time limit). The answer a
+method returns is scored even when it failed the independent KKT check (hollow markers); the
+Pareto front (filled line) is computed over the points whose every solve passed it. The FEM
+points are the coarser meshes (r / 4, r / 6, r / 12) against the r / 24 reference, with the cost
+per torque of their ramp.
+
+Writes ``out/speed_accuracy.png`` and ``out/speed_accuracy.json``.
+
+Usage::
+
+    python scripts/speed_accuracy.py [--out out]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from envs.accuracy import (  # noqa: E402
+    calibrate,
+    fem_reference,
+    jsonable,
+    pareto_front,
+    psm_curve,
+)
+from envs.scene import Scene  # noqa: E402
+from envs.solver import simulate  # noqa: E402
+
+SCENE = "paper-r070"
+TORQUES_NM = (0.1, 0.25, 0.5)
+REF_RINGS = 24
+FEM_RINGS = (4, 6, 12)
+N_BY_METHOD = {
+    "newton": (4, 6, 8, 10, 12, 16, 20, 24, 32, 40, 60, 80, 120, 160, 240),
+    "slsqp": (4, 6, 8, 12, 16, 20, 24, 32, 40, 60),
+    "nelder-mead": (4, 8),
+}
+TIME_LIMIT_S = {"newton": 30.0, "slsqp": 20.0, "nelder-mead": 10.0}
+Y_CLIP = 300.0  # [%] errors above are drawn at the top of the chart
+NEWTON_REPEATS = 3  # timing repeats (median) of the Newton ramps up to N = 80
+STYLE = {"newton": ("tab:blue", "o"), "slsqp": ("tab:orange", "s"),
+         "nelder-mead": ("tab:red", "D"), "fem": ("k", "P")}
+
+
+def _closing_error(th0: float, ref_angles: np.ndarray, angles: np.ndarray) -> tuple[float, float]:
+    rel = (th0 - angles) / (th0 - ref_angles) - 1.0
+    return float(np.sqrt(np.mean(rel**2))), float(np.max(np.abs(rel)))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="out", help="output folder")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+
+    base = Scene.preset(SCENE)
+    th0 = base.gripper.rest_angle_rad
+    r = base.disk.radius_m
+    ref = fem_reference(base, TORQUES_NM, mesh_size_m=r / REF_RINGS)
+    if len(ref.torques_nm) != len(TORQUES_NM):
+        raise RuntimeError(f"FEM reference failed at {ref.dropped_torques_nm}")
+    ref_angles = np.asarray(ref.jaw_angles_rad)
+    cal20 = calibrate(base, ref, 20, xatol=1e-3)
+    cal = calibrate(cal20.calibrated(base), ref, 60, xatol=1e-3, step_factor=1.1,
+                    grid_points=7)
+    scene = cal.calibrated(base)
+    simulate(scene, TORQUES_NM[0], 20)  # compiled kernels loaded before timing
+    print(f"{SCENE}: reference {ref.source} ({ref.solve_time_s / len(TORQUES_NM):.2f} s/torque),"
+          f" PSM scale s = {cal.scale:.4f} fitted at N = 60")
+
+    points = []
+    for method, ns in N_BY_METHOD.items():
+        for n in ns:
+            reps = NEWTON_REPEATS if method == "newton" and n <= 80 else 1
+            runs = [psm_curve(scene, TORQUES_NM, n, method, time_limit_s=TIME_LIMIT_S[method])
+                    for _ in range(reps)]
+            curve = runs[0]
+            t_med = float(np.median([c.time_per_solve_s for c in runs]))
+            angles = np.array([float(np.mean(g.jaw_angles_rad)) for g in curve.results])
+            rms, mx = _closing_error(th0, ref_angles, angles)
+            p = {"method": method, "n_triangles": n, "time_per_torque_s": t_med,
+                 "rms_rel_error": rms, "max_rel_error": mx, "all_converged": curve.n_failed == 0,
+                 "n_failed": curve.n_failed, "messages": curve.messages}
+            points.append(p)
+            print(f"{method:12s} N={n:4d}: {1e3 * p['time_per_torque_s']:9.2f} ms/torque, "
+                  f"RMS {100 * rms:8.2f} %, max {100 * mx:8.2f} %"
+                  f"{'' if p['all_converged'] else f'  ({curve.n_failed} not converged)'}")
+    for rings in FEM_RINGS:
+        fr = fem_reference(base, TORQUES_NM, mesh_size_m=r / rings)
+        ok = len(fr.torques_nm) == len(TORQUES_NM)
+        angles = np.asarray(fr.jaw_angles_rad) if ok else np.full(len(TORQUES_NM), np.nan)
+        rms, mx = _closing_error(th0, ref_angles, angles)
+        p = {"method": "fem", "rings": rings, "n_triangles": None,
+             "time_per_torque_s": fr.solve_time_s / len(TORQUES_NM), "rms_rel_error": rms,
+             "max_rel_error": mx, "all_converged": ok, "n_failed": len(fr.dropped_torques_nm)}
+        points.append(p)
+        print(f"fem r/{rings:<3d}        : {1e3 * p['time_per_torque_s']:9.2f} ms/torque, "
+              f"RMS {100 * rms:8.3f} %, max {100 * mx:8.3f} %")
+
+    usable = [i for i, p in enumerate(points) if p["all_converged"]]
+    front_local = pareto_front([points[i]["time_per_torque_s"] for i in usable],
+                               [points[i]["rms_rel_error"] for i in usable])
+    front = [usable[i] for i in front_local]
+    for i in front:
+        points[i]["pareto"] = True
+
+    fig = Figure(figsize=(8, 5.5))
+    ax = fig.add_subplot()
+    for method, (col, mk) in STYLE.items():
+        sel = [p for p in points if p["method"] == method]
+        for p in sel:
+            e = 100 * p["rms_rel_error"]
+            y = min(max(e, 1e-3), Y_CLIP) if math.isfinite(e) else Y_CLIP
+            ax.plot(p["time_per_torque_s"], y, mk, color=col,
+                    mfc=col if p["all_converged"] else "none", ms=7)
+            lab = f"r/{p['rings']}" if method == "fem" else str(p["n_triangles"])
+            if y >= Y_CLIP:
+                lab += " (off scale)"
+            ax.annotate(lab, (p["time_per_torque_s"], y), textcoords="offset points",
+                        xytext=(4, 3), fontsize=6, color=col)
+        ax.plot([], [], mk, color=col, label=method if method != "fem" else "FEM (vs r/24)")
+    fx = [points[i]["time_per_torque_s"] for i in front]
+    fy = [100 * points[i]["rms_rel_error"] for i in front]
+    ax.step(fx, fy, where="post", color="tab:green", lw=2, alpha=0.7, label="Pareto front")
+    ax.plot([], [], "o", color="0.5", mfc="none", label="failed KKT check / time limit")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time per torque [s]")
+    ax.set_ylabel("jaw closing-angle error vs FEM r/24 [%] (RMS over 3 torques)")
+    ax.set_title(f"{SCENE}, T = {TORQUES_NM} N·m, PSM scale {cal.scale:.3f} (labels: N)",
+                 fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out / "speed_accuracy.png", dpi=120)
+
+    summary = {
+        "scene": SCENE,
+        "torques_nm": TORQUES_NM,
+        "reference": ref,
+        "calibration": cal,
+        "points": points,
+        "pareto_front": [points[i] for i in front],
+        "time_limits_s": TIME_LIMIT_S,
+        "wall_time_s": time.perf_counter() - t_start,
+    }
+    (out / "speed_accuracy.json").write_text(json.dumps(jsonable(summary), indent=1))
+    print("Pareto front (time per torque, RMS error):")
+    for i in front:
+        p = points[i]
+        lab = (f"fem r/{p['rings']}" if p["method"] == "fem"
+               else f"{p['method']} N={p['n_triangles']}")
+        print(f"  {lab:16s} {1e3 * p['time_per_torque_s']:9.2f} ms  "
+              f"{100 * p['rms_rel_error']:7.3f} %")
+    print(f"wrote {out / 'speed_accuracy.png'} and .json in "
+          f"{time.perf_counter() - t_start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
