@@ -243,8 +243,14 @@ class PsmCurve:
 
     @property
     def time_per_solve_s(self) -> float:
-        """Ramp wall time divided by the number of torques [s]."""
+        """Ramp wall time divided by the number of torques [s] (failures and retries count)."""
         return self.wall_time_s / max(1, len(self.torques_nm))
+
+    @property
+    def median_converged_solve_s(self) -> float:
+        """Median solver-reported time of the converged solves [s] (NaN if none)."""
+        t = [dt for dt, ok in zip(self.solve_times_s, self.converged, strict=True) if ok]
+        return float(np.median(t)) if t else math.nan
 
 
 def psm_curve(
@@ -747,7 +753,9 @@ class NChoiceRow:
     n_retried
         Torques answered by a retry at a torque 0.1-0.3 % away (see :func:`psm_curve`).
     time_per_solve_s
-        Ramp wall time divided by the number of torques [s].
+        Ramp wall time divided by the number of torques [s] (failures and retries count).
+    median_solve_s
+        Median solver-reported time of the converged solves [s].
     within_tolerance
         All torques converged and both errors are within the tolerance.
     """
@@ -758,6 +766,7 @@ class NChoiceRow:
     n_failed: int
     n_retried: int
     time_per_solve_s: float
+    median_solve_s: float
     within_tolerance: bool
 
     def to_dict(self) -> dict:
@@ -794,9 +803,13 @@ class NChoice:
         Candidates evaluated, in increasing ``N`` (the search stops at the first one within
         tolerance unless ``full_table=True``).
     reference_time_per_solve_s
-        Reference ramp wall time divided by the number of torques [s].
+        Reference ramp wall time divided by the number of torques [s] (failed solves and
+        retries included: a fine mesh that struggles costs that time).
     time_per_solve_s
         Same for the chosen ``N`` [s].
+    reference_median_solve_s, median_solve_s
+        Median solver-reported time of the converged solves of the reference and of the chosen
+        ``N`` [s] (the cost without failures).
     """
 
     n_triangles: int
@@ -811,11 +824,18 @@ class NChoice:
     rows: tuple[NChoiceRow, ...]
     reference_time_per_solve_s: float
     time_per_solve_s: float
+    reference_median_solve_s: float = math.nan
+    median_solve_s: float = math.nan
 
     @property
     def speedup(self) -> float:
         """Reference time per solve divided by the chosen ``N``'s [-]."""
         return self.reference_time_per_solve_s / max(self.time_per_solve_s, 1e-12)
+
+    @property
+    def median_speedup(self) -> float:
+        """Ratio of the median converged solve times, reference over chosen ``N`` [-]."""
+        return self.reference_median_solve_s / max(self.median_solve_s, 1e-12)
 
     def row(self, n_triangles: int) -> NChoiceRow:
         """The table row of a candidate (``KeyError`` if it was not evaluated)."""
@@ -840,6 +860,9 @@ class NChoice:
             "reference_time_per_solve_s": self.reference_time_per_solve_s,
             "time_per_solve_s": self.time_per_solve_s,
             "speedup": self.speedup,
+            "reference_median_solve_s": self.reference_median_solve_s,
+            "median_solve_s": self.median_solve_s,
+            "median_speedup": self.median_speedup,
         }
 
 
@@ -866,7 +889,7 @@ def _cached_curve(scene: Scene, torques: np.ndarray, n: int, method: str, stiffn
 def _reference_values(
     scene: Scene, torques: np.ndarray, reference_n: int, method: str, stiffness_rule: str,
     retry: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
     """Fine reference at each torque; a failed torque is retried on nearby meshes."""
     curve = _cached_curve(scene, torques, reference_n, method, stiffness_rule, retry)
     angles = np.asarray(curve.jaw_angles_rad, dtype=float)
@@ -881,7 +904,7 @@ def _reference_values(
         angles[bad] = alt.jaw_angles_rad
         strains[bad] = alt.peak_strains
         used_n[bad] = reference_n + dn
-    return angles, strains, used_n, curve.time_per_solve_s
+    return angles, strains, used_n, curve.time_per_solve_s, curve.median_converged_solve_s
 
 
 def choose_n_triangles(
@@ -968,7 +991,7 @@ def choose_n_triangles(
 
     torques = np.linspace(t_lo, t_hi, int(n_torques))
     th0 = scene.gripper.rest_angle_rad
-    angles, strains, used_n, ref_time = _reference_values(
+    angles, strains, used_n, ref_time, ref_median = _reference_values(
         scene, torques, int(reference_n), method, stiffness_rule, bool(retry)
     )
     keep = np.isfinite(angles)
@@ -986,7 +1009,7 @@ def choose_n_triangles(
             e_s = float(np.max(np.abs(s / strains - 1))) if curve.n_failed == 0 else math.nan
             ok = curve.n_failed == 0 and e_c <= tolerance and e_s <= tolerance
             row = NChoiceRow(n, e_c, e_s, curve.n_failed, curve.n_retried,
-                             curve.time_per_solve_s, bool(ok))
+                             curve.time_per_solve_s, curve.median_converged_solve_s, bool(ok))
             rows.append(row)
             if ok and chosen is None:
                 chosen = row
@@ -994,7 +1017,7 @@ def choose_n_triangles(
                     break
     if chosen is None:
         chosen = rows[-1] if rows else NChoiceRow(cands[-1], math.nan, math.nan, 0, 0,
-                                                  math.nan, False)
+                                                  math.nan, math.nan, False)
     out = NChoice(
         n_triangles=chosen.n_triangles,
         within_tolerance=chosen.within_tolerance,
@@ -1008,6 +1031,8 @@ def choose_n_triangles(
         rows=tuple(rows),
         reference_time_per_solve_s=float(ref_time),
         time_per_solve_s=float(chosen.time_per_solve_s),
+        reference_median_solve_s=float(ref_median),
+        median_solve_s=float(chosen.median_solve_s),
     )
     _N_CACHE[key] = out
     return out
