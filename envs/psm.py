@@ -4,7 +4,8 @@ The disk is a fan of ``N`` isosceles triangles around its pinned centre: ``N`` c
 ``N`` radial springs (rest length ``r``) and ``N`` contour springs (rest length
 ``h = 2 r sin(pi/N)``). Everything the solver needs is packed in a :class:`ScaledProblem`, a
 non-dimensional copy of the scene (lengths in units of ``r``, stiffness in units of ``s E t``),
-so tolerances are independent of the physical size.
+so tolerances are independent of the physical size. The disk's ``contour_stiffness_ratio``
+multiplies the contour springs only (on top of ``s``), see :func:`disk_spring_stiffness`.
 """
 
 from __future__ import annotations
@@ -14,13 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import Scene, check_range, closed_angle_rad, finger_frame
+from .scene import Scene, SoftDisk, check_range, closed_angle_rad, finger_frame
 
 __all__ = [
     "STIFFNESS_RULES",
     "MIN_TRIANGLES",
     "MAX_TRIANGLES",
     "spring_stiffness",
+    "disk_spring_stiffness",
     "rest_points",
     "ScaledProblem",
     "corner_radius",
@@ -117,6 +119,34 @@ def spring_stiffness(
     return float(k_int), float(k_ext)
 
 
+def disk_spring_stiffness(
+    disk: SoftDisk, n_triangles: int, rule: str = "van_gelder"
+) -> tuple[float, float]:
+    """Physical radial and contour spring stiffness of a disk's fan [N/m].
+
+    ``k_int = s E t k_int'`` and ``k_ext = rho_c s E t k_ext'`` with ``k_int', k_ext'`` from
+    :func:`spring_stiffness`, ``s`` the disk's ``stiffness_scale`` and ``rho_c`` its
+    ``contour_stiffness_ratio`` (which multiplies the contour springs only).
+
+    Parameters
+    ----------
+    disk
+        The disk (radius, material, thickness and both calibration factors).
+    n_triangles
+        Number of fan triangles ``N``.
+    rule
+        Stiffness rule, see :func:`spring_stiffness`.
+
+    Returns
+    -------
+    k_int_n_per_m, k_ext_n_per_m : float
+        Radial (internal) and contour (external) spring stiffness [N/m].
+    """
+    k_int, k_ext = spring_stiffness(n_triangles, disk.radius_m, rule, disk.poisson_ratio)
+    k_unit = disk.stiffness_scale * disk.youngs_modulus_pa * disk.thickness_m  # N/m
+    return k_int * k_unit, k_ext * disk.contour_stiffness_ratio * k_unit
+
+
 def _check_n(n_triangles: int) -> int:
     if isinstance(n_triangles, bool) or int(n_triangles) != n_triangles:
         raise ValueError(f"n_triangles must be an integer, got {n_triangles!r}")
@@ -195,7 +225,8 @@ def scaled_problem(
     Parameters
     ----------
     scene
-        Gripper and disk.
+        Gripper and disk; the disk's ``stiffness_scale`` sets the stiffness unit ``s E t`` and
+        its ``contour_stiffness_ratio`` multiplies the scaled contour stiffness ``P_KC``.
     torque_nm
         Actuation torque ``T_a`` on each finger [N·m], >= 0.
     n_triangles
@@ -212,6 +243,7 @@ def scaled_problem(
     r = d.radius_m
     k_unit = d.stiffness_scale * d.youngs_modulus_pa * d.thickness_m  # N/m
     k_int, k_ext = spring_stiffness(n, r, stiffness_rule, d.poisson_ratio)
+    k_ext *= d.contour_stiffness_ratio  # second calibration factor, contour springs only
     p = np.zeros(N_PARAMS)
     p[P_KR], p[P_KC], p[P_H] = k_int, k_ext, 2 * math.sin(math.pi / n)
     centre = d.center_m

@@ -135,6 +135,10 @@ class SoftDisk:
         Out-of-plane thickness ``t`` [m].
     stiffness_scale
         Calibration scale ``s`` multiplying every spring stiffness [-].
+    contour_stiffness_ratio
+        Second calibration factor ``rho_c`` multiplying only the contour (external) springs,
+        on top of ``stiffness_scale`` [-], in (0, 1e3]: ``k_ext = rho_c s E t A / h^2`` while
+        ``k_int = 2 s E t A / r^2`` (van Gelder rule). Default 1 (the plain stiffness rule).
     """
 
     radius_m: float
@@ -143,6 +147,7 @@ class SoftDisk:
     poisson_ratio: float = 0.45
     thickness_m: float = 0.01
     stiffness_scale: float = 1.0
+    contour_stiffness_ratio: float = 1.0
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -151,6 +156,9 @@ class SoftDisk:
         check_range("poisson_ratio", self.poisson_ratio, -1.0, 0.5, low_open=True, high_open=True)
         check_range("thickness_m", self.thickness_m, 0.0, math.inf, low_open=True)
         check_range("stiffness_scale", self.stiffness_scale, 0.0, math.inf, low_open=True)
+        check_range(
+            "contour_stiffness_ratio", self.contour_stiffness_ratio, 0.0, 1e3, low_open=True
+        )
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
 

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from envs import kernels as K
-from envs.psm import rest_points, scaled_problem, spring_stiffness
+from envs.psm import (
+    P_KC,
+    P_KR,
+    disk_spring_stiffness,
+    rest_points,
+    scaled_problem,
+    spring_stiffness,
+)
 from envs.scene import Scene
 
 
@@ -35,6 +42,26 @@ def test_bad_triangle_counts_raise(n):
 def test_unknown_rule_raises():
     with pytest.raises(ValueError, match="stiffness rule"):
         spring_stiffness(20, 0.07, "magic")
+
+
+@pytest.mark.parametrize("rule", ["van_gelder", "cst_fit"])
+def test_contour_stiffness_ratio_scales_only_the_contour_springs(rule):
+    base = Scene.preset("paper-r070").with_changes(stiffness_scale=1.5)
+    scene = base.with_changes(contour_stiffness_ratio=2.5)
+    p0 = scaled_problem(base, 0.3, 20, rule).params
+    p1 = scaled_problem(scene, 0.3, 20, rule).params
+    assert p1[P_KC] == pytest.approx(2.5 * p0[P_KC], rel=1e-15)
+    mask = np.ones(len(p0), dtype=bool)
+    mask[P_KC] = False
+    np.testing.assert_array_equal(p1[mask], p0[mask])
+    # physical stiffness [N/m]: k_int = s E t k_int', k_ext = rho_c s E t k_ext'
+    d = scene.disk
+    k_unit = 1.5 * d.youngs_modulus_pa * d.thickness_m
+    k_int, k_ext = disk_spring_stiffness(d, 20, rule)
+    assert k_int == pytest.approx(p1[P_KR] * k_unit, rel=1e-15)
+    assert k_ext == pytest.approx(p1[P_KC] * k_unit, rel=1e-15)
+    ki, ke = spring_stiffness(20, d.radius_m, rule, d.poisson_ratio)
+    assert k_ext / k_int == pytest.approx(2.5 * ke / ki, rel=1e-15)
 
 
 def _state(n=12, seed=0):

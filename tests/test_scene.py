@@ -61,6 +61,9 @@ def test_gripper_rejects_bad_fields(field, value):
         ("poisson_ratio", -1.0),
         ("thickness_m", 0.0),
         ("stiffness_scale", -1.0),
+        ("contour_stiffness_ratio", 0.0),
+        ("contour_stiffness_ratio", 1001.0),
+        ("contour_stiffness_ratio", math.nan),
         ("distance_m", math.inf),
     ],
 )
@@ -68,6 +71,16 @@ def test_disk_rejects_bad_fields(field, value):
     d = Scene.preset("paper-r070").disk
     with pytest.raises(ValueError, match=field):
         replace(d, **{field: value})
+
+
+def test_contour_stiffness_ratio_defaults_to_one_and_names_its_range():
+    d = Scene.preset("paper-r070").disk
+    assert d.contour_stiffness_ratio == 1.0
+    assert replace(d, contour_stiffness_ratio=1e3).contour_stiffness_ratio == 1e3
+    with pytest.raises(ValueError, match=r"contour_stiffness_ratio.*\(0, 1000\]"):
+        replace(d, contour_stiffness_ratio=-0.5)
+    s = Scene.preset("paper-r070").with_changes(contour_stiffness_ratio=2.0)
+    assert s.disk.contour_stiffness_ratio == 2.0
 
 
 def test_scene_rejects_overlap_and_wide_fingers():
