@@ -8,12 +8,14 @@ import numpy as np
 import pytest
 
 from envs.accuracy import (
+    CALIBRATION_FITS,
     ReferenceCurve,
     calibrate,
     choose_n_triangles,
     clear_n_cache,
     closing_errors,
     fem_reference,
+    paper_heldout_cases,
     pareto_front,
     psm_curve,
 )
@@ -69,9 +71,95 @@ def test_calibration_against_a_coarse_fem_curve(tmp_path, monkeypatch):
     assert np.all(np.diff(rep.reference_closing_rad) > 0)
 
 
-def test_separate_scales_are_not_supported(synthetic_reference):
-    with pytest.raises(NotImplementedError, match="single stiffness_scale"):
-        calibrate(R070, synthetic_reference, 20, separate=True)
+SCALE_2, RATIO_2 = 2.5, 0.4  # known parameters of the two-parameter synthetic reference
+
+
+@pytest.fixture(scope="module")
+def synthetic_two_parameter() -> tuple[ReferenceCurve, ReferenceCurve]:
+    """PSM curves (fit torques, held-out torques) of the r = 0.07 disk with s = 2.5 and a
+    contour stiffness ratio 0.4 (N = 20)."""
+    sc = R070.with_changes(stiffness_scale=SCALE_2, contour_stiffness_ratio=RATIO_2)
+    fit = psm_curve(sc, TORQUES, 20)
+    held = psm_curve(sc, (0.15, 0.35), 20)
+    assert all(fit.converged) and all(held.converged)
+    return (ReferenceCurve(fit.torques_nm, fit.jaw_angles_rad, source="psm s=2.5 rho=0.4"),
+            ReferenceCurve(held.torques_nm, held.jaw_angles_rad, source="psm held-out"))
+
+
+def test_two_parameter_calibration_recovers_scale_and_ratio(synthetic_two_parameter):
+    ref, held = synthetic_two_parameter
+    # separate=True is the backward-compatible spelling of fit="scale_and_ratio"
+    cal = calibrate(R070, ref, 20, separate=True, heldout={"held": (R070, held)})
+    assert cal.fit_mode == "scale_and_ratio"
+    assert cal.scale == pytest.approx(SCALE_2, rel=1e-3)
+    assert cal.contour_stiffness_ratio == pytest.approx(RATIO_2, rel=1e-3)
+    assert cal.initial_scale == 1.0 and cal.initial_contour_stiffness_ratio == 1.0
+    assert cal.rms_rel_error < 1e-4 and cal.max_rel_error < 1e-4
+    # the profile starts at the scene's ratio and the factors, each with its best scale; the
+    # refinement can only improve on its best row
+    assert [row[0] for row in cal.profile] == pytest.approx([0.1, 0.3, 1.0, 3.0, 10.0])
+    assert cal.rms_rel_error <= min(row[2] for row in cal.profile)
+    # held-out torques, both factors reused
+    assert set(cal.heldout) == {"held"}
+    assert cal.heldout["held"].max_rel_error < 1e-3
+    assert cal.heldout["held"].contour_stiffness_ratio == pytest.approx(cal.contour_stiffness_ratio)
+    assert cal.heldout_max_rel_error == cal.heldout["held"].max_rel_error
+    calibrated = cal.calibrated(R050).disk
+    assert (calibrated.stiffness_scale, calibrated.contour_stiffness_ratio) == (
+        cal.scale, cal.contour_stiffness_ratio)
+    d = cal.to_dict()
+    assert d["contour_stiffness_ratio"] == cal.contour_stiffness_ratio
+    assert d["heldout"]["held"]["max_rel_error"] == cal.heldout["held"].max_rel_error
+
+
+def test_scale_only_fit_keeps_the_scene_ratio(synthetic_two_parameter):
+    ref, _ = synthetic_two_parameter
+    cal = calibrate(R070.with_changes(contour_stiffness_ratio=RATIO_2), ref, 20)
+    assert cal.fit_mode == "scale" and cal.profile == ()
+    assert cal.contour_stiffness_ratio == RATIO_2
+    assert cal.scale == pytest.approx(SCALE_2, rel=1e-3)
+    assert math.isnan(cal.heldout_rms_rel_error)  # no held-out case given
+
+
+def test_calibration_options_are_validated(synthetic_reference):
+    assert CALIBRATION_FITS == ("scale", "scale_and_ratio")
+    with pytest.raises(ValueError, match="fit must be one of"):
+        calibrate(R070, synthetic_reference, 20, fit="ratio")
+    with pytest.raises(ValueError, match="ratio_bounds"):
+        calibrate(R070, synthetic_reference, 20, fit="scale_and_ratio", ratio_bounds=(0, 10))
+    with pytest.raises(ValueError, match="ratio_factors"):
+        calibrate(R070, synthetic_reference, 20, fit="scale_and_ratio", ratio_factors=(-1.0,))
+    with pytest.raises(ValueError, match="fitted_preset"):
+        paper_heldout_cases("forceps-a")
+
+
+def test_fem_reference_ignores_the_psm_calibration_factors(monkeypatch):
+    """The FEM is physical: both PSM factors are reset so all calibrations share its cache."""
+    import envs.fem
+
+    seen = []
+
+    def fake_fem_grasp(scene, torques, **kwargs):
+        seen.append(scene.disk)
+        return []
+
+    monkeypatch.setattr(envs.fem, "fem_grasp", fake_fem_grasp)
+    with pytest.raises(ValueError, match="at least one"):
+        fem_reference(R070.with_changes(stiffness_scale=3.0, contour_stiffness_ratio=0.2))
+    assert seen[0] == R070.disk
+
+
+@pytest.mark.slow
+def test_two_parameter_fit_is_no_worse_on_a_coarse_fem_curve(tmp_path, monkeypatch):
+    """Measured (N = 20, FEM r / 6, r = 0.05 disk, 0.1..0.5 N·m): see the README."""
+    monkeypatch.setenv("PSM_GRASP_CACHE", str(tmp_path))
+    ref = fem_reference(R050, (0.1, 0.2, 0.3, 0.4, 0.5), mesh_size_m=R050.disk.radius_m / 6)
+    one = calibrate(R050, ref, 20)
+    two = calibrate(R050, ref, 20, fit="scale_and_ratio")
+    # the profile contains the scene's ratio (1) with its best scale, so the two-parameter fit
+    # is at least as good as the scale-only fit up to the latter's finer tolerance
+    assert two.rms_rel_error <= one.rms_rel_error * (1 + 1e-3)
+    assert 0.01 <= two.contour_stiffness_ratio <= 100
 
 
 def test_reference_curve_validation():
