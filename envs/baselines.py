@@ -231,6 +231,6 @@ def solve(
     if ok:
         msg = "converged"
     return result_from_scaled(
-        scene, prob, torque_nm, x, lam_face, np.zeros((2, 2)), -np.ones((2, 2), dtype=int),
-        lam_stop, ok, msg, nit, elapsed, method, stiffness_rule,
+        scene, prob, torque_nm, x, lam_face, np.zeros((2, 4, prob.n)), lam_stop, ok, msg, nit,
+        elapsed, method, stiffness_rule,
     )

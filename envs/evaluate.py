@@ -281,7 +281,8 @@ def _design_table(designs) -> np.ndarray:
 
 
 def _disk_table(disks, batch: int) -> np.ndarray:
-    """Columns: radius, Young's modulus, Poisson ratio, thickness, stiffness scale."""
+    """Columns: radius, Young's modulus, Poisson ratio, thickness, stiffness scale, contour
+    stiffness ratio."""
     if isinstance(disks, SoftDisk):
         disks = [disks] * batch
     elif not isinstance(disks, Sequence) or len(disks) != batch:
@@ -291,8 +292,8 @@ def _disk_table(disks, batch: int) -> np.ndarray:
         if not isinstance(d, SoftDisk):
             raise ValueError(f"disks[{i}] must be a SoftDisk, got {type(d).__name__}")
         rows.append((d.radius_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
-                     d.stiffness_scale))
-    return np.array(rows, dtype=np.float64).reshape(batch, 5)
+                     d.stiffness_scale, d.contour_stiffness_ratio))
+    return np.array(rows, dtype=np.float64).reshape(batch, 6)
 
 
 def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
@@ -357,8 +358,9 @@ def _rest_geometry(des: np.ndarray, radius: np.ndarray):
 def _scene_params(des_row: np.ndarray, disk_row: np.ndarray, n: int, kf: float) -> np.ndarray:
     """``scaled_problem(...).params`` of one valid row, through the real Scene (slow path)."""
     ln, th0, d3, w, torque, d1 = des_row.tolist()
-    r, young, nu, thick, scale = disk_row.tolist()
-    scene = Scene(Gripper(ln, th0, d3, w, kf), SoftDisk(r, d1, young, nu, thick, scale))
+    r, young, nu, thick, scale, ratio = disk_row.tolist()
+    scene = Scene(Gripper(ln, th0, d3, w, kf),
+                  SoftDisk(r, d1, young, nu, thick, scale, contour_stiffness_ratio=ratio))
     return scaled_problem(scene, torque, int(n), "van_gelder", PHASE_RAD).params
 
 
@@ -390,7 +392,7 @@ def _pack(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, kf: np.ndarray):
 
 def _pack_fast(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, kf: np.ndarray):
     """Vectorized Scene validation + scaled_problem packing; params shape (B, N_PARAMS)."""
-    radius, young, _, thick, scale = disk.T
+    radius, young, _, thick, scale, ratio = disk.T
     cos0, sin0, clearance, th_min = _rest_geometry(des, radius)
     valid = _valid_at_rest(des, radius, cos0, sin0, clearance)
     prm = np.zeros((des.shape[0], N_PARAMS))
@@ -400,7 +402,7 @@ def _pack_fast(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, kf: np.ndar
     for n in np.unique(n_tri).tolist():
         rows = n_tri == n
         k_int, k_ext = spring_stiffness(n, 1.0, "van_gelder")
-        prm[rows, P_KR], prm[rows, P_KC] = k_int, k_ext
+        prm[rows, P_KR], prm[rows, P_KC] = k_int, k_ext * ratio[rows]
         prm[rows, P_H] = 2 * math.sin(math.pi / n)
     yc = (d1 + radius) / radius
     prm[:, P_C0X], prm[:, P_C0Y] = (0.0 - d3) / radius, yc
@@ -434,9 +436,9 @@ def _solve_group(n: int, prm: np.ndarray) -> dict[str, np.ndarray]:
     xs[:, 2 * n] = prm[:, P_TH0]
     xs[:, 2 * n + 1] = prm[:, P_TH0]
     lam_face = np.zeros((g, 2, n))
-    lam_corner = np.zeros((g, 2, 2))
+    lam_corner = np.zeros((g, 2, 4, n))
     lam_stop = np.zeros(2 * g).reshape(g, 2)
-    edges = -np.ones((g, 2, 2), dtype=np.int64)
+    corner_cand = np.zeros((g, 2, 4, n), dtype=np.bool_)
     cand = np.zeros((g, 2, n), dtype=np.bool_)
     infos = np.zeros((g, 8))
     opts = kernels.default_options()
@@ -444,12 +446,12 @@ def _solve_group(n: int, prm: np.ndarray) -> dict[str, np.ndarray]:
     if g == 1:
         # a single row needs no thread pool (and stays fork-safe in process-based vector envs)
         kernels.solve_one(n, prm[0], opts, xs[0], lam_face[0], lam_corner[0], lam_stop[0],
-                          edges[0], cand[0], infos[0])
+                          corner_cand[0], cand[0], infos[0])
     else:
         # dynamic scheduling, one row at a time: solve times vary by 100x between rows (a row
         # hitting the iteration limit), so static blocks would leave threads idle
         with numba.parallel_chunksize(1):
-            kernels.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, edges, cand,
+            kernels.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand, cand,
                                 infos)
     q = xs[:, : 2 * n].reshape(g, n, 2)
     radial = np.sqrt(q[..., 0] * q[..., 0] + q[..., 1] * q[..., 1]) - 1.0
@@ -463,7 +465,7 @@ def _solve_group(n: int, prm: np.ndarray) -> dict[str, np.ndarray]:
         "stable": infos[:, 3] != 0.0,
         "jaw_angles_rad": xs[:, 2 * n :].copy(),
         "n_contacts": np.count_nonzero(lam_face > 0.0, axis=2).astype(np.int64),
-        "corner_force": lam_corner.sum(axis=2),
+        "corner_force": lam_corner.sum(axis=(2, 3)),
         "face_force": lam_face.sum(axis=2),
         "peak_strain": np.maximum(np.abs(radial).max(axis=1), np.abs(contour).max(axis=1)),
         "max_displacement_ratio": disp.max(axis=1),

@@ -1348,7 +1348,8 @@ def fem_grasp(
         "version": FEM_VERSION,
         "gripper": {f.name: getattr(grip, f.name) for f in fields(grip)},
         "disk": {
-            f.name: getattr(disk, f.name) for f in fields(disk) if f.name != "stiffness_scale"
+            f.name: getattr(disk, f.name) for f in fields(disk)
+            if f.name not in ("stiffness_scale", "contour_stiffness_ratio")
         },
         "torques_nm": torques,
         "rings": rings,

@@ -48,6 +48,9 @@ from .psm import (
 
 BW = 5  # half bandwidth of the interleaved point ordering
 P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
+P_POLICY = 16  # extra slot: contact policy of this attempt (see solve_one)
+CORNER_NEAR = 0.5  # corner-edge constraints for edges this close to a corner's path (units of r)
+CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
 
 # status codes
 OK = 0
@@ -58,6 +61,8 @@ CONTACT_CYCLE = 4
 POLISH_FAIL = 5
 INFEASIBLE_START = 6
 SADDLE = 7
+INVERTED = 8
+PENETRATION = 9
 STATUS_MESSAGES = {
     OK: "converged",
     ITER_LIMIT: "interior-point iteration limit reached",
@@ -67,6 +72,9 @@ STATUS_MESSAGES = {
     POLISH_FAIL: "active-set polish did not reach the contact tolerance",
     INFEASIBLE_START: "start point violates a contact constraint",
     SADDLE: "stuck at an unstable (saddle) equilibrium; escapes from it failed",
+    PENETRATION: "answer penetrates a finger outside the contact constraints considered",
+    INVERTED: "equilibrium with inverted (folded) fan triangles: the squeeze is beyond the "
+              "point-spring model's valid range",
 }
 
 # option vector layout
@@ -105,78 +113,97 @@ def _band_index(n):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _face_eval(q, i, j, th, prm, grad, hess):
-    """Face constraint of point i on finger j: value, local grad/Hessian over (qx, qy, theta)."""
+    """Gap of point i to the body of finger j: value, local grad/Hessian over (qx, qy, theta).
+
+    The body is the bar 0 <= s <= l, |m| <= w/2 in finger coordinates (s along the axis, m
+    along the inward normal) with its four corners rounded to the radius rho: the rectangle
+    R = [0, l] x [-(w/2 - rho), w/2 - rho] grown by rho. The gap is dist(p, R) - rho, C1
+    outside the body: the gripping face (m = w/2), the tip and root ends and the back of the
+    bar, which a disk wrapping round a finger tip can reach.
+    """
     ex, ey, nx, ny = _frame(j, th)
     vx = q[i, 0] + prm[P_C0X + 2 * j]
     vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
-    hw = prm[P_HW]
+    rho = prm[P_RHO]
+    hc = prm[P_HW] - rho
     s = ex * vx + ey * vy
     m = nx * vx + ny * vy
     for a in range(3):
         grad[a] = 0.0
         for b in range(3):
             hess[a, b] = 0.0
-    if s < 0.0 or s > prm[P_LMAX]:
-        # beyond an end of the face: distance to that (rounded) corner, whose centre sits at
-        # (s_c, hw - rho) in finger coordinates, minus its radius rho
-        sc = 0.0 if s < 0.0 else prm[P_LMAX]
-        rho = prm[P_RHO]
-        hc = hw - rho
-        ds = s - sc
-        dm = m - hc
-        g = math.sqrt(ds * ds + dm * dm)
-        if g < 1e-300:
-            return -rho
-        wx = ds * ex + dm * nx
-        wy = ds * ey + dm * ny
-        # w = v - sc e - hc n ; dw/dtheta = sc n - hc e ; d2w/dtheta2 = sc e + hc n
-        dwx = sc * nx - hc * ex
-        dwy = sc * ny - hc * ey
-        ux = wx / g
-        uy = wy / g
-        grad[0] = ux
-        grad[1] = uy
-        grad[2] = ux * dwx + uy * dwy
-        d2x = sc * ex + hc * nx
-        d2y = sc * ey + hc * ny
-        pxx = (1.0 - ux * ux) / g
-        pxy = (-ux * uy) / g
-        pyy = (1.0 - uy * uy) / g
-        hess[0, 0] = pxx
-        hess[0, 1] = pxy
-        hess[1, 0] = pxy
-        hess[1, 1] = pyy
-        hess[0, 2] = pxx * dwx + pxy * dwy
-        hess[1, 2] = pxy * dwx + pyy * dwy
-        hess[2, 0] = hess[0, 2]
-        hess[2, 1] = hess[1, 2]
-        hess[2, 2] = dwx * hess[0, 2] + dwy * hess[1, 2] + ux * d2x + uy * d2y
-        return g - rho
-    grad[0] = nx
-    grad[1] = ny
-    grad[2] = s
-    hess[0, 2] = ex
-    hess[1, 2] = ey
-    hess[2, 0] = ex
-    hess[2, 1] = ey
-    hess[2, 2] = -m
-    return m - hw
+    ds = s - min(max(s, 0.0), prm[P_LMAX])
+    dm = m - min(max(m, -hc), hc)
+    # derivatives of s and m: ds/dq = e, dm/dq = n, ds/dth = -m, dm/dth = s,
+    # d2s/dq dth = -n, d2m/dq dth = e, d2s/dth2 = -s, d2m/dth2 = -m
+    if ds != 0.0 and dm != 0.0:
+        dist = math.sqrt(ds * ds + dm * dm)
+        g_s = ds / dist
+        g_m = dm / dist
+        d3 = dist * dist * dist
+        g_ss = dm * dm / d3
+        g_mm = ds * ds / d3
+        g_sm = -ds * dm / d3
+    elif dm != 0.0:
+        dist = abs(dm)
+        g_s = 0.0
+        g_m = 1.0 if dm > 0.0 else -1.0
+        g_ss = 0.0
+        g_mm = 0.0
+        g_sm = 0.0
+    elif ds != 0.0:
+        dist = abs(ds)
+        g_s = 1.0 if ds > 0.0 else -1.0
+        g_m = 0.0
+        g_ss = 0.0
+        g_mm = 0.0
+        g_sm = 0.0
+    else:
+        return -rho  # inside the core rectangle: deep penetration (never at a feasible point)
+    # first derivatives: grad = g_s grad(s) + g_m grad(m)
+    as0, as1, as2 = ex, ey, -m
+    am0, am1, am2 = nx, ny, s
+    grad[0] = g_s * as0 + g_m * am0
+    grad[1] = g_s * as1 + g_m * am1
+    grad[2] = g_s * as2 + g_m * am2
+    # second derivatives: sum of g_ab grad(a) grad(b)^T plus g_s Hess(s) + g_m Hess(m)
+    sv = (as0, as1, as2)
+    mv = (am0, am1, am2)
+    for a in range(3):
+        for b in range(3):
+            hess[a, b] = (g_ss * sv[a] * sv[b] + g_mm * mv[a] * mv[b]
+                          + g_sm * (sv[a] * mv[b] + mv[a] * sv[b]))
+    # Hess(s): (q, th) entries -n, (th, th) -s ; Hess(m): (q, th) entries e, (th, th) -m
+    hx = -g_s * nx + g_m * ex
+    hy = -g_s * ny + g_m * ey
+    hess[0, 2] += hx
+    hess[2, 0] += hx
+    hess[1, 2] += hy
+    hess[2, 1] += hy
+    hess[2, 2] += -g_s * s - g_m * m
+    return dist - rho
 
 
 @njit(cache=True, error_model="numpy")
-def _corner_eval(q, k, j, th, sc, prm, grad, hess):
-    """Corner of finger j at axial position sc vs contour edge k -> k+1.
+def _corner_eval(q, k, j, th, c, prm, grad, hess):
+    """Rounded corner c of finger j vs contour edge k -> k+1.
 
-    Local variables (ax, ay, bx, by, theta). Value: signed distance of the corner from the edge
-    line (positive outside the counter-clockwise polygon) where its foot lies on the edge, and
-    its distance to the nearer end point beyond the edge (a C1 continuation: no fictitious
-    extended line).
+    Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back of the bar.
+
+    Local variables (ax, ay, bx, by, theta). Value: distance from the centre of the rounded
+    corner to the segment, minus the corner radius: the distance to the edge line where the foot
+    lies on the edge, to the nearer end point beyond it. The distance to a segment is C1 away
+    from the segment, so a corner may slide from one edge to the next through their common
+    vertex with every nearby edge kept as its own constraint.
     """
     n = q.shape[0]
     k1 = k + 1 if k + 1 < n else 0
     ex, ey, nx, ny = _frame(j, th)
     rho = prm[P_RHO]
-    hw = prm[P_HW] - rho  # centre of the rounded corner
+    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
+    hw = prm[P_HW] - rho  # centre of the rounded corner, in finger coordinates (sc, hw)
+    if c >= 2:
+        hw = -hw
     cx = prm[P_C0X + 2 * j]
     cy = prm[P_C0X + 2 * j + 1]
     kx = -cx + sc * ex + hw * nx
@@ -276,6 +303,14 @@ def _corner_eval(q, k, j, th, sc, prm, grad, hess):
                 ub0, ub1, db0, db1 = k1x, k1y, 0.0, 0.0
             hess[a, b] = ub0 * mu0 + ub1 * mu1 + db0 * md0 + db1 * md1
     hess[4, 4] += gux * k2x + guy * k2y
+    if cr < 0.0:
+        # the corner lies on the inner side of this edge's line: the distance to the segment
+        # is -cr / L (every edge near the corner is a constraint, not only the one it faces)
+        for a in range(5):
+            grad[a] = -grad[a]
+            for b in range(5):
+                hess[a, b] = -hess[a, b]
+        return -g - rho
     return g - rho
 
 
@@ -408,10 +443,12 @@ def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
         dofs[2] = 2 * n + j
         return g, 3
     if kind == 1:
-        g = _corner_eval(q, idx, j, th, sc, prm, grad5, hess5)
-        k1 = idx + 1 if idx + 1 < n else 0
-        dofs[0] = 2 * idx
-        dofs[1] = 2 * idx + 1
+        c = idx // n
+        k = idx - c * n
+        g = _corner_eval(q, k, j, th, c, prm, grad5, hess5)
+        k1 = k + 1 if k + 1 < n else 0
+        dofs[0] = 2 * k
+        dofs[1] = 2 * k + 1
         dofs[2] = 2 * k1
         dofs[3] = 2 * k1 + 1
         dofs[4] = 2 * n + j
@@ -520,81 +557,91 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
 # candidate constraints
 
 
-@njit(cache=True, error_model="numpy")
-def _straddle_edge(q, n, j, th, sc, prm):
-    """Contour edge crossed by the line through finger j's corner at axial position sc.
-
-    Among edges whose end points lie on both sides of that line and on the near side of the
-    disk, the one closest to the face line; -1 if none.
-    """
+@njit(cache=True, error_model="numpy", inline="always")
+def _corner_centre(j, th, c, prm):
+    """Centre of the rounded corner c of finger j (disk-centred, units of r)."""
     ex, ey, nx, ny = _frame(j, th)
-    cx = prm[P_C0X + 2 * j]
-    cy = prm[P_C0X + 2 * j + 1]
-    best = -1
-    bestd = 1e300
-    for k in range(n):
-        k1 = k + 1 if k + 1 < n else 0
-        sa = ex * (q[k, 0] + cx) + ey * (q[k, 1] + cy) - sc
-        sb = ex * (q[k1, 0] + cx) + ey * (q[k1, 1] + cy) - sc
-        if sa * sb > 0.0:
-            continue
-        ma = nx * (q[k, 0] + cx) + ny * (q[k, 1] + cy)
-        mb = nx * (q[k1, 0] + cx) + ny * (q[k1, 1] + cy)
-        dist = 0.5 * (ma + mb)
-        if dist < bestd:
-            bestd = dist
-            best = k
-    return best
+    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
+    hc = prm[P_HW] - prm[P_RHO]
+    if c >= 2:
+        hc = -hc
+    return (-prm[P_C0X + 2 * j] + sc * ex + hc * nx,
+            -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny)
 
 
 @njit(cache=True, error_model="numpy")
-def _corner_choice(q, n, j, th, sc, prm, current, lam, kinds, fj, fsc, mcount):
-    """Edge the corner should face at this solution (current one if still right, -1: none).
-
-    A loaded corner whose foot left its edge moves to the neighbouring edge on that side; an
-    unloaded corner faces the edge nearest to it when it penetrates the contour, else keeps its
-    edge (or the straddling one).
-    """
-    ex, ey, nx, ny = _frame(j, th)
-    hw = prm[P_HW]
-    kx = -prm[P_C0X + 2 * j] + sc * ex + hw * nx
-    ky = -prm[P_C0X + 2 * j + 1] + sc * ey + hw * ny
-    loaded = False
-    for m in range(mcount):
-        if kinds[m] == 1 and fj[m] == j and fsc[m] == sc and lam[m] > 0.0:
-            loaded = True
-    if current >= 0 and loaded:
-        k1 = current + 1 if current + 1 < n else 0
-        dx, dy = q[k1, 0] - q[current, 0], q[k1, 1] - q[current, 1]
-        t = ((kx - q[current, 0]) * dx + (ky - q[current, 1]) * dy) / (dx * dx + dy * dy)
-        if t < -1e-9:
-            return current - 1 if current > 0 else n - 1
-        if t > 1.0 + 1e-9:
-            return k1
-        return current
-    # unloaded: is the corner inside the contour? (crossing-number test)
+def _inside(q, n, px, py):
+    """Crossing-number test: is (px, py) inside the contour polygon?"""
     inside = False
-    best = -1
-    bestd = 1e300
     for k in range(n):
         k1 = k + 1 if k + 1 < n else 0
         ax, ay, bx, by = q[k, 0], q[k, 1], q[k1, 0], q[k1, 1]
-        if (ay > ky) != (by > ky):
-            xc = ax + (ky - ay) * (bx - ax) / (by - ay)
-            if xc > kx:
+        if (ay > py) != (by > py):
+            xc = ax + (py - ay) * (bx - ax) / (by - ay)
+            if xc > px:
                 inside = not inside
-        dx, dy = bx - ax, by - ay
-        t = ((kx - ax) * dx + (ky - ay) * dy) / (dx * dx + dy * dy)
-        t = min(1.0, max(0.0, t))
-        d = math.hypot(kx - ax - t * dx, ky - ay - t * dy)
-        if d < bestd:
-            bestd = d
-            best = k
-    if inside:
-        return best
-    if current >= 0:
-        return current
-    return _straddle_edge(q, n, j, th, sc, prm)
+    return inside
+
+
+@njit(cache=True, error_model="numpy")
+def _bar_crossed(q, n, j, th, prm):
+    """Does a contour edge cross the axis of finger j (the bar runs right through the disk)?
+
+    Every point outside the bar and every corner outside the contour do not exclude an edge
+    with one end in front of the bar and the other behind it.
+    """
+    ex, ey, _, _ = _frame(j, th)
+    ax = -prm[P_C0X + 2 * j]
+    ay = -prm[P_C0X + 2 * j + 1]
+    bx = ax + prm[P_LMAX] * ex
+    by = ay + prm[P_LMAX] * ey
+    for k in range(n):
+        k1 = k + 1 if k + 1 < n else 0
+        px, py, rx, ry = q[k, 0], q[k, 1], q[k1, 0], q[k1, 1]
+        d1 = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+        d2 = (bx - ax) * (ry - ay) - (by - ay) * (rx - ax)
+        if d1 * d2 >= 0.0:
+            continue
+        d3 = (rx - px) * (ay - py) - (ry - py) * (ax - px)
+        d4 = (rx - px) * (by - py) - (ry - py) * (bx - px)
+        if d3 * d4 < 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _tunnels(x, xt, n, prm):
+    """Would the step x -> xt carry a corner or a point right through the contour or a finger?
+
+    The corner gaps are distances to segments and the bar of a finger is thin, so a long step
+    can jump across a constraint and land where every gap is positive again. Rejected: a corner
+    ending inside the contour, a point crossing a finger's axis line along the bar.
+    """
+    nb = 2 * n
+    qt = xt[:nb].reshape(n, 2)
+    for j in range(2):
+        if _bar_crossed(qt, n, j, xt[nb + j], prm):
+            return True
+        for c in range(4):
+            kx, ky = _corner_centre(j, xt[nb + j], c, prm)
+            if _inside(qt, n, kx, ky):
+                return True
+        ex0, ey0, nx0, ny0 = _frame(j, x[nb + j])
+        ex1, ey1, nx1, ny1 = _frame(j, xt[nb + j])
+        cx = prm[P_C0X + 2 * j]
+        cy = prm[P_C0X + 2 * j + 1]
+        lmax = prm[P_LMAX]
+        for i in range(n):
+            vx0, vy0 = x[2 * i] + cx, x[2 * i + 1] + cy
+            vx1, vy1 = xt[2 * i] + cx, xt[2 * i + 1] + cy
+            m0 = nx0 * vx0 + ny0 * vy0
+            m1 = nx1 * vx1 + ny1 * vy1
+            if m0 * m1 < 0.0:
+                s0 = ex0 * vx0 + ey0 * vy0
+                s1 = ex1 * vx1 + ey1 * vy1
+                if (0.0 <= s0 <= lmax) or (0.0 <= s1 <= lmax):
+                    return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -615,13 +662,14 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
                 fsc[m] = 0.0
                 m += 1
     for j in range(2):
-        for c in range(2):
-            if corner[j, c] >= 0:
-                kinds[m] = 1
-                fj[m] = j
-                fidx[m] = corner[j, c]
-                fsc[m] = prm[P_LMAX] if c == 0 else 0.0
-                m += 1
+        for c in range(4):
+            for k in range(n):
+                if corner[j, c, k]:
+                    kinds[m] = 1
+                    fj[m] = j
+                    fidx[m] = k + n * c
+                    fsc[m] = prm[P_LMAX] if c % 2 == 0 else 0.0
+                    m += 1
     for j in range(2):
         kinds[m] = 2
         fj[m] = j
@@ -816,6 +864,8 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     if gt[m] < shrink * g[m]:
                         feasible = False
                         break
+                if feasible and _tunnels(x, xt, n, prm):
+                    feasible = False
                 if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
                     accepted = True
                     break
@@ -999,6 +1049,16 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening
         for m in range(mcount):
             if not gbuf[m] > 1e-8:
                 ok = False
+        # corner gaps are distances to segments: a corner inside the contour has them positive
+        q0 = x0[:nb].reshape(n, 2)
+        for j in range(2):
+            if ok and _bar_crossed(q0, n, j, x0[nb + j], prm):
+                ok = False
+            for c in range(4):
+                if ok:
+                    kx, ky = _corner_centre(j, x0[nb + j], c, prm)
+                    if _inside(q0, n, kx, ky):
+                        ok = False
         if ok:
             return True
         opening *= 2.0
@@ -1006,7 +1066,35 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening
 
 
 @njit(cache=True, error_model="numpy")
-def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, face_cand, info):
+def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand, info):
+    """Solve one grasp in place, trying up to two contact policies.
+
+    Policy 0 (fast): corner-edge constraints for the edges near the arc each corner sweeps as
+    its finger closes. Policy 1: every contour edge for the tip corners. In both, line-search
+    steps that would carry a corner or a point right through the contour or a finger are
+    refused (the gaps are distances, positive again on the far side). Policy 1 starts again
+    from the given start point and runs only when policy 0 failed (an inverted fan, a property
+    of the model, is not retried). Arguments as in :func:`_solve_attempt`; ``info[1]`` counts
+    the iterations of both attempts.
+    """
+    x_in = x.copy()
+    lam_in = lam_face.copy()
+    total = 0.0
+    for policy in range(2):
+        if policy > 0:
+            x[:] = x_in
+            lam_face[:, :] = lam_in
+        _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand,
+                       face_cand, info, float(policy))
+        total += info[1]
+        if info[0] == OK or info[0] == INVERTED:
+            break
+    info[1] = total
+
+
+@njit(cache=True, error_model="numpy")
+def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
+                   info, policy):
     """Solve one grasp in place.
 
     Parameters
@@ -1023,27 +1111,29 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     lam_face : float64[2, n]
         In: multipliers of the previous solution (warm start) or zeros; out: scaled face contact
         forces.
-    lam_corner : float64[2, 2]
-        Out: scaled corner contact forces (finger, [tip, root]).
+    lam_corner : float64[2, 4, n]
+        Out: scaled force of each corner (finger; face tip, face root, back tip, back root) on
+        each contour edge k -> k+1.
     lam_stop : float64[2]
         Out: scaled joint-stop torques.
-    corner_edge : int64[2, 2]
-        Out: contour edge index faced by each corner (-1 none).
+    corner_cand : bool[2, 4, n]
+        Work/out: corner-edge constraints considered.
     face_cand : bool[2, n]
         Work/out: face constraints considered.
     info : float64[8]
         Out: status, Newton iterations, rounds, stable flag, stationarity, max |gap| of contacts,
-        min gap, final mu.
+        min gap, number of inverted fan triangles.
     """
     nb = 2 * n
-    prm = np.zeros(P_GAUGE + 1)
+    prm = np.zeros(P_POLICY + 1)
     npr = min(prm_in.shape[0], P_GAUGE)
     prm[:npr] = prm_in[:npr]
     prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
+    prm[P_POLICY] = policy
     bidx = _band_index(n)
     x0 = x.copy()
     q0 = x0[:nb].reshape(n, 2)
-    mmax = 2 * n + 4 + 2
+    mmax = 10 * n + 2
     kinds = np.zeros(mmax, dtype=np.int64)
     fj = np.zeros(mmax, dtype=np.int64)
     fidx = np.zeros(mmax, dtype=np.int64)
@@ -1065,14 +1155,21 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                 g = _face_eval(q0, i, j, th, prm, grad5, hess5)
                 if g > 1e-12:
                     face_cand[j, i] = True
-        for c in range(2):
-            sc = prm[P_LMAX] if c == 0 else 0.0
-            corner_edge[j, c] = -1
-            k = _straddle_edge(q0, n, j, th, sc, prm)
-            if k >= 0:
-                g = _corner_eval(q0, k, j, th, sc, prm, grad5, hess5)
-                if g > 1e-12:
-                    corner_edge[j, c] = k
+        for c in range(4):
+            for k in range(n):
+                g = _corner_eval(q0, k, j, th, c, prm, grad5, hess5)
+                corner_cand[j, c, k] = False
+                if not g > 1e-12:
+                    continue
+                if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                    corner_cand[j, c, k] = True  # tip corners: every edge
+                    continue
+                # root corners: edges near the arc the corner sweeps as the finger closes
+                for t in range(CORNER_SWEEP):
+                    ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
+                    if _corner_eval(q0, k, j, ths, c, prm, grad5, hess5) < CORNER_NEAR:
+                        corner_cand[j, c, k] = True
+                        break
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
@@ -1088,7 +1185,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     xs = x0.copy()
     for rnd in range(int(opts[O_MAXROUND]) + 3):
         rounds = rnd + 1
-        mcount = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+        mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx, fsc, prm)
         for d in range(nb + 2):
             xs[d] = x0[d]
         _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
@@ -1160,18 +1257,18 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
                         if g0 > 1e-12:
                             face_cand[j, i] = True
                             changed = True
-            for c in range(2):
-                sc = prm[P_LMAX] if c == 0 else 0.0
-                k = _corner_choice(q, n, j, th, sc, prm, corner_edge[j, c], lam, kinds, fj,
-                                   fsc, mcount)
-                if k != corner_edge[j, c]:
-                    if k < 0:
-                        corner_edge[j, c] = -1
-                        changed = True
-                    else:
-                        g0 = _corner_eval(q0, k, j, x0[nb + j], sc, prm, grad5, hess5)
+            for c in range(4):
+                # edges left out at the start that the corner now touches or crossed
+                kx, ky = _corner_centre(j, th, c, prm)
+                crossed = _inside(q, n, kx, ky)
+                for k in range(n):
+                    if corner_cand[j, c, k]:
+                        continue
+                    g = _corner_eval(q, k, j, th, c, prm, grad5, hess5)
+                    if g < 1e-9 or (crossed and g < CORNER_NEAR):
+                        g0 = _corner_eval(q0, k, j, x0[nb + j], c, prm, grad5, hess5)
                         if g0 > 1e-12:
-                            corner_edge[j, c] = k
+                            corner_cand[j, c, k] = True
                             changed = True
         if status == POLISH_FAIL:
             # keep the interior-point answer; the caller reports the reason
@@ -1211,7 +1308,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
         for m in range(mcount):
             if kinds[m] == 0:
                 lam_guess_face[fj[m], fidx[m]] = lam[m]
-        mnew = _build_constraints(face_cand, corner_edge, n, kinds, fj, fidx, fsc, prm)
+        mnew = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx, fsc, prm)
         xprev = x0.copy()
         if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mnew, 0, gbuf, 1e-4):
             for d in range(nb + 2):
@@ -1224,7 +1321,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     for d in range(nb + 2):
         x[d] = xs[d]
     lam_face[:, :] = 0.0
-    lam_corner[:, :] = 0.0
+    lam_corner[:, :, :] = 0.0
     lam_stop[:] = 0.0
     mcount = last_m
     kinds[:mcount] = last_kinds[:mcount]
@@ -1239,9 +1336,6 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
             if gbuf[m] > 1e-9:
                 lam[m] = 0.0
         status = OK
-    for d in range(2):
-        corner_edge[d, 0] = -1
-        corner_edge[d, 1] = -1
     gmin = 1e300
     gact = 0.0
     for m in range(mcount):
@@ -1251,14 +1345,40 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
         if kinds[m] == 0:
             lam_face[fj[m], fidx[m]] = lam[m]
         elif kinds[m] == 1:
-            c = 0 if fsc[m] > 0.0 else 1
-            lam_corner[fj[m], c] = lam[m]
-            corner_edge[fj[m], c] = fidx[m]
+            c = fidx[m] // n
+            lam_corner[fj[m], c, fidx[m] - c * n] = lam[m]
         else:
             lam_stop[fj[m]] = lam[m]
     res = np.zeros(nb + 2)
     kkt = _stationarity(xs, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs,
                         res)
+    # a fan triangle (centre, q_i, q_i+1) turned over: the springs allow this fold at finite
+    # energy, the material does not; the answer is an equilibrium of the model but not a grasp
+    inverted = 0
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        if xs[2 * i] * xs[2 * i1 + 1] - xs[2 * i + 1] * xs[2 * i1] <= 0.0:
+            inverted += 1
+    if status == OK:
+        # final guard over every point and corner, candidates or not
+        q = xs[:nb].reshape(n, 2)
+        for j in range(2):
+            th = xs[nb + j]
+            for i in range(n):
+                if _face_eval(q, i, j, th, prm, grad5, hess5) < -1e-9:
+                    status = PENETRATION
+            if _bar_crossed(q, n, j, th, prm):
+                status = PENETRATION
+            for c in range(4):
+                kx, ky = _corner_centre(j, th, c, prm)
+                if _inside(q, n, kx, ky):
+                    status = PENETRATION
+    if status == OK and inverted > 0:
+        status = INVERTED
+    if status == OK and kkt > 1e-9 * fscale + 1e-13 * max(prm[P_KC], prm[P_KR]):
+        # the interior-point answer kept after a failed polish is not an equilibrium to the
+        # required accuracy: let the caller try another policy
+        status = POLISH_FAIL
     info[0] = status
     info[1] = work_it[0]
     info[2] = rounds
@@ -1266,12 +1386,12 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_edge, f
     info[4] = kkt / fscale
     info[5] = gact
     info[6] = gmin
-    info[7] = 0.0
+    info[7] = inverted
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_edge, face_cand, infos):
+def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_cand, face_cand, infos):
     """:func:`solve_one` over a batch (first axis), in parallel threads."""
     for b in prange(prms.shape[0]):
         solve_one(n, prms[b], opts, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
-                  corner_edge[b], face_cand[b], infos[b])
+                  corner_cand[b], face_cand[b], infos[b])

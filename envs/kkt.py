@@ -57,6 +57,19 @@ def _dist_to_polygon(pt: np.ndarray, poly: np.ndarray) -> float:
     return float(np.min(np.linalg.norm(pt - proj, axis=1)))
 
 
+def _edges_crossing(a: np.ndarray, b: np.ndarray, poly: np.ndarray) -> int:
+    """Number of polygon edges that properly cross the segment a-b."""
+    p, q = poly, np.roll(poly, -1, axis=0)
+
+    def orient(u, v, w):
+        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (
+            v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0])
+
+    d1, d2 = orient(a, b, p), orient(a, b, q)
+    d3, d4 = orient(p, q, a), orient(p, q, b)
+    return int(np.count_nonzero((d1 * d2 < 0) & (d3 * d4 < 0)))
+
+
 def kkt_check(
     scene: Scene,
     torque_nm: float,
@@ -66,7 +79,6 @@ def kkt_check(
     jaw_angles_rad: tuple[float, float],
     face_forces_n: np.ndarray,
     corner_forces_n: np.ndarray,
-    corner_edges: np.ndarray,
     stop_torques_nm: np.ndarray,
 ) -> KKTReport:
     """Check equilibrium and contact conditions of a grasp.
@@ -82,9 +94,9 @@ def kkt_check(
     face_forces_n
         Normal force of each finger face on each point [N], shape (2, N).
     corner_forces_n
-        Force of each finger's tip and root corner on the contour edge it faces [N], (2, 2).
-    corner_edges
-        Index ``k`` of the edge ``(k, k+1)`` each corner faces, -1 for none, (2, 2).
+        Force of each finger's rounded corners (tip and root of the gripping face, tip and root
+        of the back of the bar) on each contour edge ``(k, k+1)`` [N], shape (2, 4, N). The
+        force acts along the shortest segment between the corner's centre and the edge.
     stop_torques_nm
         Torques of the closed-jaw stops [N·m], (2,).
 
@@ -99,9 +111,13 @@ def kkt_check(
     n = len(points_m)
     k_unit = d.stiffness_scale * d.youngs_modulus_pa * d.thickness_m
     k_int, k_ext = (k * k_unit for k in spring_stiffness(n, r, stiffness_rule, d.poisson_ratio))
+    k_ext *= getattr(d, "contour_stiffness_ratio", 1.0)
     h = 2 * r * math.sin(math.pi / n)
     centre = d.center_m
     p = np.asarray(points_m, dtype=float)
+    corner_forces = np.asarray(corner_forces_n, dtype=float)
+    if corner_forces.shape != (2, 4, n):
+        raise ValueError(f"corner_forces_n must have shape (2, 4, {n}), got {corner_forces.shape}")
     force = np.zeros_like(p)  # net force on each contour point
     spring_mag = []
     for i in range(n):
@@ -135,22 +151,17 @@ def kkt_check(
         rel = p - joint
         s = rel @ axis
         m = rel @ normal
+        # the finger body: the bar 0 <= s <= l, |m| <= w/2 with corners rounded to rho, i.e.
+        # the rectangle [0, l] x [-(w/2 - rho), w/2 - rho] grown by rho
+        ds = s - np.clip(s, 0.0, g.finger_length_m)
+        dm = m - np.clip(m, -(hw - rho), hw - rho)
         for i in range(n):
-            if 0.0 <= s[i] <= g.finger_length_m:
-                gap = m[i] - hw
-                direction = normal
-                at = p[i]
-            else:
-                sc = 0.0 if s[i] < 0 else g.finger_length_m
-                corner = joint + sc * axis + (hw - rho) * normal
-                vec = p[i] - corner
-                dist = math.hypot(*vec)
-                gap = dist - rho
-                direction = vec / dist if dist > 0 else normal
-                at = corner
+            dist = math.hypot(ds[i], dm[i])
+            gap = dist - rho
+            direction = (ds[i] * axis + dm[i] * normal) / dist if dist > 0 else normal
+            at = p[i] - gap * direction  # the touching point of the finger surface
+            max_pen = max(max_pen, -gap)
             lam = face_forces_n[j, i]
-            if 0.0 <= s[i] <= g.finger_length_m:
-                max_pen = max(max_pen, -gap)
             if lam != 0.0:
                 min_force = min(min_force, lam)
                 max_gap = max(max_gap, abs(gap))
@@ -158,36 +169,32 @@ def kkt_check(
                 arm = at - joint
                 moments[j] += arm[0] * (-lam * direction[1]) - arm[1] * (-lam * direction[0])
                 contact_scale.append(abs(lam) * math.hypot(*arm))
-        for c in range(2):
-            sc = g.finger_length_m if c == 0 else 0.0
-            corner = joint + sc * axis + (hw - rho) * normal
+        if _edges_crossing(joint, joint + g.finger_length_m * axis, p):
+            # the bar runs right through the disk: points and corners are all outside
+            max_pen = max(max_pen, hw)
+        for c in range(4):  # tip and root of the gripping face, then of the back
+            sc = g.finger_length_m if c % 2 == 0 else 0.0
+            side = 1.0 if c < 2 else -1.0
+            corner = joint + sc * axis + side * (hw - rho) * normal
             depth = _dist_to_polygon(corner, p)
             depth = rho + depth if _point_in_polygon(corner, p) else rho - depth
             max_pen = max(max_pen, depth)
-            k = int(corner_edges[j, c])
-            lam = corner_forces_n[j, c]
-            if k < 0 or lam == 0.0:
-                continue
-            a, b = p[k], p[(k + 1) % n]
-            dvec = b - a
-            length = math.hypot(*dvec)
-            t = float((corner - a) @ dvec) / length**2
-            if 0.0 <= t <= 1.0:
-                nu = np.array([dvec[1], -dvec[0]]) / length  # outward normal of a CCW contour
-                gap = float((corner - a) @ nu) - rho
-            else:  # beyond the edge: the corner bears on the nearer end point
-                t = 0.0 if t < 0.0 else 1.0
-                vec = corner - (a if t == 0.0 else b)
+            for k in np.flatnonzero(corner_forces[j, c]):
+                lam = corner_forces[j, c, k]
+                a, b = p[k], p[(k + 1) % n]
+                dvec = b - a
+                t = min(1.0, max(0.0, float((corner - a) @ dvec) / float(dvec @ dvec)))
+                vec = corner - (a + t * dvec)  # from the nearest point of the edge
                 dist = math.hypot(*vec)
                 gap = dist - rho
                 nu = vec / dist if dist > 0 else np.zeros(2)
-            min_force = min(min_force, lam)
-            max_gap = max(max_gap, abs(gap))
-            force[k] -= (1 - t) * lam * nu
-            force[(k + 1) % n] -= t * lam * nu
-            arm = corner - joint
-            moments[j] += arm[0] * (lam * nu[1]) - arm[1] * (lam * nu[0])
-            contact_scale.append(abs(lam) * math.hypot(*arm))
+                min_force = min(min_force, lam)
+                max_gap = max(max_gap, abs(gap))
+                force[k] -= (1 - t) * lam * nu
+                force[(k + 1) % n] -= t * lam * nu
+                arm = corner - joint
+                moments[j] += arm[0] * (lam * nu[1]) - arm[1] * (lam * nu[0])
+                contact_scale.append(abs(lam) * math.hypot(*arm))
         if stop_torques_nm[j] != 0.0:
             min_force = min(min_force, stop_torques_nm[j])
             if abs(theta - theta_min) > GAP_TOL:
@@ -195,7 +202,7 @@ def kkt_check(
     # floor: the spring force of a 1e-6 strain, so that an unloaded disk is judged absolutely
     f_floor = 1e-6 * k_ext * r
     f_ref = max(max(spring_mag), float(np.max(np.abs(face_forces_n))), f_floor)
-    f_ref = max(f_ref, float(np.max(np.abs(corner_forces_n))))
+    f_ref = max(f_ref, float(np.max(np.abs(corner_forces), initial=0.0)))
     m_ref = max(max(contact_scale), torque_nm, f_floor * g.finger_length_m)
     f_res = float(np.max(np.abs(force))) / f_ref
     m_res = float(np.max(np.abs(moments))) / m_ref

@@ -57,9 +57,14 @@ class GraspResult:
     torque_nm, n_triangles, method, stiffness_rule
         The problem solved.
     corner_forces_n : numpy.ndarray
-        Force of the (tip, root) corner of each finger on the contour edge it faces [N], (2, 2).
+        Total force of each rounded corner of each finger on the contour [N], (2, 4); corners
+        in the order: tip and root of the gripping face, tip and root of the back of the bar.
     corner_edges : numpy.ndarray
-        Edge ``k`` (from point k to k+1) faced by each corner, -1 for none, (2, 2).
+        Edge ``k`` (from point k to k+1) carrying most of each corner's force, -1 for none,
+        (2, 4).
+    corner_edge_forces_n : numpy.ndarray
+        Force of each corner on each contour edge ``k`` [N], (2, 4, N): a corner pressing on a
+        vertex bears on both edges that meet there.
     stop_torques_nm : numpy.ndarray
         Reaction torque of the closed-jaw stop of each finger [N·m] (non-zero: jaws closed).
     energy_j : float
@@ -73,6 +78,10 @@ class GraspResult:
         The independent equilibrium check.
     rounds : int
         Outer rounds updating the contact candidate set.
+    inverted_triangles : int
+        Fan triangles (centre, point i, point i+1) turned over. The springs allow such a fold
+        at finite energy; a result with any is reported as not converged (the squeeze is
+        beyond the model's valid range).
     """
 
     converged: bool
@@ -88,14 +97,16 @@ class GraspResult:
     n_triangles: int = 0
     method: str = "newton"
     stiffness_rule: str = "van_gelder"
-    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
-    corner_edges: np.ndarray = field(default_factory=lambda: -np.ones((2, 2), dtype=int))
+    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4)))
+    corner_edges: np.ndarray = field(default_factory=lambda: -np.ones((2, 4), dtype=int))
+    corner_edge_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4, 0)))
     stop_torques_nm: np.ndarray = field(default_factory=lambda: np.zeros(2))
     energy_j: float = math.nan
     max_displacement_ratio: float = math.nan
     stable: bool = True
     kkt: KKTReport | None = None
     rounds: int = 1
+    inverted_triangles: int = 0
 
     @property
     def n_contacts(self) -> tuple[int, int]:
@@ -142,6 +153,7 @@ class GraspResult:
             "stable": self.stable,
             "iterations": self.iterations,
             "rounds": self.rounds,
+            "inverted_triangles": self.inverted_triangles,
             "solve_time_s": self.solve_time_s,
             "kkt": self.kkt._asdict() if self.kkt is not None else None,
             "points_m": self.points_m.tolist(),
@@ -169,7 +181,6 @@ def result_from_scaled(
     x: np.ndarray,
     lam_face: np.ndarray,
     lam_corner: np.ndarray,
-    corner_edges: np.ndarray,
     lam_stop: np.ndarray,
     solver_ok: bool,
     message: str,
@@ -188,19 +199,23 @@ def result_from_scaled(
     points = scene.disk.center_m + r * q
     angles = (float(x[2 * n]), float(x[2 * n + 1]))
     face = np.asarray(lam_face, dtype=float) * prob.force_n
-    corner = np.asarray(lam_corner, dtype=float) * prob.force_n
+    corner = np.asarray(lam_corner, dtype=float).reshape(2, 4, n) * prob.force_n
     stop = np.asarray(lam_stop, dtype=float) * prob.torque_nm
-    report = kkt_check(
-        scene, torque_nm, n, stiffness_rule, points, angles, face, corner, corner_edges, stop
-    )
+    report = kkt_check(scene, torque_nm, n, stiffness_rule, points, angles, face, corner, stop)
+    corner_total = corner.sum(axis=2)
+    edges = np.where(corner_total > 0.0, np.argmax(corner, axis=2), -1)
     radial, contour = spring_strains(q, prob.rest_contour)
     peak = float(max(np.max(np.abs(radial)), np.max(np.abs(contour))))
     rest = rest_points(n, prob.params[kernels.P_PHASE])
     disp = float(np.max(np.linalg.norm(q - rest, axis=1)))
     mask = face > 0.0
-    converged = bool(solver_ok and report.passed)
+    inverted = int(np.count_nonzero(
+        q[:, 0] * np.roll(q[:, 1], -1) - q[:, 1] * np.roll(q[:, 0], -1) <= 0.0))
+    converged = bool(solver_ok and report.passed and inverted == 0)
     if solver_ok and not report.passed:
         message = f"independent KKT check failed: {report.reason}"
+    elif solver_ok and inverted:
+        message = kernels.STATUS_MESSAGES[kernels.INVERTED]
     return GraspResult(
         converged=converged,
         message=message,
@@ -215,14 +230,16 @@ def result_from_scaled(
         n_triangles=n,
         method=method,
         stiffness_rule=stiffness_rule,
-        corner_forces_n=corner,
-        corner_edges=np.asarray(corner_edges, dtype=int).copy(),
+        corner_forces_n=corner_total,
+        corner_edges=edges,
+        corner_edge_forces_n=corner,
         stop_torques_nm=stop,
         energy_j=energy_scaled(x, prob) * prob.torque_nm,
         max_displacement_ratio=disp,
         stable=bool(stable),
         kkt=report,
         rounds=int(rounds),
+        inverted_triangles=inverted,
     )
 
 
@@ -238,18 +255,18 @@ def _newton(
     n = prob.n
     x = x0.copy()
     lam_face = np.zeros((2, n)) if lam0 is None else lam0.copy()
-    lam_corner = np.zeros((2, 2))
+    lam_corner = np.zeros((2, 4, n))
     lam_stop = np.zeros(2)
-    edges = -np.ones((2, 2), dtype=np.int64)
+    corner_cand = np.zeros((2, 4, n), dtype=np.bool_)
     cand = np.zeros((2, n), dtype=np.bool_)
     info = np.zeros(8)
     t0 = time.perf_counter()
-    kernels.solve_one(n, prob.params, options, x, lam_face, lam_corner, lam_stop, edges, cand,
-                      info)
+    kernels.solve_one(n, prob.params, options, x, lam_face, lam_corner, lam_stop, corner_cand,
+                      cand, info)
     elapsed = time.perf_counter() - t0
     status = int(info[0])
     return result_from_scaled(
-        scene, prob, torque_nm, x, lam_face, lam_corner, edges, lam_stop, status == kernels.OK,
+        scene, prob, torque_nm, x, lam_face, lam_corner, lam_stop, status == kernels.OK,
         kernels.STATUS_MESSAGES[status], int(info[1]), elapsed, "newton", stiffness_rule,
         stable=bool(info[3]), rounds=int(info[2]),
     )
@@ -299,7 +316,8 @@ def _solve_newton(
             if res is not None:
                 spent += res.solve_time_s
             res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
-    if not res.converged and torque_nm > 0 and prob.n <= CONTINUATION_MAX_N:
+    if (not res.converged and torque_nm > 0 and prob.n <= CONTINUATION_MAX_N
+            and res.inverted_triangles == 0):
         failed = res
         spent += failed.solve_time_s
         res = _continuation(scene, prob.n, torque_nm, stiffness_rule, phase_rad, options)

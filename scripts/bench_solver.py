@@ -4,7 +4,8 @@ For each mesh size N and method: median solve time, iterations and whether it co
 independent KKT check included), on the paper's r = 0.07 scene at T = 0.2 N·m. Baselines are run
 until they need more than ``--baseline-limit`` seconds. Ratios are measured in this same run.
 A second sweep counts converged solves on the three paper scenes for torques up to 40 % peak
-strain.
+strain, or up to the torque where the fan folds over (an inverted triangle: the model's own limit,
+flagged by the solver and counted apart from failures).
 
 Usage: ``python scripts/bench_solver.py [--quick] [--repeats 5]``
 """
@@ -90,20 +91,27 @@ def main() -> None:
                 res = simulate(sc, float(t), n)
                 sweep.append({"scene": name, "n": n, "torque_nm": float(t),
                               "converged": res.converged, "stable": res.stable,
+                              "inverted": res.inverted_triangles > 0,
                               "peak_strain": res.peak_strain, "message": res.message,
                               "time_s": time.perf_counter() - t0})
-                if res.converged and res.peak_strain >= 0.4:
+                if res.inverted_triangles or (res.converged and res.peak_strain >= 0.4):
                     break
     ok = sum(r["converged"] for r in sweep)
-    print(f"convergence sweep: {ok}/{len(sweep)} converged "
-          f"(N in {sweep_n}, torques up to 40 % peak strain)")
+    folded = [r for r in sweep if r["inverted"]]
+    print(f"convergence sweep: {ok}/{len(sweep)} converged, {len(folded)} flagged as folded "
+          f"(N in {sweep_n}, torques up to 40 % peak strain or the fold)")
+    for r in folded:
+        print(f"  folded: {r['scene']} N={r['n']} T={r['torque_nm']:.3g} "
+              f"at peak strain {r['peak_strain']:.3f}")
     for r in sweep:
-        if not r["converged"]:
+        if not r["converged"] and not r["inverted"]:
             print(f"  failed: {r['scene']} N={r['n']} T={r['torque_nm']:.3g}: {r['message'][:80]}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"rows": rows, "ratios": ratios, "sweep": sweep,
-                               "converged_fraction": ok / len(sweep)}, indent=1))
+                               "converged_fraction": ok / len(sweep),
+                               "failed": len(sweep) - ok - len(folded),
+                               "folded": len(folded)}, indent=1))
     print(f"wrote {out}")
 
 
