@@ -49,6 +49,7 @@ from .psm import (
 BW = 5  # half bandwidth of the interleaved point ordering
 P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
 P_POLICY = 16  # extra slot: contact policy of this attempt (see solve_one)
+GAUGE_MAX_N = 100  # finest fan that gets the rotation gauge spring
 CORNER_NEAR = 0.5  # corner-edge constraints for edges this close to a corner's path (units of r)
 CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
 
@@ -185,7 +186,7 @@ def _face_eval(q, i, j, th, prm, grad, hess):
 
 
 @njit(cache=True, error_model="numpy")
-def _corner_eval(q, k, j, th, c, prm, grad, hess):
+def _corner_eval(q, k, j, th, c, prm, grad, hess, want_hess):
     """Rounded corner c of finger j vs contour edge k -> k+1.
 
     Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back of the bar.
@@ -273,35 +274,26 @@ def _corner_eval(q, k, j, th, c, prm, grad, hess):
     grad[2] = gdx
     grad[3] = gdy
     grad[4] = gux * k1x + guy * k1y
+    sgn = 1.0 if cr >= 0.0 else -1.0
+    if not want_hess:
+        # the corner on the inner side of this edge's line: the distance is -cr / L
+        for a in range(5):
+            grad[a] *= sgn
+        return sgn * g - rho
     # per-z columns of du and dd (du for z = bx, by is zero; dd for theta is zero)
+    u0 = (-1.0, 0.0, 0.0, 0.0, k1x)
+    u1 = (0.0, -1.0, 0.0, 0.0, k1y)
+    e0 = (-1.0, 0.0, 1.0, 0.0, 0.0)
+    e1 = (0.0, -1.0, 0.0, 1.0, 0.0)
     for a in range(5):
-        if a == 0:
-            ua0, ua1, da0, da1 = -1.0, 0.0, -1.0, 0.0
-        elif a == 1:
-            ua0, ua1, da0, da1 = 0.0, -1.0, 0.0, -1.0
-        elif a == 2:
-            ua0, ua1, da0, da1 = 0.0, 0.0, 1.0, 0.0
-        elif a == 3:
-            ua0, ua1, da0, da1 = 0.0, 0.0, 0.0, 1.0
-        else:
-            ua0, ua1, da0, da1 = k1x, k1y, 0.0, 0.0
+        ua0, ua1, da0, da1 = u0[a], u1[a], e0[a], e1[a]
         # (M t_a) components: Mu = M_ud d, Md = M_du u + M_dd d
         mu0 = m00 * da0 + m01 * da1
         mu1 = m10 * da0 + m11 * da1
         md0 = m00 * ua0 + m10 * ua1 + d00 * da0 + d01 * da1
         md1 = m01 * ua0 + m11 * ua1 + d01 * da0 + d11 * da1
         for b in range(5):
-            if b == 0:
-                ub0, ub1, db0, db1 = -1.0, 0.0, -1.0, 0.0
-            elif b == 1:
-                ub0, ub1, db0, db1 = 0.0, -1.0, 0.0, -1.0
-            elif b == 2:
-                ub0, ub1, db0, db1 = 0.0, 0.0, 1.0, 0.0
-            elif b == 3:
-                ub0, ub1, db0, db1 = 0.0, 0.0, 0.0, 1.0
-            else:
-                ub0, ub1, db0, db1 = k1x, k1y, 0.0, 0.0
-            hess[a, b] = ub0 * mu0 + ub1 * mu1 + db0 * md0 + db1 * md1
+            hess[a, b] = u0[b] * mu0 + u1[b] * mu1 + e0[b] * md0 + e1[b] * md1
     hess[4, 4] += gux * k2x + guy * k2y
     if cr < 0.0:
         # the corner lies on the inner side of this edge's line: the distance to the segment
@@ -433,7 +425,55 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
+def _face_gap(q, i, j, th, prm):
+    """Value of :func:`_face_eval` only."""
+    ex, ey, nx, ny = _frame(j, th)
+    vx = q[i, 0] + prm[P_C0X + 2 * j]
+    vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
+    rho = prm[P_RHO]
+    hc = prm[P_HW] - rho
+    s = ex * vx + ey * vy
+    m = nx * vx + ny * vy
+    ds = s - min(max(s, 0.0), prm[P_LMAX])
+    dm = m - min(max(m, -hc), hc)
+    return math.sqrt(ds * ds + dm * dm) - rho
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _corner_gap(q, k, j, th, c, prm):
+    """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
+    n = q.shape[0]
+    k1 = k + 1 if k + 1 < n else 0
+    ex, ey, nx, ny = _frame(j, th)
+    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
+    hc = prm[P_HW] - prm[P_RHO]
+    if c >= 2:
+        hc = -hc
+    kx = -prm[P_C0X + 2 * j] + sc * ex + hc * nx
+    ky = -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny
+    ax, ay = q[k, 0], q[k, 1]
+    dx, dy = q[k1, 0] - ax, q[k1, 1] - ay
+    t = ((kx - ax) * dx + (ky - ay) * dy) / (dx * dx + dy * dy)
+    t = min(1.0, max(0.0, t))
+    wx = kx - ax - t * dx
+    wy = ky - ay - t * dy
+    return math.sqrt(wx * wx + wy * wy) - prm[P_RHO]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _con_value(kind, j, idx, x, q, n, prm):
+    """Value of constraint (kind, j, idx) only (line searches, candidate checks)."""
+    th = x[2 * n + j]
+    if kind == 0:
+        return _face_gap(q, idx, j, th, prm)
+    if kind == 1:
+        c = idx // n
+        return _corner_gap(q, idx - c * n, j, th, c, prm)
+    return th - prm[P_THMIN]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
     if kind == 0:
@@ -445,7 +485,7 @@ def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs):
     if kind == 1:
         c = idx // n
         k = idx - c * n
-        g = _corner_eval(q, k, j, th, c, prm, grad5, hess5)
+        g = _corner_eval(q, k, j, th, c, prm, grad5, hess5, want_hess)
         k1 = k + 1 if k + 1 < n else 0
         dofs[0] = 2 * k
         dofs[1] = 2 * k + 1
@@ -474,8 +514,7 @@ def _to_band(d, n, bidx):
 def _all_gaps(x, n, prm, kinds, fj, fidx, fsc, gout, grad5, hess5, dofs):
     q = x[: 2 * n].reshape(n, 2)
     for m in range(kinds.shape[0]):
-        g, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
-        gout[m] = g
+        gout[m] = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
 
 
 # --------------------------------------------------------------------------------------------
@@ -645,12 +684,6 @@ def _tunnels(x, xt, n, prm):
 
 
 @njit(cache=True, error_model="numpy")
-def _near(q, i, j, th):
-    ex, ey, nx, ny = _frame(j, th)
-    return nx * q[i, 0] + ny * q[i, 1] < 0.6
-
-
-@njit(cache=True, error_model="numpy")
 def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
     m = 0
     for j in range(2):
@@ -698,13 +731,20 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
     bb[:, :] = 0.0
     dd[:, :] = 0.0
     _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
+    kmax = max(prm[P_KC], prm[P_KR])
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+        # a far constraint: its matrix block is below round-off of the springs
+        block = sig[m] + abs(lam[m]) / max(g, 1e-300) >= 1e-9 * kmax
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+                          block)
         g_out[m] = g
         w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
         for a in range(nd):
             grad[dofs[a]] -= w * grad5[a]
+        if not block:
+            continue
         for a in range(nd):
             pa = _to_band(dofs[a], n, bidx)
             for b in range(a + 1):
@@ -722,7 +762,7 @@ def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
-        g, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
         gbuf[m] = g
         if not g > 0.0:
             return math.inf
@@ -737,7 +777,8 @@ def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hes
     _spring_terms(x, n, prm, np.zeros(1, dtype=np.int64), res, none, none, none, False)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+                          False)
         gbuf[m] = g
         for a in range(nd):
             res[dofs[a]] -= lam[m] * grad5[a]
@@ -884,7 +925,8 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         q = x[:nb].reshape(n, 2)
         alpha_d = 1.0
         for m in range(mcount):
-            _, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+            _, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+                              False)
             dl = 0.0
             for a in range(nd):
                 dl += grad5[a] * step[dofs[a]]
@@ -941,7 +983,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
     for _outer in range(40):
         work_it[0] += 1
         for m in range(mcount):
-            gm, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs)
+            gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
             g[m] = gm
             if active[m]:
                 sig[m] = rho
@@ -972,8 +1014,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
         # multiplier update
         for m in range(mcount):
             if active[m]:
-                gm, _ = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5,
-                                  dofs)
+                gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
                 lam[m] = lam[m] - rho * gm
         kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
                             res)
@@ -1128,7 +1169,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     prm = np.zeros(P_POLICY + 1)
     npr = min(prm_in.shape[0], P_GAUGE)
     prm[:npr] = prm_in[:npr]
-    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
+    # the gauge spring helps coarse fans; on fine ones (soft radial springs, stiff contour) it
+    # drags a slowly travelling residual round the contour from point 0: left out there
+    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR]) if n <= GAUGE_MAX_N else 0.0
     prm[P_POLICY] = policy
     bidx = _band_index(n)
     x0 = x.copy()
@@ -1150,14 +1193,11 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     for j in range(2):
         th = x0[nb + j]
         for i in range(n):
-            face_cand[j, i] = False
-            if _near(q0, i, j, th):
-                g = _face_eval(q0, i, j, th, prm, grad5, hess5)
-                if g > 1e-12:
-                    face_cand[j, i] = True
+            # every point: a far one costs a little, a late one a whole extra round
+            face_cand[j, i] = _face_gap(q0, i, j, th, prm) > 1e-12
         for c in range(4):
             for k in range(n):
-                g = _corner_eval(q0, k, j, th, c, prm, grad5, hess5)
+                g = _corner_gap(q0, k, j, th, c, prm)
                 corner_cand[j, c, k] = False
                 if not g > 1e-12:
                     continue
@@ -1167,7 +1207,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 # root corners: edges near the arc the corner sweeps as the finger closes
                 for t in range(CORNER_SWEEP):
                     ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                    if _corner_eval(q0, k, j, ths, c, prm, grad5, hess5) < CORNER_NEAR:
+                    if _corner_gap(q0, k, j, ths, c, prm) < CORNER_NEAR:
                         corner_cand[j, c, k] = True
                         break
     lam_guess_face = lam_face.copy()
@@ -1251,9 +1291,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             th = xs[nb + j]
             for i in range(n):
                 if not face_cand[j, i]:
-                    g = _face_eval(q, i, j, th, prm, grad5, hess5)
+                    g = _face_gap(q, i, j, th, prm)
                     if g < 1e-9:
-                        g0 = _face_eval(q0, i, j, x0[nb + j], prm, grad5, hess5)
+                        g0 = _face_gap(q0, i, j, x0[nb + j], prm)
                         if g0 > 1e-12:
                             face_cand[j, i] = True
                             changed = True
@@ -1264,9 +1304,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 for k in range(n):
                     if corner_cand[j, c, k]:
                         continue
-                    g = _corner_eval(q, k, j, th, c, prm, grad5, hess5)
+                    g = _corner_gap(q, k, j, th, c, prm)
                     if g < 1e-9 or (crossed and g < CORNER_NEAR):
-                        g0 = _corner_eval(q0, k, j, x0[nb + j], c, prm, grad5, hess5)
+                        g0 = _corner_gap(q0, k, j, x0[nb + j], c, prm)
                         if g0 > 1e-12:
                             corner_cand[j, c, k] = True
                             changed = True
@@ -1365,7 +1405,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         for j in range(2):
             th = xs[nb + j]
             for i in range(n):
-                if _face_eval(q, i, j, th, prm, grad5, hess5) < -1e-9:
+                if _face_gap(q, i, j, th, prm) < -1e-9:
                     status = PENETRATION
             if _bar_crossed(q, n, j, th, prm):
                 status = PENETRATION

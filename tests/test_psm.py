@@ -85,17 +85,27 @@ def _fd_check(fun, x, grad, hess, eps=1e-6):
         np.testing.assert_allclose((gradp - gradm) / (2 * eps), hess[:, a], atol=1e-5, rtol=1e-5)
 
 
-@pytest.mark.parametrize("sc_kind", ["face", "beyond_tip", "behind_root"])
+@pytest.mark.parametrize("sc_kind", ["face", "beyond_tip", "behind_root", "back", "back_tip"])
 def test_face_constraint_derivatives(sc_kind):
+    # gap of a point to the finger's rounded bar: face, tip and root corners, back of the bar
     prob, x = _state()
     n = prob.n
     q = x[: 2 * n].reshape(n, 2).copy()
     prm = prob.params.copy()
-    if sc_kind == "beyond_tip":
-        prm[K.P_LMAX] = 1.0  # short finger: the point lies beyond its tip
     i, j = 8, 0
-    if sc_kind == "behind_root":
-        i = 14 % n
+    # place point i in finger coordinates (s along the bar, m along the inward normal)
+    lmax, hw, rho = prm[K.P_LMAX], prm[K.P_HW], prm[K.P_RHO]
+    s_m = {
+        "face": (0.5 * lmax, hw + 0.1),
+        "beyond_tip": (lmax + 0.05, hw - rho + 0.03),  # round the rounded tip corner
+        "behind_root": (-0.05, hw + 0.02),
+        "back": (0.5 * lmax, -hw - 0.1),  # behind the bar
+        "back_tip": (lmax + 0.04, -hw - 0.02),
+    }[sc_kind]
+    th = x[2 * n + j]
+    e = np.array([np.sin(th), np.cos(th)])
+    nrm = np.array([-np.cos(th), np.sin(th)])
+    q[i] = -prm[K.P_C0X : K.P_C0X + 2] + s_m[0] * e + s_m[1] * nrm
 
     def fun(z):
         qq = q.copy()
@@ -106,13 +116,16 @@ def test_face_constraint_derivatives(sc_kind):
 
     z = np.array([q[i, 0], q[i, 1], x[2 * n + j]])
     g5, h5 = np.zeros(5), np.zeros((5, 5))
-    K._face_eval(q, i, j, z[2], prm, g5, h5)
+    val = K._face_eval(q, i, j, z[2], prm, g5, h5)
+    assert val > 0
+    assert K._face_gap(q, i, j, z[2], prm) == pytest.approx(val, abs=1e-15)
     _fd_check(fun, z, g5[:3], h5[:3, :3])
 
 
-@pytest.mark.parametrize("sc,k", [(0.0, 9), (2.5, 9), (0.0, 3), (2.5, 0), (1.2, 6)])
-def test_corner_constraint_derivatives(sc, k):
-    # covers both the edge-interior branch and the end-point branch of the corner gap
+@pytest.mark.parametrize("c,k", [(1, 9), (0, 9), (1, 3), (0, 0), (2, 6), (3, 9), (2, 0)])
+def test_corner_constraint_derivatives(c, k):
+    # corner c of the bar (0/1 tip/root of the face, 2/3 of the back) against edge k: the
+    # edge-interior and the end-point branches of the segment distance
     prob, x = _state()
     n = prob.n
     q = x[: 2 * n].reshape(n, 2).copy()
@@ -123,12 +136,16 @@ def test_corner_constraint_derivatives(sc, k):
         qq[k] = z[:2]
         qq[(k + 1) % n] = z[2:4]
         g5, h5 = np.zeros(5), np.zeros((5, 5))
-        val = K._corner_eval(qq, k, j, z[4], sc, prob.params, g5, h5)
+        val = K._corner_eval(qq, k, j, z[4], c, prob.params, g5, h5, True)
         return val, g5.copy()
 
     z = np.array([*q[k], *q[(k + 1) % n], x[2 * n + j]])
     g5, h5 = np.zeros(5), np.zeros((5, 5))
-    K._corner_eval(q, k, j, z[4], sc, prob.params, g5, h5)
+    val = K._corner_eval(q, k, j, z[4], c, prob.params, g5, h5, True)
+    assert K._corner_gap(q, k, j, z[4], c, prob.params) == pytest.approx(val, abs=1e-13)
+    g_only = np.zeros(5)
+    K._corner_eval(q, k, j, z[4], c, prob.params, g_only, np.zeros((5, 5)), False)
+    np.testing.assert_allclose(g_only, g5, atol=1e-15)
     _fd_check(fun, z, g5, h5)
 
 

