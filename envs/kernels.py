@@ -50,7 +50,7 @@ BW = 5  # half bandwidth of the interleaved point ordering
 P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
 P_POLICY = 16  # extra slot: contact policy of this attempt (see solve_one)
 GAUGE_MAX_N = 100  # finest fan that gets the rotation gauge spring
-CORNER_NEAR = 0.5  # corner-edge constraints for edges this close to a corner's path (units of r)
+CORNER_NEAR = 0.25  # corner-edge constraints for edges this close to a corner's path (units of r)
 CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
 
 # status codes
@@ -1189,7 +1189,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     work_it = np.zeros(1, dtype=np.int64)
     tau = prm[P_TAU]
     fscale = max(tau, prm[P_KAPPA] * abs(prm[P_TH0] - prm[P_THMIN]), 1e-300)
-    # initial candidate sets, evaluated at the start point
+    # initial candidate sets, evaluated at the start point; fine fans deform more for their
+    # edge length: a wider band of edges round each corner's path
+    near = CORNER_NEAR if n <= GAUGE_MAX_N else 2.0 * CORNER_NEAR
     for j in range(2):
         th = x0[nb + j]
         for i in range(n):
@@ -1207,7 +1209,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 # root corners: edges near the arc the corner sweeps as the finger closes
                 for t in range(CORNER_SWEEP):
                     ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                    if _corner_gap(q0, k, j, ths, c, prm) < CORNER_NEAR:
+                    if _corner_gap(q0, k, j, ths, c, prm) < near:
                         corner_cand[j, c, k] = True
                         break
     lam_guess_face = lam_face.copy()
