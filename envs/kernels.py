@@ -113,6 +113,16 @@ def _band_index(n):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _finger_coords(q, i, j, th, prm):
+    """Frame of finger j and the coordinates (s along the bar, m along the inward normal) of
+    point i relative to its joint."""
+    ex, ey, nx, ny = _frame(j, th)
+    vx = q[i, 0] + prm[P_C0X + 2 * j]
+    vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
+    return ex, ey, nx, ny, ex * vx + ey * vy, nx * vx + ny * vy
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _face_eval(q, i, j, th, prm, grad, hess):
     """Gap of point i to the body of finger j: value, local grad/Hessian over (qx, qy, theta).
 
@@ -122,13 +132,9 @@ def _face_eval(q, i, j, th, prm, grad, hess):
     outside the body: the gripping face (m = w/2), the tip and root ends and the back of the
     bar, which a disk wrapping round a finger tip can reach.
     """
-    ex, ey, nx, ny = _frame(j, th)
-    vx = q[i, 0] + prm[P_C0X + 2 * j]
-    vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
+    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, th, prm)
     rho = prm[P_RHO]
     hc = prm[P_HW] - rho
-    s = ex * vx + ey * vy
-    m = nx * vx + ny * vy
     for a in range(3):
         grad[a] = 0.0
         for b in range(3):
@@ -427,13 +433,9 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
 @njit(cache=True, error_model="numpy", inline="always")
 def _face_gap(q, i, j, th, prm):
     """Value of :func:`_face_eval` only."""
-    ex, ey, nx, ny = _frame(j, th)
-    vx = q[i, 0] + prm[P_C0X + 2 * j]
-    vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
+    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, th, prm)
     rho = prm[P_RHO]
     hc = prm[P_HW] - rho
-    s = ex * vx + ey * vy
-    m = nx * vx + ny * vy
     ds = s - min(max(s, 0.0), prm[P_LMAX])
     dm = m - min(max(m, -hc), hc)
     return math.sqrt(ds * ds + dm * dm) - rho
