@@ -734,11 +734,12 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
     dd[:, :] = 0.0
     _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
     kmax = max(prm[P_KC], prm[P_KR])
+    pos = np.empty(5, dtype=np.int64)
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
-        g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
-        # a far constraint: its matrix block is below round-off of the springs
-        block = sig[m] + abs(lam[m]) / max(g, 1e-300) >= 1e-9 * kmax
+        # a far constraint: its matrix block is below round-off of the springs (g_out holds
+        # the gaps at x on entry: every caller evaluates them just before)
+        block = sig[m] + abs(lam[m]) / max(g_out[m], 1e-300) >= 1e-9 * kmax
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
                           block)
         g_out[m] = g
@@ -748,15 +749,15 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
         if not block:
             continue
         for a in range(nd):
-            pa = _to_band(dofs[a], n, bidx)
+            pos[a] = _to_band(dofs[a], n, bidx)
+        # constraint curvature; dropped in the convexified fallback, where the curved
+        # (corner-distance) gaps would make the matrix badly indefinite
+        curv = 0.0 if psd else lam[m]
+        for a in range(nd):
+            sa = sig[m] * grad5[a]
+            pa = pos[a]
             for b in range(a + 1):
-                pb = _to_band(dofs[b], n, bidx)
-                v = sig[m] * grad5[a] * grad5[b]
-                if not psd:
-                    # constraint curvature; dropped in the convexified fallback, where the
-                    # curved (corner-distance) gaps would make the matrix badly indefinite
-                    v -= lam[m] * hess5[a, b]
-                _add(ab, bb, dd, nb, pa, pb, v)
+                _add(ab, bb, dd, nb, pa, pos[b], sa * grad5[b] - curv * hess5[a, b])
 
 
 @njit(cache=True, error_model="numpy")
