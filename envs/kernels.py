@@ -734,7 +734,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
     dd[:, :] = 0.0
     _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
     kmax = max(prm[P_KC], prm[P_KR])
-    pos = np.empty(5, dtype=np.int64)
+    blk = np.zeros((5, 5))
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
         # a far constraint: its matrix block is below round-off of the springs (g_out holds
@@ -748,16 +748,42 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
             grad[dofs[a]] -= w * grad5[a]
         if not block:
             continue
-        for a in range(nd):
-            pos[a] = _to_band(dofs[a], n, bidx)
         # constraint curvature; dropped in the convexified fallback, where the curved
         # (corner-distance) gaps would make the matrix badly indefinite
         curv = 0.0 if psd else lam[m]
         for a in range(nd):
-            sa = sig[m] * grad5[a]
-            pa = pos[a]
             for b in range(a + 1):
-                _add(ab, bb, dd, nb, pa, pos[b], sa * grad5[b] - curv * hess5[a, b])
+                blk[a, b] = sig[m] * grad5[a] * grad5[b] - curv * hess5[a, b]
+        j = fj[m]
+        if kinds[m] == 0:
+            # point i: its 2x2 diagonal block and its coupling to theta_j
+            p = bidx[dofs[0] // 2]
+            ab[p, 0] += blk[0, 0]
+            ab[p + 1, 1] += blk[1, 0]
+            ab[p + 1, 0] += blk[1, 1]
+            bb[p, j] += blk[2, 0]
+            bb[p + 1, j] += blk[2, 1]
+            dd[j, j] += blk[2, 2]
+        elif kinds[m] == 1:
+            # edge k -> k1: two diagonal blocks, their coupling, and theta_j
+            p = bidx[dofs[0] // 2]
+            r = bidx[dofs[2] // 2]
+            ab[p, 0] += blk[0, 0]
+            ab[p + 1, 1] += blk[1, 0]
+            ab[p + 1, 0] += blk[1, 1]
+            ab[r, 0] += blk[2, 2]
+            ab[r + 1, 1] += blk[3, 2]
+            ab[r + 1, 0] += blk[3, 3]
+            for a in range(2, 4):
+                for b in range(2):
+                    _add(ab, bb, dd, nb, r + a - 2, p + b, blk[a, b])
+            bb[p, j] += blk[4, 0]
+            bb[p + 1, j] += blk[4, 1]
+            bb[r, j] += blk[4, 2]
+            bb[r + 1, j] += blk[4, 3]
+            dd[j, j] += blk[4, 4]
+        else:
+            dd[j, j] += blk[0, 0]
 
 
 @njit(cache=True, error_model="numpy")
