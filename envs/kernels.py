@@ -720,12 +720,14 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
 
 @njit(cache=True, error_model="numpy")
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
-                   g_out, grad5, hess5, dofs, barrier_mu, psd):
+                   g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
 
     With barrier_mu > 0 the returned gradient is that of Pi - mu sum log g; with barrier_mu = 0
     it is grad Pi - sum lam grad g (used by the augmented-Lagrangian polish, where lam already
-    holds lam_k - rho g).
+    holds lam_k - rho g). Also returns, in the same pass, ``gb = sum grad g / g`` (so the
+    barrier gradient for another mu is grad + (barrier_mu - mu) gb) and the stationarity
+    residual ``res = grad Pi - sum lam grad g``.
     """
     nb = 2 * n
     grad[:] = 0.0
@@ -733,6 +735,9 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
     bb[:, :] = 0.0
     dd[:, :] = 0.0
     _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
+    for d in range(nb + 2):
+        res[d] = grad[d]
+        gb[d] = 0.0
     kmax = max(prm[P_KC], prm[P_KR])
     blk = np.zeros((5, 5))
     q = x[:nb].reshape(n, 2)
@@ -746,6 +751,8 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
         w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
         for a in range(nd):
             grad[dofs[a]] -= w * grad5[a]
+            res[dofs[a]] -= lam[m] * grad5[a]
+            gb[dofs[a]] += grad5[a] / g
         if not block:
             continue
         # constraint curvature; dropped in the convexified fallback, where the curved
@@ -852,29 +859,41 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     it = 0
     n_neg = 0
+    gb = np.zeros(nx)
+    _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, fsc, g, grad5, hess5, dofs)
     while it < maxit:
-        # convergence test; reduce mu once the barrier subproblem is solved
-        kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
-                            res)
-        cmax = 0.0
-        for m in range(mcount):
-            cmax = max(cmax, abs(lam[m] * g[m] - mu))
-        if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
-            work_it[0] += it
-            return OK, it
-        if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
-            mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
-            # active gaps scale with mu: let them shrink by that factor in one step
-            shrink = min(0.01, 0.1 * mu_new / mu)
-            mu = mu_new
-            continue
-        it += 1
+        # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
+        # springs' negative geometric stiffness removed; a diagonal shift only as a last resort.
+        # The same pass gives the stationarity residual (sig = lam / g does not depend on mu).
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
-        # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
-        # springs' negative geometric stiffness removed; a diagonal shift only as a last resort
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
-                       g, grad5, hess5, dofs, mu, False)
+                       g, grad5, hess5, dofs, mu, False, gb, res)
+        kkt = 0.0
+        for d in range(nx):
+            kkt = max(kkt, abs(res[d]))
+        # convergence test; reduce mu while the barrier subproblem is solved
+        done = False
+        while True:
+            cmax = 0.0
+            for m in range(mcount):
+                cmax = max(cmax, abs(lam[m] * g[m] - mu))
+            if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
+                done = True
+                break
+            if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
+                mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
+                # active gaps scale with mu: let them shrink by that factor in one step
+                shrink = min(0.01, 0.1 * mu_new / mu)
+                for d in range(nx):
+                    grad[d] += (mu - mu_new) * gb[d]
+                mu = mu_new
+                continue
+            break
+        if done:
+            work_it[0] += it
+            return OK, it
+        it += 1
         for d in range(nb):
             i = d // 2
             rb[bidx[i] + (d - 2 * i)] = -grad[d]
@@ -893,7 +912,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     work_it[0] += it
                     return SADDLE, it
             _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb,
-                           dd, g, grad5, hess5, dofs, mu, True)
+                           dd, g, grad5, hess5, dofs, mu, True, gb, res)
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
@@ -970,6 +989,8 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             print("ipm", it, mu / fscale, kkt / fscale, alpha, shift, ok, mcount)
         for d in range(nx):
             x[d] = xt[d]
+        for m in range(mcount):
+            g[m] = gt[m]  # the gaps at the accepted point, from its merit evaluation
     work_it[0] += it
     return ITER_LIMIT, it
 
@@ -997,6 +1018,8 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
     sig = np.zeros(mcount)
     lam_eff = np.zeros(mcount)
     res = np.zeros(nx)
+    res_p = np.zeros(nx)
+    gbuf_p = np.zeros(nx)
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
@@ -1021,7 +1044,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0, False)
+                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p)
         for d in range(nb):
             i = d // 2
             rb[bidx[i] + (d - 2 * i)] = -grad[d]
