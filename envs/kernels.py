@@ -8,10 +8,11 @@ Problem (all quantities non-dimensional, see :class:`envs.psm.ScaledProblem`)::
 
 with ``x = (q_0 .. q_N-1, theta_R, theta_L)``. The constraints are
 
-* face:   distance from contour point ``i`` to the gripping-face segment of finger ``j``
-          (signed distance to the face line where the point projects on the face, distance to
-          the face's end corner beyond it);
-* corner: the tip (or root) corner of finger ``j`` stays outside the contour edge it faces;
+* face:   distance from contour point ``i`` to the body of finger ``j``: the bar of length l and
+          width w with its four corners rounded (gripping face, tip and root ends, back);
+* corner: each rounded corner of finger ``j`` (face tip, face root, back tip, back root) keeps
+          off each contour edge near the arc it sweeps (distance to the edge as a segment, so
+          a corner passes from edge to edge through a vertex without any switching);
 * stop:   ``theta_j >= theta_min`` (jaws closed on each other).
 
 Method: a primal-dual interior-point Newton method with exact Hessians, inertia correction and a
@@ -19,9 +20,10 @@ backtracking line search on the barrier merit, followed by an augmented-Lagrangi
 on the identified contact set so that contacts hold to round-off. The Newton matrix is a
 cyclic block-tridiagonal matrix (springs) bordered by the two finger angles; ordering the contour
 points 0, N-1, 1, N-2, ... makes it banded (half bandwidth 5), so each factorization is a banded
-Cholesky plus a 2x2 Schur complement: O(N) work. Outer rounds update the set of candidate
-constraints (which edge a corner faces, points that newly approach a face) until it is
-consistent with the solution.
+Cholesky plus a 2x2 Schur complement: O(N) work. The gaps are distances, positive again on the
+far side of a thin bar or an edge, so line-search steps that would jump across one are refused.
+Outer rounds add constraints the solution reaches that were left out at the start; a final guard
+reports a penetrating answer, and an answer with a turned-over fan triangle is reported as such.
 """
 
 from __future__ import annotations

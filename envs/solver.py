@@ -1,11 +1,12 @@
 """Quasi-static grasp solver: ``simulate``, ``simulate_ramp`` and :class:`GraspResult`.
 
 The grasp at torque ``T_a`` is the stable equilibrium of the point-spring disk squeezed by the two
-torque-driven fingers, with frictionless unilateral contact on both gripping faces and their end
-corners. ``method="newton"`` (default) is the compiled interior-point Newton solver of
-:mod:`envs.kernels`; ``"slsqp"`` and ``"nelder-mead"`` are the baselines of
-:mod:`envs.baselines`. Every result is verified by the independent check of :mod:`envs.kkt`;
-a result that fails it is returned with ``converged=False`` and the reason in ``message``.
+torque-driven fingers, with frictionless unilateral contact on the whole of each finger bar
+(gripping face, ends, back) and its rounded corners. ``method="newton"`` (default) is the
+compiled interior-point Newton solver of :mod:`envs.kernels`; ``"slsqp"`` and ``"nelder-mead"``
+are the baselines of :mod:`envs.baselines`. Every result is verified by the independent check of
+:mod:`envs.kkt`; a result that fails it is returned with ``converged=False`` and the reason in
+``message``, and so is an equilibrium with a turned-over fan triangle.
 """
 
 from __future__ import annotations
