@@ -444,24 +444,24 @@ def _face_gap(q, i, j, th, prm):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _corner_gap(q, k, j, th, c, prm):
-    """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
+def _seg_dist(q, k, px, py):
+    """Distance from (px, py) to the contour edge k -> k+1."""
     n = q.shape[0]
     k1 = k + 1 if k + 1 < n else 0
-    ex, ey, nx, ny = _frame(j, th)
-    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
-    hc = prm[P_HW] - prm[P_RHO]
-    if c >= 2:
-        hc = -hc
-    kx = -prm[P_C0X + 2 * j] + sc * ex + hc * nx
-    ky = -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny
     ax, ay = q[k, 0], q[k, 1]
     dx, dy = q[k1, 0] - ax, q[k1, 1] - ay
-    t = ((kx - ax) * dx + (ky - ay) * dy) / (dx * dx + dy * dy)
+    t = ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy)
     t = min(1.0, max(0.0, t))
-    wx = kx - ax - t * dx
-    wy = ky - ay - t * dy
-    return math.sqrt(wx * wx + wy * wy) - prm[P_RHO]
+    wx = px - ax - t * dx
+    wy = py - ay - t * dy
+    return math.sqrt(wx * wx + wy * wy)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _corner_gap(q, k, j, th, c, prm):
+    """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
+    kx, ky = _corner_centre(j, th, c, prm)
+    return _seg_dist(q, k, kx, ky) - prm[P_RHO]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1246,6 +1246,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     # initial candidate sets, evaluated at the start point; fine fans deform more for their
     # edge length: a wider band of edges round each corner's path
     near = CORNER_NEAR if n <= GAUGE_MAX_N else 2.0 * CORNER_NEAR
+    reach = np.zeros(n, dtype=np.bool_)
     for j in range(2):
         th = x0[nb + j]
         for i in range(n):
@@ -1253,19 +1254,20 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             face_cand[j, i] = _face_gap(q0, i, j, th, prm) > 1e-12
         for c in range(4):
             for k in range(n):
-                g = _corner_gap(q0, k, j, th, c, prm)
-                corner_cand[j, c, k] = False
-                if not g > 1e-12:
-                    continue
-                if c % 2 == 0 and prm[P_POLICY] > 0.0:
-                    corner_cand[j, c, k] = True  # tip corners: every edge
-                    continue
-                # root corners: edges near the arc the corner sweeps as the finger closes
-                for t in range(CORNER_SWEEP):
-                    ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                    if _corner_gap(q0, k, j, ths, c, prm) < near:
-                        corner_cand[j, c, k] = True
-                        break
+                corner_cand[j, c, k] = _corner_gap(q0, k, j, th, c, prm) > 1e-12
+            if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                continue  # policy 1, tip corners: every edge clear of them at the start
+            # edges near the arc the corner sweeps as the finger closes (centres computed once
+            # per sample of the arc)
+            reach[:] = False
+            for t in range(CORNER_SWEEP):
+                ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
+                kx, ky = _corner_centre(j, ths, c, prm)
+                for k in range(n):
+                    if corner_cand[j, c, k] and not reach[k]:
+                        reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < near
+            for k in range(n):
+                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[k]
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
