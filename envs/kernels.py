@@ -66,6 +66,7 @@ INFEASIBLE_START = 6
 SADDLE = 7
 INVERTED = 8
 PENETRATION = 9
+BLOCKED = 10  # internal: steps refused by an anti-tunnelling test; widen the candidate set
 STATUS_MESSAGES = {
     OK: "converged",
     ITER_LIMIT: "interior-point iteration limit reached",
@@ -78,6 +79,8 @@ STATUS_MESSAGES = {
     PENETRATION: "answer penetrates a finger outside the contact constraints considered",
     INVERTED: "equilibrium with inverted (folded) fan triangles: the squeeze is beyond the "
               "point-spring model's valid range",
+    BLOCKED: "steps kept refused by the anti-tunnelling tests and no new contact candidate "
+             "explains why",
 }
 
 # option vector layout
@@ -861,6 +864,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     it = 0
     n_neg = 0
+    n_walled = 0
     gb = np.zeros(nx)
     _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, fsc, g, grad5, hess5, dofs)
     while it < maxit:
@@ -945,6 +949,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
             alpha = 1.0 / lim
         phi0 = _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gt, grad5, hess5, dofs)
         accepted = False
+        walled = False
         for _ls in range(60):
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
@@ -957,10 +962,17 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                         break
                 if feasible and _tunnels(x, xt, n, prm):
                     feasible = False
+                    walled = True
                 if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
                     accepted = True
                     break
             alpha *= 0.5
+        # a corner or a point held back only by the anti-tunnelling tests (a contact the
+        # candidate set lacks): hand back to the caller, which adds what is touched
+        n_walled = n_walled + 1 if (walled and alpha < 1e-2) else 0
+        if n_walled >= 3:
+            work_it[0] += it
+            return BLOCKED, it
         if not accepted:
             # tiny progress is impossible at this mu: accept if already stationary to round-off
             if kkt <= 1e3 * tol:
@@ -1331,14 +1343,15 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # escapes exhausted: polish where we are; the answer is reported as not stable
             status = OK
             saddle = True
-        if status != OK:
+        blocked = status == BLOCKED
+        if status != OK and not blocked:
             break
         # identify the contact set and polish
         _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
         active = np.zeros(mcount, dtype=np.bool_)
         for m in range(mcount):
             active[m] = lam[m] > gbuf[m] * fscale and gbuf[m] < 1e-5
-        if opts[O_POLISH] > 0.0:
+        if opts[O_POLISH] > 0.0 and not blocked:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
                                  fscale, active, work_it, gbuf, stable_out)
             stable = stable_out[0]
@@ -1359,16 +1372,18 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 # edges left out at the start that the corner now touches or crossed
                 kx, ky = _corner_centre(j, th, c, prm)
                 crossed = _inside(q, n, kx, ky)
+                # a blocked interior-point run stopped short of the edge that holds it back
+                near_hit = CORNER_NEAR if crossed else 0.02
                 for k in range(n):
                     if corner_cand[j, c, k]:
                         continue
                     g = _corner_gap(q, k, j, th, c, prm)
-                    if g < 1e-9 or (crossed and g < CORNER_NEAR):
+                    if g < 1e-9 or ((crossed or blocked) and g < near_hit):
                         g0 = _corner_gap(q0, k, j, x0[nb + j], c, prm)
                         if g0 > 1e-12:
                             corner_cand[j, c, k] = True
                             changed = True
-        if status == POLISH_FAIL:
+        if status == POLISH_FAIL or (blocked and not changed):
             # keep the interior-point answer; the caller reports the reason
             break
         if not changed and prm[P_GAUGE] > 0.0:
