@@ -1010,6 +1010,24 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
 
 
 @njit(cache=True, error_model="numpy")
+def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
+    """Augmented Lagrangian E - sum lam g + rho/2 sum g^2 over the active constraints.
+
+    Infinite where an inactive constraint is violated more than at the reference gaps
+    ``g_ref`` (the polish walks along the active set; it must not run through another contact).
+    """
+    e = _energy(x, n, prm)
+    q = x[: 2 * n].reshape(n, 2)
+    for m in range(mcount):
+        gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+        if active[m]:
+            e += gm * (0.5 * rho * gm - lam[m])
+        elif gm < min(g_ref[m], 0.0) - 1e-12:
+            return math.inf
+    return e
+
+
+@njit(cache=True, error_model="numpy")
 def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active, work_it):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 
@@ -1034,6 +1052,8 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
     res = np.zeros(nx)
     res_p = np.zeros(nx)
     gbuf_p = np.zeros(nx)
+    xt = np.zeros(nx)
+    step = np.zeros(nx)
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
@@ -1074,9 +1094,40 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
         for d in range(nb):
             i = d // 2
-            x[d] += ob[bidx[i] + (d - 2 * i)]
-        x[nb] += ot[0]
-        x[nb + 1] += ot[1]
+            step[d] = ob[bidx[i] + (d - 2 * i)]
+        step[nb] = ot[0]
+        step[nb + 1] = ot[1]
+        # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
+        # step): a plain Newton step from an indefinite matrix can throw the iterate far off
+        slope = 0.0
+        for d in range(nx):
+            slope += grad[d] * step[d]
+        m0 = _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
+        alpha = 1.0
+        hit = False
+        for _ls in range(40):
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+            mt = _al_merit(xt, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
+            if mt <= m0 + 1e-4 * alpha * slope + 1e-13 * abs(m0):
+                break
+            hit = hit or mt == math.inf
+            alpha *= 0.5
+        if hit:
+            # the full step ran through contacts left out of the set: take them in (the
+            # caller drops them again should they come out pulling)
+            for d in range(nx):
+                xt[d] = x[d] + 2.0 * alpha * step[d]
+            qt = xt[:nb].reshape(n, 2)
+            for m in range(mcount):
+                if not active[m]:
+                    if _con_value(kinds[m], fj[m], fidx[m], xt, qt, n, prm) < min(g[m], 0.0):
+                        active[m] = True
+                        lam[m] = 0.0
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+        for d in range(nx):
+            x[d] = xt[d]
         # multiplier update
         for m in range(mcount):
             if active[m]:
