@@ -248,3 +248,27 @@ def test_light_tip_corner_contact_converges():
     res = simulate(Scene.preset("forceps-f"), 0.005, 20)
     assert res.converged, res.message
     assert res.n_contacts == (0, 0) and min(res.corner_forces_n[:, 0]) > 0
+
+
+def test_tip_corner_meeting_an_edge_outside_its_swept_band_converges():
+    # short fingers on a turned disk: a tip corner runs into a contour edge that was not near
+    # its path at rest. The interior-point run used to crawl for hundreds of iterations
+    # against the anti-tunnelling wall; now the edge joins the candidates and the solve ends.
+    g = replace(R070.gripper, finger_length_m=0.08579017217720118,
+                rest_angle_rad=0.5286745051921705, joint_offset_m=0.031435695473990236,
+                finger_width_m=0.010201435557562994)
+    scene = Scene(g, replace(R070.disk, distance_m=0.02967286960585693))
+    res = simulate(scene, 0.08342271429130343, 20)
+    assert res.converged, res.message
+    assert res.kkt.passed and res.kkt.max_penetration_m <= 1e-9 * 0.07
+    assert res.corner_forces_n[:, 0].min() > 0.05  # both tip corners carry load
+    assert res.jaw_angles_rad[0] == pytest.approx(res.jaw_angles_rad[1], abs=1e-6)
+
+
+def test_light_squeeze_of_a_fine_polygon_converges():
+    # at light load a fine polygon turns almost freely about its pin; the contact polish used
+    # to throw it around (plain Newton steps) and cycle between two contact sets
+    res = simulate(R070, 0.017944253018577248, 100)
+    assert res.converged, res.message
+    assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
+    assert min(res.n_contacts) >= 1
