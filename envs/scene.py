@@ -258,8 +258,17 @@ class Scene:
 
     def _reach_warnings(self) -> tuple[str, ...]:
         g, d = self.gripper, self.disk
+        # right finger over 64 angles from closed to rest (the left one mirrors it), vectorized
+        # form of _distance_to_finger_bar: this runs for every Scene an optimizer builds
         angles = np.linspace(closed_angle_rad(g), g.rest_angle_rad, 64)
-        reach = min(_distance_to_finger_bar(g, 0, a, d.center_m) for a in angles)
+        sin_a, cos_a = np.sin(angles), np.cos(angles)
+        rx, ry = -g.joint_offset_m, d.distance_m + d.radius_m  # centre relative to the joint
+        s = sin_a * rx + cos_a * ry
+        m = -cos_a * rx + sin_a * ry
+        hw = g.finger_width_m / 2
+        ds = np.maximum(0.0, np.maximum(-s, s - g.finger_length_m))
+        dm = np.maximum(0.0, np.maximum(m - hw, -hw - m))
+        reach = float(np.min(np.hypot(ds, dm)))
         if reach > d.radius_m:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "
