@@ -798,6 +798,20 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
             dd[j, j] += blk[0, 0]
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _step_from_band(ob, ot, bidx, nb, grad, step):
+    """Newton step in natural order from the banded solve; returns its slope grad . step."""
+    for d in range(nb):
+        i = d // 2
+        step[d] = ob[bidx[i] + (d - 2 * i)]
+    step[nb] = ot[0]
+    step[nb + 1] = ot[1]
+    slope = 0.0
+    for d in range(nb + 2):
+        slope += grad[d] * step[d]
+    return slope
+
+
 @njit(cache=True, error_model="numpy")
 def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs):
     e = _energy(x, n, prm)
@@ -931,14 +945,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     work_it[0] += it
                     return LINALG_FAIL, it
             shift_last = shift
-        for d in range(nb):
-            i = d // 2
-            step[d] = ob[bidx[i] + (d - 2 * i)]
-        step[nb] = ot[0]
-        step[nb + 1] = ot[1]
-        slope = 0.0
-        for d in range(nx):
-            slope += grad[d] * step[d]
+        slope = _step_from_band(ob, ot, bidx, nb, grad, step)
         # damp huge finger rotations (a full step can jump a finger past a vertex)
         smax = 0.0
         for d in range(nb):
@@ -1092,16 +1099,9 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
             if shift > 1e6 * kscale:
                 return False, False
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
-        for d in range(nb):
-            i = d // 2
-            step[d] = ob[bidx[i] + (d - 2 * i)]
-        step[nb] = ot[0]
-        step[nb + 1] = ot[1]
         # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
         # step): a plain Newton step from an indefinite matrix can throw the iterate far off
-        slope = 0.0
-        for d in range(nx):
-            slope += grad[d] * step[d]
+        slope = _step_from_band(ob, ot, bidx, nb, grad, step)
         m0 = _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
         alpha = 1.0
         hit = False
