@@ -80,9 +80,10 @@ class GraspResult:
     rounds : int
         Outer rounds updating the contact candidate set.
     inverted_triangles : int
-        Fan triangles (centre, point i, point i+1) turned over. The springs allow such a fold
-        at finite energy; a result with any is reported as not converged (the squeeze is
-        beyond the model's valid range).
+        Fan triangles (centre, point i, point i+1) turned over in the returned state. The
+        springs allow such a fold at finite energy; a result with any is reported as not
+        converged (the squeeze is beyond the model's valid range). A failed solve can also end
+        on a folded iterate: :attr:`folded` tells the two apart.
     """
 
     converged: bool
@@ -108,6 +109,15 @@ class GraspResult:
     kkt: KKTReport | None = None
     rounds: int = 1
     inverted_triangles: int = 0
+
+    @property
+    def folded(self) -> bool:
+        """An equilibrium (the independent check passed) with inverted fan triangles.
+
+        The model's own limit, not a solver failure: such a state is never passed off as a
+        grasp (``converged`` is False), but unlike a failed solve it is a correct answer.
+        """
+        return self.inverted_triangles > 0 and self.kkt is not None and self.kkt.passed
 
     @property
     def n_contacts(self) -> tuple[int, int]:
@@ -318,7 +328,7 @@ def _solve_newton(
                 spent += res.solve_time_s
             res = _newton(scene, prob, torque_nm, stiffness_rule, rest_state(prob), None, options)
     if (not res.converged and torque_nm > 0 and prob.n <= CONTINUATION_MAX_N
-            and res.inverted_triangles == 0):
+            and not res.folded):
         failed = res
         spent += failed.solve_time_s
         res = _continuation(scene, prob.n, torque_nm, stiffness_rule, phase_rad, options)

@@ -91,10 +91,10 @@ def main() -> None:
                 res = simulate(sc, float(t), n)
                 sweep.append({"scene": name, "n": n, "torque_nm": float(t),
                               "converged": res.converged, "stable": res.stable,
-                              "inverted": res.inverted_triangles > 0,
+                              "inverted": res.folded,
                               "peak_strain": res.peak_strain, "message": res.message,
                               "time_s": time.perf_counter() - t0})
-                if res.inverted_triangles or (res.converged and res.peak_strain >= 0.4):
+                if res.folded or (res.converged and res.peak_strain >= 0.4):
                     break
     ok = sum(r["converged"] for r in sweep)
     folded = [r for r in sweep if r["inverted"]]

@@ -2,7 +2,8 @@
 
 The van Gelder fan has no spring against turning a triangle (centre, q_i, q_i+1) over: past
 some squeeze the equilibrium reached by ramping the torque has a folded triangle, which the
-solver reports as not converged (``GraspResult.inverted_triangles``). This script ramps the
+solver reports as not converged (``GraspResult.folded``: an equilibrium with an inverted
+triangle, told apart from a failed solve that stopped on a folded iterate). This script ramps the
 torque on each paper disk for several N and records the last unfolded state: its torque and
 peak strain. Writes ``out/fold_limit.json``.
 
@@ -27,7 +28,7 @@ def fold_limit(name: str, n: int, t_max: float, steps: int) -> dict:
     torques = np.linspace(t_max / steps, t_max, steps)
     last, first_fold, failures = None, None, 0
     for res in simulate_ramp(scene, torques, n):
-        if res.inverted_triangles:
+        if res.folded:
             first_fold = res
             break
         if res.converged:

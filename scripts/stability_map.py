@@ -61,7 +61,8 @@ def _psm_cell(scene: Scene, method: str, n: int, torque: float) -> dict:
     kkt = res.kkt
     resid = max(kkt.force_residual_rel, kkt.moment_residual_rel) if kkt else math.nan
     return {"converged": bool(res.converged), "kkt_residual": float(resid), "time_s": wall,
-            "stable": bool(res.stable), "message": res.message}
+            "stable": bool(res.stable), "message": res.message,
+            "folded": bool(getattr(res, "folded", False))}
 
 
 def _fem_cells(scene: Scene, rings: int, torques: tuple[float, ...]) -> list[dict]:
@@ -104,27 +105,31 @@ def main(argv: list[str] | None = None) -> int:
                 for t in torques:
                     table.append([_psm_cell(scene, method, n, t) for n in ns])
             cells[method][name] = table
-            nfail = sum(not c["converged"] for row in table for c in row)
+            nfold = sum(c.get("folded", False) for row in table for c in row)
+            nfail = sum(not c["converged"] for row in table for c in row) - nfold
             print(f"{method:12s} {name}: {nfail}/{len(torques) * len(ns)} cells failed, "
-                  f"{sum(c['time_s'] for row in table for c in row):.1f} s")
+                  f"{nfold} folded, {sum(c['time_s'] for row in table for c in row):.1f} s")
 
     # summary of failures
     failures = {}
     for method, per_scene in cells.items():
         torques = TORQUES_BY_METHOD.get(method, TORQUES_NM)
         lst = []
+        folded = 0
         for name, table in per_scene.items():
             for i, t in enumerate(torques):
                 for j, n in enumerate(grids[method]):
                     c = table[i][j]
-                    if not c["converged"]:
+                    if c.get("folded", False):
+                        folded += 1  # an equilibrium outside the model's range, not a failure
+                    elif not c["converged"]:
                         lst.append({"scene": name, "torque_nm": t,
                                     "rings" if method == "fem" else "n_triangles": n,
                                     "kkt_residual": c["kkt_residual"],
                                     "message": c["message"][:120]})
         total = len(per_scene) * len(torques) * len(grids[method])
         near = sum(1 for c in lst if c["kkt_residual"] <= NEAR_MISS)
-        failures[method] = {"failed": len(lst), "total": total,
+        failures[method] = {"failed": len(lst), "folded": folded, "total": total,
                             "near_miss_residual_below_1e-5": near, "cells": lst}
 
     # figures: one row per method, one column per disk
@@ -149,16 +154,19 @@ def main(argv: list[str] | None = None) -> int:
                     val = np.array([[c["time_s"] for c in row] for row in table])
                     im = ax.imshow(np.clip(val, 1e-3, 100), origin="lower", aspect="auto",
                                    cmap="magma", norm=LogNorm(1e-3, 100))
-                fail = np.array([[not c["converged"] for c in row] for row in table])
+                fold = np.array([[c.get("folded", False) for c in row] for row in table])
+                fail = np.array([[not c["converged"] for c in row] for row in table]) & ~fold
                 yy, xx = np.nonzero(fail)
                 ax.plot(xx, yy, "x", color="red", ms=9, mew=2.2)
+                yy, xx = np.nonzero(fold)
+                ax.plot(xx, yy, "o", mfc="none", color="orange", ms=8, mew=1.8)
                 ax.set_xticks(range(len(ns)))
                 ax.set_xticklabels([str(n) for n in ns], fontsize=7)
                 ax.set_yticks(range(len(torques)))
                 ax.set_yticklabels([f"{t:g}" for t in torques], fontsize=7)
                 r = scenes[name].disk.radius_m
-                ax.set_title(f"{method}, r = {r:.2f} m: {int(fail.sum())}/{fail.size} failed",
-                             fontsize=8)
+                ax.set_title(f"{method}, r = {r:.2f} m: {int(fail.sum())}/{fail.size} failed"
+                             + (f", {int(fold.sum())} folded" if fold.any() else ""), fontsize=8)
                 if b == 0:
                     ax.set_ylabel("torque [N·m]", fontsize=8)
                 ax.set_xlabel("FEM rings" if method == "fem" else "N", fontsize=8)
@@ -169,7 +177,8 @@ def main(argv: list[str] | None = None) -> int:
                                            else "")
             fig.colorbar(im, ax=list(axes[a]), shrink=0.9, label=label)
         fig.suptitle("red x: not converged (failed the independent KKT check, solver failure or "
-                     "time limit)", fontsize=9)
+                     "time limit); orange o: folded fan (an inverted triangle: the squeeze is "
+                     "beyond the model's range)", fontsize=9)
         name = "stability_map.png" if kind == "residual" else "stability_map_time.png"
         fig.savefig(out / name, dpi=110)
 
@@ -187,7 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     print("failures per method:")
     for method, f in failures.items():
         print(f"  {method:12s}: {f['failed']}/{f['total']} failed, of which "
-              f"{f['near_miss_residual_below_1e-5']} with a KKT residual <= {NEAR_MISS:g}")
+              f"{f['near_miss_residual_below_1e-5']} with a KKT residual <= {NEAR_MISS:g}; "
+              f"{f['folded']} folded")
         for c in f["cells"][:40]:
             key = "rings" if method == "fem" else "n_triangles"
             print(f"      {c['scene']} T={c['torque_nm']:<5g} {key}={c[key]:<5d} "
