@@ -165,6 +165,7 @@ class GraspResult:
             "iterations": self.iterations,
             "rounds": self.rounds,
             "inverted_triangles": self.inverted_triangles,
+            "folded": self.folded,
             "solve_time_s": self.solve_time_s,
             "kkt": self.kkt._asdict() if self.kkt is not None else None,
             "points_m": self.points_m.tolist(),
