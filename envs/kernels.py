@@ -1537,12 +1537,13 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 kx, ky = _corner_centre(j, th, c, prm)
                 if _inside(q, n, kx, ky):
                     status = PENETRATION
-    if status == OK and inverted > 0:
-        status = INVERTED
     if status == OK and kkt > 1e-9 * fscale + 1e-13 * max(prm[P_KC], prm[P_KR]):
         # the interior-point answer kept after a failed polish is not an equilibrium to the
         # required accuracy: let the caller try another policy
         status = POLISH_FAIL
+    if status == OK and inverted > 0:
+        # reported as a fold only once it is known to be an equilibrium
+        status = INVERTED
     info[0] = status
     info[1] = work_it[0]
     info[2] = rounds
