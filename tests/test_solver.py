@@ -273,3 +273,14 @@ def test_light_squeeze_of_a_fine_polygon_converges():
     assert res.converged, res.message
     assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
     assert min(res.n_contacts) >= 1
+
+
+@pytest.mark.parametrize("name,torque,n", [("paper-r100", 6.211, 12), ("paper-r070", 1.6, 20)])
+def test_a_fold_is_reported_only_for_a_checked_equilibrium(name, torque, n):
+    # crushed past the fold: the answer is either a folded equilibrium the independent check
+    # confirms, or a failure saying so; never "equilibrium with inverted triangles" unchecked
+    res = simulate(Scene.preset(name), torque, n)
+    assert not res.converged
+    assert res.inverted_triangles > 0
+    assert res.folded == ("inverted (folded)" in res.message)
+    assert res.folded == res.kkt.passed
