@@ -51,7 +51,6 @@ from .psm import (
 BW = 5  # half bandwidth of the interleaved point ordering
 P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
 P_POLICY = 16  # extra slot: contact policy of this attempt (see solve_one)
-GAUGE_MAX_N = 100  # finest fan that gets the rotation gauge spring
 CORNER_NEAR = 0.25  # corner-edge constraints for edges this close to a corner's path (units of r)
 CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
 
@@ -1286,9 +1285,11 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     prm = np.zeros(P_POLICY + 1)
     npr = min(prm_in.shape[0], P_GAUGE)
     prm[:npr] = prm_in[:npr]
-    # the gauge spring helps coarse fans; on fine ones (soft radial springs, stiff contour) it
-    # drags a slowly travelling residual round the contour from point 0: left out there
-    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR]) if n <= GAUGE_MAX_N else 0.0
+    # the gauge spring holds the nearly free turn of the polygon about its pin while the
+    # contacts form (released once the contact set settles). Fine fans need it most: without
+    # it the interior-point iterates swung the polygon to and fro at N = 500 and ran into the
+    # iteration limit at nearly every torque of the paper sweep
+    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
     prm[P_POLICY] = policy
     bidx = _band_index(n)
     x0 = x.copy()
@@ -1306,9 +1307,10 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     work_it = np.zeros(1, dtype=np.int64)
     tau = prm[P_TAU]
     fscale = max(tau, prm[P_KAPPA] * abs(prm[P_TH0] - prm[P_THMIN]), 1e-300)
-    # initial candidate sets, evaluated at the start point; fine fans deform more for their
-    # edge length: a wider band of edges round each corner's path
-    near = CORNER_NEAR if n <= GAUGE_MAX_N else 2.0 * CORNER_NEAR
+    # initial candidate sets, evaluated at the start point (the same band for every N: with
+    # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
+    # the paper sweep; an edge met outside it joins in a later round)
+    near = CORNER_NEAR
     reach = np.zeros(n, dtype=np.bool_)
     for j in range(2):
         th = x0[nb + j]

@@ -224,7 +224,8 @@ def result_from_scaled(
     inverted = int(np.count_nonzero(
         q[:, 0] * np.roll(q[:, 1], -1) - q[:, 1] * np.roll(q[:, 0], -1) <= 0.0))
     converged = bool(solver_ok and report.passed and inverted == 0)
-    if solver_ok and not report.passed:
+    if (solver_ok or message == kernels.STATUS_MESSAGES[kernels.INVERTED]) and not report.passed:
+        # the kernel's own answer (a grasp or a fold) that the independent check rejects
         message = f"independent KKT check failed: {report.reason}"
     elif solver_ok and inverted:
         message = kernels.STATUS_MESSAGES[kernels.INVERTED]
