@@ -479,7 +479,7 @@ def _con_value(kind, j, idx, x, q, n, prm):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _con_eval(kind, j, idx, sc, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
+def _con_eval(kind, j, idx, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
     if kind == 0:
@@ -517,7 +517,7 @@ def _to_band(d, n, bidx):
 
 
 @njit(cache=True, error_model="numpy")
-def _all_gaps(x, n, prm, kinds, fj, fidx, fsc, gout, grad5, hess5, dofs):
+def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
     q = x[: 2 * n].reshape(n, 2)
     for m in range(kinds.shape[0]):
         gout[m] = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
@@ -655,6 +655,23 @@ def _bar_crossed(q, n, j, th, prm):
 
 
 @njit(cache=True, error_model="numpy")
+def _crossed_through(x, n, prm):
+    """Has a finger gone right through the disk in state x (an edge across its bar, or one
+    of its corners inside the contour), where every gap is positive again?"""
+    nb = 2 * n
+    q = x[:nb].reshape(n, 2)
+    for j in range(2):
+        th = x[nb + j]
+        if _bar_crossed(q, n, j, th, prm):
+            return True
+        for c in range(4):
+            kx, ky = _corner_centre(j, th, c, prm)
+            if _inside(q, n, kx, ky):
+                return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
 def _tunnels(x, xt, n, prm):
     """Would the step x -> xt carry a corner or a point right through the contour or a finger?
 
@@ -663,14 +680,9 @@ def _tunnels(x, xt, n, prm):
     ending inside the contour, a point crossing a finger's axis line along the bar.
     """
     nb = 2 * n
-    qt = xt[:nb].reshape(n, 2)
+    if _crossed_through(xt, n, prm):
+        return True
     for j in range(2):
-        if _bar_crossed(qt, n, j, xt[nb + j], prm):
-            return True
-        for c in range(4):
-            kx, ky = _corner_centre(j, xt[nb + j], c, prm)
-            if _inside(qt, n, kx, ky):
-                return True
         ex0, ey0, nx0, ny0 = _frame(j, x[nb + j])
         ex1, ey1, nx1, ny1 = _frame(j, xt[nb + j])
         cx = prm[P_C0X + 2 * j]
@@ -690,7 +702,7 @@ def _tunnels(x, xt, n, prm):
 
 
 @njit(cache=True, error_model="numpy")
-def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
+def _build_constraints(face, corner, n, kinds, fj, fidx):
     m = 0
     for j in range(2):
         for i in range(n):
@@ -698,7 +710,6 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
                 kinds[m] = 0
                 fj[m] = j
                 fidx[m] = i
-                fsc[m] = 0.0
                 m += 1
     for j in range(2):
         for c in range(4):
@@ -707,13 +718,11 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
                     kinds[m] = 1
                     fj[m] = j
                     fidx[m] = k + n * c
-                    fsc[m] = prm[P_LMAX] if c % 2 == 0 else 0.0
                     m += 1
     for j in range(2):
         kinds[m] = 2
         fj[m] = j
         fidx[m] = 0
-        fsc[m] = 0.0
         m += 1
     return m
 
@@ -723,7 +732,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx, fsc, prm):
 
 
 @njit(cache=True, error_model="numpy")
-def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
+def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
                    g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
 
@@ -749,7 +758,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad
         # a far constraint: its matrix block is below round-off of the springs (g_out holds
         # the gaps at x on entry: every caller evaluates them just before)
         block = sig[m] + abs(lam[m]) / max(g_out[m], 1e-300) >= 1e-9 * kmax
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
                           block)
         g_out[m] = g
         w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
@@ -812,7 +821,7 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
 
 
 @njit(cache=True, error_model="numpy")
-def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs):
+def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
@@ -825,13 +834,13 @@ def _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gbuf, grad5, hess5, dofs
 
 
 @njit(cache=True, error_model="numpy")
-def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs, res):
+def _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, dofs, res):
     res[:] = 0.0
     none = np.zeros((1, 1))
     _spring_terms(x, n, prm, np.zeros(1, dtype=np.int64), res, none, none, none, False)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
                           False)
         gbuf[m] = g
         for a in range(nd):
@@ -843,7 +852,7 @@ def _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hes
 
 
 @njit(cache=True, error_model="numpy")
-def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, work_it):
+def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it):
     """Primal-dual interior point on a fixed constraint set. Returns (status, iterations)."""
     nb = 2 * n
     nx = nb + 2
@@ -879,14 +888,14 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
     n_neg = 0
     n_walled = 0
     gb = np.zeros(nx)
-    _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, fsc, g, grad5, hess5, dofs)
+    _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
     while it < maxit:
         # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
         # springs' negative geometric stiffness removed; a diagonal shift only as a last resort.
         # The same pass gives the stationarity residual (sig = lam / g does not depend on mu).
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
-        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb, dd,
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
                        g, grad5, hess5, dofs, mu, False, gb, res)
         kkt = 0.0
         for d in range(nx):
@@ -930,7 +939,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
                     # descent from a symmetric start cannot leave; the caller perturbs and retries
                     work_it[0] += it
                     return SADDLE, it
-            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam, sig, grad, ab, bb,
+            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb,
                            dd, g, grad5, hess5, dofs, mu, True, gb, res)
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
         if not ok:
@@ -953,13 +962,13 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
         if lim > 1.0:
             alpha = 1.0 / lim
-        phi0 = _merit(x, n, prm, kinds, fj, fidx, fsc, mcount, mu, gt, grad5, hess5, dofs)
+        phi0 = _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gt)
         accepted = False
         walled = False
         for _ls in range(60):
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
-            phi = _merit(xt, n, prm, kinds, fj, fidx, fsc, mcount, mu, gt, grad5, hess5, dofs)
+            phi = _merit(xt, n, prm, kinds, fj, fidx, mcount, mu, gt)
             if phi < math.inf:
                 feasible = True
                 for m in range(mcount):
@@ -993,7 +1002,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0, 
         q = x[:nb].reshape(n, 2)
         alpha_d = 1.0
         for m in range(mcount):
-            _, nd = _con_eval(kinds[m], fj[m], fidx[m], fsc[m], x, q, n, prm, grad5, hess5, dofs,
+            _, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
                               False)
             dl = 0.0
             for a in range(nd):
@@ -1034,7 +1043,7 @@ def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
 
 
 @njit(cache=True, error_model="numpy")
-def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active, work_it):
+def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 
     Returns (ok, stable) where stable means the final Newton matrix needed no shift.
@@ -1083,7 +1092,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
             else:
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
-        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, fsc, mcount, lam_eff, sig, grad, ab, bb,
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
                        dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p)
         for d in range(nb):
             i = d // 2
@@ -1132,7 +1141,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
             if active[m]:
                 gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
                 lam[m] = lam[m] - rho * gm
-        kkt = _stationarity(x, n, prm, kinds, fj, fidx, fsc, mcount, lam, g, grad5, hess5, dofs,
+        kkt = _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, g, grad5, hess5, dofs,
                             res)
         viol = 0.0
         for m in range(mcount):
@@ -1147,7 +1156,7 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, ac
 
 
 @njit(cache=True, error_model="numpy")
-def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, active,
+def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
                 work_it, gbuf, stable_out):
     """Polish on a contact set, correcting the set (primal-dual active set) a few times.
 
@@ -1155,18 +1164,15 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscal
     violated. On success ``xs`` and ``lam`` hold the polished answer; returns a status.
     """
     nb = 2 * n
-    grad5 = np.zeros(5)
-    hess5 = np.zeros((5, 5))
-    dofs = np.zeros(5, dtype=np.int64)
     for _attempt in range(6):
         xp = xs.copy()
         lp = lam[:mcount].copy()
-        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale,
+        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
                               active, work_it)
         stable_out[0] = stable
         if not okp:
             return POLISH_FAIL
-        _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, gbuf)
         good = True
         for m in range(mcount):
             if active[m] and lp[m] < -1e-12 * fscale:
@@ -1185,12 +1191,9 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscal
 
 
 @njit(cache=True, error_model="numpy")
-def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening=0.01):
+def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
-    grad5 = np.zeros(5)
-    hess5 = np.zeros((5, 5))
-    dofs = np.zeros(5, dtype=np.int64)
     angle = (0.25 if attempt % 2 == 1 else -0.25) * attempt * 2.0 * math.pi / n
     c = math.cos(angle)
     s = math.sin(angle)
@@ -1201,21 +1204,14 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, attempt, gbuf, opening
     for _k in range(16):
         for j in range(2):
             x0[nb + j] = min(xs[nb + j] + opening, prm[P_TH0])
-        _all_gaps(x0, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        _all_gaps(x0, n, prm, kinds[:mcount], fj, fidx, gbuf)
         ok = True
         for m in range(mcount):
             if not gbuf[m] > 1e-8:
                 ok = False
         # corner gaps are distances to segments: a corner inside the contour has them positive
-        q0 = x0[:nb].reshape(n, 2)
-        for j in range(2):
-            if ok and _bar_crossed(q0, n, j, x0[nb + j], prm):
-                ok = False
-            for c in range(4):
-                if ok:
-                    kx, ky = _corner_centre(j, x0[nb + j], c, prm)
-                    if _inside(q0, n, kx, ky):
-                        ok = False
+        if ok and _crossed_through(x0, n, prm):
+            ok = False
         if ok:
             return True
         opening *= 2.0
@@ -1298,7 +1294,6 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     kinds = np.zeros(mmax, dtype=np.int64)
     fj = np.zeros(mmax, dtype=np.int64)
     fidx = np.zeros(mmax, dtype=np.int64)
-    fsc = np.zeros(mmax)
     lam = np.zeros(mmax)
     gbuf = np.zeros(mmax)
     grad5 = np.zeros(5)
@@ -1338,7 +1333,6 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     last_kinds = np.zeros(mmax, dtype=np.int64)
     last_fj = np.zeros(mmax, dtype=np.int64)
     last_fidx = np.zeros(mmax, dtype=np.int64)
-    last_fsc = np.zeros(mmax)
     last_m = 0
     saddle = False
     status = OK
@@ -1348,10 +1342,10 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     xs = x0.copy()
     for rnd in range(int(opts[O_MAXROUND]) + 3):
         rounds = rnd + 1
-        mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx, fsc, prm)
+        mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
         for d in range(nb + 2):
             xs[d] = x0[d]
-        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, gbuf)
         # initial barrier parameter: from warm-start multipliers when given, else a force scale
         mu0 = abs(opts[O_MU0]) * fscale * 0.05
         have_warm = False
@@ -1378,16 +1372,15 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # bound the cost of a hopeless solve over all rounds
             status = ITER_LIMIT
             break
-        status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount, fscale, mu0,
+        status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0,
                          work_it)
         last_m = mcount
         last_kinds[:mcount] = kinds[:mcount]
         last_fj[:mcount] = fj[:mcount]
         last_fidx[:mcount] = fidx[:mcount]
-        last_fsc[:mcount] = fsc[:mcount]
         if status == SADDLE and escapes < 3:
             escapes += 1
-            if _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, escapes, gbuf):
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf):
                 for m in range(mcount):
                     if kinds[m] == 0:
                         lam_guess_face[fj[m], fidx[m]] = lam[m]
@@ -1400,12 +1393,12 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         if status != OK and not blocked:
             break
         # identify the contact set and polish
-        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+        _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, gbuf)
         active = np.zeros(mcount, dtype=np.bool_)
         for m in range(mcount):
             active[m] = lam[m] > gbuf[m] * fscale and gbuf[m] < 1e-5
         if opts[O_POLISH] > 0.0 and not blocked:
-            status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+            status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                  fscale, active, work_it, gbuf, stable_out)
             stable = stable_out[0]
         # check the candidate set against the solution
@@ -1447,7 +1440,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 active[m] = lam[m] > 0.0
             xkeep = xs.copy()
             lkeep = lam.copy()
-            good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, fsc, mcount,
+            good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                fscale, active, work_it, gbuf, stable_out) == OK
             stable = stable_out[0]
             if not good:
@@ -1456,13 +1449,13 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 for m in range(mcount):
                     lam[m] = lkeep[m]
                 changed = True
-                if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, 0, gbuf):
+                if not _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, 0, gbuf):
                     status = POLISH_FAIL
                     break
         if not changed and not stable and escapes < 3:
             # converged to a saddle (e.g. a symmetric squeeze past a bifurcation): perturb
             escapes += 1
-            if _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mcount, escapes, gbuf):
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf):
                 for m in range(mcount):
                     if kinds[m] == 0:
                         lam_guess_face[fj[m], fidx[m]] = lam[m]
@@ -1474,9 +1467,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         for m in range(mcount):
             if kinds[m] == 0:
                 lam_guess_face[fj[m], fidx[m]] = lam[m]
-        mnew = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx, fsc, prm)
+        mnew = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
         xprev = x0.copy()
-        if not _escape(xs, x0, n, prm, kinds, fj, fidx, fsc, mnew, 0, gbuf, 1e-4):
+        if not _escape(xs, x0, n, prm, kinds, fj, fidx, mnew, 0, gbuf, 1e-4):
             for d in range(nb + 2):
                 x0[d] = xprev[d]
         if rnd >= int(opts[O_MAXROUND]) + escapes - 1:
@@ -1493,8 +1486,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     kinds[:mcount] = last_kinds[:mcount]
     fj[:mcount] = last_fj[:mcount]
     fidx[:mcount] = last_fidx[:mcount]
-    fsc[:mcount] = last_fsc[:mcount]
-    _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, fsc, gbuf, grad5, hess5, dofs)
+    _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, gbuf)
     if status == POLISH_FAIL:
         # keep the interior-point answer with the multipliers of open gaps dropped; the
         # independent check decides whether it is an equilibrium
@@ -1516,7 +1508,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         else:
             lam_stop[fj[m]] = lam[m]
     res = np.zeros(nb + 2)
-    kkt = _stationarity(xs, n, prm, kinds, fj, fidx, fsc, mcount, lam, gbuf, grad5, hess5, dofs,
+    kkt = _stationarity(xs, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, dofs,
                         res)
     # a fan triangle (centre, q_i, q_i+1) turned over: the springs allow this fold at finite
     # energy, the material does not; the answer is an equilibrium of the model but not a grasp
@@ -1529,16 +1521,11 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         # final guard over every point and corner, candidates or not
         q = xs[:nb].reshape(n, 2)
         for j in range(2):
-            th = xs[nb + j]
             for i in range(n):
-                if _face_gap(q, i, j, th, prm) < -1e-9:
+                if _face_gap(q, i, j, xs[nb + j], prm) < -1e-9:
                     status = PENETRATION
-            if _bar_crossed(q, n, j, th, prm):
-                status = PENETRATION
-            for c in range(4):
-                kx, ky = _corner_centre(j, th, c, prm)
-                if _inside(q, n, kx, ky):
-                    status = PENETRATION
+        if _crossed_through(xs, n, prm):
+            status = PENETRATION
     if status == OK and kkt > 1e-9 * fscale + 1e-13 * max(prm[P_KC], prm[P_KR]):
         # the interior-point answer kept after a failed polish is not an equilibrium to the
         # required accuracy: let the caller try another policy

@@ -204,16 +204,23 @@ def closed_angle_rad(gripper: Gripper) -> float:
     return math.atan2(hw, ln) - math.asin(min(1.0, d3 / rr))
 
 
-def _distance_to_finger_bar(gripper: Gripper, side: int, angle_rad: float, point) -> float:
-    """Distance from ``point`` to the rectangular finger bar (negative inside is reported as 0)."""
-    joint, axis, normal = finger_frame(gripper, side, angle_rad)
-    rel = np.asarray(point, dtype=float) - joint
-    s = float(axis @ rel)
-    m = float(normal @ rel)
+def _distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
+    """Distance from ``point`` to the rectangular finger bar (negative inside is reported as 0).
+
+    ``angle_rad`` may be an array of finger angles: one distance per angle (the frames of
+    :func:`finger_frame`, written out so that they vectorize).
+    """
+    sin_a, cos_a = np.sin(angle_rad), np.cos(angle_rad)
+    sign = 1.0 if side == 0 else -1.0
+    rx = float(point[0]) - sign * gripper.joint_offset_m
+    ry = float(point[1])
+    s = sign * sin_a * rx + cos_a * ry  # along the axis e
+    m = -sign * cos_a * rx + sin_a * ry  # along the inward normal n
     hw = gripper.finger_width_m / 2
-    ds = max(0.0, -s, s - gripper.finger_length_m)
-    dm = max(0.0, m - hw, -hw - m)
-    return math.hypot(ds, dm)
+    ds = np.maximum(0.0, np.maximum(-s, s - gripper.finger_length_m))
+    dm = np.maximum(0.0, np.maximum(m - hw, -hw - m))
+    dist = np.hypot(ds, dm)
+    return float(dist) if np.ndim(dist) == 0 else dist
 
 
 @dataclass(frozen=True)
@@ -258,17 +265,10 @@ class Scene:
 
     def _reach_warnings(self) -> tuple[str, ...]:
         g, d = self.gripper, self.disk
-        # right finger over 64 angles from closed to rest (the left one mirrors it), vectorized
-        # form of _distance_to_finger_bar: this runs for every Scene an optimizer builds
+        # right finger over 64 angles from closed to rest (the left one mirrors it), in one
+        # vectorized call: this runs for every Scene an optimizer builds
         angles = np.linspace(closed_angle_rad(g), g.rest_angle_rad, 64)
-        sin_a, cos_a = np.sin(angles), np.cos(angles)
-        rx, ry = -g.joint_offset_m, d.distance_m + d.radius_m  # centre relative to the joint
-        s = sin_a * rx + cos_a * ry
-        m = -cos_a * rx + sin_a * ry
-        hw = g.finger_width_m / 2
-        ds = np.maximum(0.0, np.maximum(-s, s - g.finger_length_m))
-        dm = np.maximum(0.0, np.maximum(m - hw, -hw - m))
-        reach = float(np.min(np.hypot(ds, dm)))
+        reach = float(np.min(_distance_to_finger_bar(g, 0, angles, d.center_m)))
         if reach > d.radius_m:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "

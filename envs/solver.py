@@ -203,7 +203,11 @@ def result_from_scaled(
     stable: bool = True,
     rounds: int = 1,
 ) -> GraspResult:
-    """Convert a scaled solution to a :class:`GraspResult` and run the independent check."""
+    """Convert a scaled solution to a :class:`GraspResult` and run the independent check.
+
+    ``solver_ok`` means the solver claims an equilibrium (a fold included); ``converged`` is set
+    only if the check confirms it and no fan triangle is turned over.
+    """
     from .psm import energy_scaled
 
     n, r = prob.n, prob.length_m
@@ -224,8 +228,7 @@ def result_from_scaled(
     inverted = int(np.count_nonzero(
         q[:, 0] * np.roll(q[:, 1], -1) - q[:, 1] * np.roll(q[:, 0], -1) <= 0.0))
     converged = bool(solver_ok and report.passed and inverted == 0)
-    if (solver_ok or message == kernels.STATUS_MESSAGES[kernels.INVERTED]) and not report.passed:
-        # the kernel's own answer (a grasp or a fold) that the independent check rejects
+    if solver_ok and not report.passed:
         message = f"independent KKT check failed: {report.reason}"
     elif solver_ok and inverted:
         message = kernels.STATUS_MESSAGES[kernels.INVERTED]
@@ -279,7 +282,9 @@ def _newton(
     elapsed = time.perf_counter() - t0
     status = int(info[0])
     return result_from_scaled(
-        scene, prob, torque_nm, x, lam_face, lam_corner, lam_stop, status == kernels.OK,
+        # a fold is the kernel's answer too (an equilibrium): the check has the final say
+        scene, prob, torque_nm, x, lam_face, lam_corner, lam_stop,
+        status in (kernels.OK, kernels.INVERTED),
         kernels.STATUS_MESSAGES[status], int(info[1]), elapsed, "newton", stiffness_rule,
         stable=bool(info[3]), rounds=int(info[2]),
     )
