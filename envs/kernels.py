@@ -88,11 +88,12 @@ N_OPTIONS = 6
 
 
 def default_options() -> np.ndarray:
-    """Solver options: [stationarity tol, max iterations, max rounds, mu0 factor, polish, gauge]."""
+    """Solver options: [stationarity tol, max iterations, max rounds, mu0 factor, polish,
+    gauge]."""
     return np.array([1e-12, 300.0, 12.0, 1e-2, 1.0, 1.0])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _frame(j, th):
     s = math.sin(th)
     c = math.cos(th)
@@ -116,7 +117,7 @@ def _band_index(n):
 # constraints
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _finger_coords(q, i, j, th, prm):
     """Frame of finger j and the coordinates (s along the bar, m along the inward normal) of
     point i relative to its joint."""
@@ -126,7 +127,7 @@ def _finger_coords(q, i, j, th, prm):
     return ex, ey, nx, ny, ex * vx + ey * vy, nx * vx + ny * vy
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _face_eval(q, i, j, th, prm, grad, hess):
     """Gap of point i to the body of finger j: value, local grad/Hessian over (qx, qy, theta).
 
@@ -195,7 +196,7 @@ def _face_eval(q, i, j, th, prm, grad, hess):
     return dist - rho
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _corner_eval(q, k, j, th, c, prm, grad, hess, want_hess):
     """Rounded corner c of finger j vs contour edge k -> k+1.
 
@@ -320,7 +321,7 @@ def _corner_eval(q, k, j, th, c, prm, grad, hess, want_hess):
 # energy, gradient, Hessian
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _energy(x, n, prm):
     e = 0.0
     kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
@@ -343,7 +344,7 @@ def _energy(x, n, prm):
     return e
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _add(ab, bb, dd, nb, p, r, v):
     """Add v to the symmetric Newton matrix entry (p, r) (band-ordered; >= nb is an angle)."""
     if p < nb and r < nb:
@@ -361,7 +362,7 @@ def _add(ab, bb, dd, nb, p, r, v):
             dd[r - nb, p - nb] += v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Spring and finger energy gradient (natural order) and Hessian (band order)."""
     kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
@@ -434,7 +435,7 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
 # and corner position sc. Gradients/Hessians are evaluated on demand.
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _face_gap(q, i, j, th, prm):
     """Value of :func:`_face_eval` only."""
     ex, ey, nx, ny, s, m = _finger_coords(q, i, j, th, prm)
@@ -445,7 +446,7 @@ def _face_gap(q, i, j, th, prm):
     return math.sqrt(ds * ds + dm * dm) - rho
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _seg_dist(q, k, px, py):
     """Distance from (px, py) to the contour edge k -> k+1."""
     n = q.shape[0]
@@ -459,14 +460,14 @@ def _seg_dist(q, k, px, py):
     return math.sqrt(wx * wx + wy * wy)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _corner_gap(q, k, j, th, c, prm):
     """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
     kx, ky = _corner_centre(j, th, c, prm)
     return _seg_dist(q, k, kx, ky) - prm[P_RHO]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _con_value(kind, j, idx, x, q, n, prm):
     """Value of constraint (kind, j, idx) only (line searches, candidate checks)."""
     th = x[2 * n + j]
@@ -478,7 +479,7 @@ def _con_value(kind, j, idx, x, q, n, prm):
     return th - prm[P_THMIN]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _con_eval(kind, j, idx, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
@@ -508,7 +509,7 @@ def _con_eval(kind, j, idx, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
     return th - prm[P_THMIN], 1
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _to_band(d, n, bidx):
     if d >= 2 * n:
         return d
@@ -516,7 +517,7 @@ def _to_band(d, n, bidx):
     return bidx[i] + (d - 2 * i)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
     q = x[: 2 * n].reshape(n, 2)
     for m in range(kinds.shape[0]):
@@ -527,7 +528,7 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
 # banded Cholesky with a 2x2 bordered Schur complement
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _chol_band(ab, lb, nb, shift):
     for p in range(nb):
         for k in range(BW, 0, -1):
@@ -550,7 +551,7 @@ def _chol_band(ab, lb, nb, shift):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _solve_band(lb, nb, rhs, out):
     for p in range(nb):
         acc = rhs[p]
@@ -564,7 +565,7 @@ def _solve_band(lb, nb, rhs, out):
         out[p] = acc / lb[p, 0]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
     """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
     if not _chol_band(ab, lb, nb, shift):
@@ -602,7 +603,7 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
 # candidate constraints
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _corner_centre(j, th, c, prm):
     """Centre of the rounded corner c of finger j (disk-centred, units of r)."""
     ex, ey, nx, ny = _frame(j, th)
@@ -614,7 +615,7 @@ def _corner_centre(j, th, c, prm):
             -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _inside(q, n, px, py):
     """Crossing-number test: is (px, py) inside the contour polygon?"""
     inside = False
@@ -628,7 +629,7 @@ def _inside(q, n, px, py):
     return inside
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _bar_crossed(q, n, j, th, prm):
     """Does a contour edge cross the axis of finger j (the bar runs right through the disk)?
 
@@ -654,7 +655,7 @@ def _bar_crossed(q, n, j, th, prm):
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _crossed_through(x, n, prm):
     """Has a finger gone right through the disk in state x (an edge across its bar, or one
     of its corners inside the contour), where every gap is positive again?"""
@@ -671,7 +672,7 @@ def _crossed_through(x, n, prm):
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _tunnels(x, xt, n, prm):
     """Would the step x -> xt carry a corner or a point right through the contour or a finger?
 
@@ -701,7 +702,7 @@ def _tunnels(x, xt, n, prm):
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _build_constraints(face, corner, n, kinds, fj, fidx):
     m = 0
     for j in range(2):
@@ -731,7 +732,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx):
 # the interior-point Newton solve for a fixed candidate set
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
                    g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
@@ -752,7 +753,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
         res[d] = grad[d]
         gb[d] = 0.0
     kmax = max(prm[P_KC], prm[P_KR])
-    blk = np.zeros((5, 5))
+    blk = hess5  # the block is built in place of the constraint Hessian (lower triangle)
     q = x[:nb].reshape(n, 2)
     for m in range(mcount):
         # a far constraint: its matrix block is below round-off of the springs (g_out holds
@@ -806,7 +807,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
             dd[j, j] += blk[0, 0]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _step_from_band(ob, ot, bidx, nb, grad, step):
     """Newton step in natural order from the banded solve; returns its slope grad . step."""
     for d in range(nb):
@@ -820,7 +821,7 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
     return slope
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
@@ -833,11 +834,11 @@ def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
     return e
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, dofs, res):
     res[:] = 0.0
-    none = np.zeros((1, 1))
-    _spring_terms(x, n, prm, np.zeros(1, dtype=np.int64), res, none, none, none, False)
+    # gradient only: the matrix arguments are not touched
+    _spring_terms(x, n, prm, dofs, res, hess5, hess5, hess5, False)
     q = x[: 2 * n].reshape(n, 2)
     for m in range(mcount):
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
@@ -853,11 +854,13 @@ def _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, d
 
 @njit(cache=True, error_model="numpy")
 def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it):
-    """Primal-dual interior point on a fixed constraint set. Returns (status, iterations)."""
+    """Primal-dual interior point on a fixed constraint set. Returns (status, iterations).
+
+    Allocates the work arrays; the iterations run in :func:`_ipm_core`, compiled without
+    reference counting (array views and helper calls inside it then cost nothing extra).
+    """
     nb = 2 * n
     nx = nb + 2
-    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
-    maxit = int(opts[O_MAXIT])
     grad = np.zeros(nx)
     step = np.zeros(nx)
     xt = np.zeros(nx)
@@ -879,6 +882,20 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
+    gb = np.zeros(nx)
+    return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
+                     grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig,
+                     dlam, grad5, hess5, dofs, gb)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
+              grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig, dlam,
+              grad5, hess5, dofs, gb):
+    nb = 2 * n
+    nx = nb + 2
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
+    maxit = int(opts[O_MAXIT])
     mu = mu0
     mu_min = 1e-3 * tol
     shrink = 0.01
@@ -887,7 +904,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     it = 0
     n_neg = 0
     n_walled = 0
-    gb = np.zeros(nx)
     _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
     while it < maxit:
         # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
@@ -1024,7 +1040,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     return ITER_LIMIT, it
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
     """Augmented Lagrangian E - sum lam g + rho/2 sum g^2 over the active constraints.
 
@@ -1045,6 +1061,8 @@ def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
 @njit(cache=True, error_model="numpy")
 def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
+
+    Allocates the work arrays for :func:`_polish_core` (compiled without reference counting).
 
     Returns (ok, stable) where stable means the final Newton matrix needed no shift.
     """
@@ -1072,6 +1090,17 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
+    return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
+                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff,
+                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
+                 grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff, res, res_p,
+                 gbuf_p, xt, step, grad5, hess5, dofs):
+    nb = 2 * n
+    nx = nb + 2
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
     rho = 1e2 * kscale
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
@@ -1190,7 +1219,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     return POLISH_FAIL
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
@@ -1216,6 +1245,39 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
             return True
         opening *= 2.0
     return False
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach):
+    """Candidate constraints at the start point ``x0`` (see :func:`solve_one` for the policies).
+
+    Every point against each finger body; each corner against the contour edges near the arc
+    it sweeps as its finger closes (all edges clear of it for the tip corners of policy 1).
+    """
+    nb = 2 * n
+    q0 = x0[:nb].reshape(n, 2)
+    for j in range(2):
+        th = x0[nb + j]
+        for i in range(n):
+            # every point: a far one costs a little, a late one a whole extra round
+            face_cand[j, i] = _face_gap(q0, i, j, th, prm) > 1e-12
+        for c in range(4):
+            for k in range(n):
+                corner_cand[j, c, k] = _corner_gap(q0, k, j, th, c, prm) > 1e-12
+            if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                continue  # policy 1, tip corners: every edge clear of them at the start
+            # edges near the arc the corner sweeps as the finger closes (centres computed once
+            # per sample of the arc)
+            for k in range(n):
+                reach[k] = False
+            for t in range(CORNER_SWEEP):
+                ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
+                kx, ky = _corner_centre(j, ths, c, prm)
+                for k in range(n):
+                    if corner_cand[j, c, k] and not reach[k]:
+                        reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
+            for k in range(n):
+                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[k]
 
 
 @njit(cache=True, error_model="numpy")
@@ -1305,29 +1367,8 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     # initial candidate sets, evaluated at the start point (the same band for every N: with
     # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
     # the paper sweep; an edge met outside it joins in a later round)
-    near = CORNER_NEAR
     reach = np.zeros(n, dtype=np.bool_)
-    for j in range(2):
-        th = x0[nb + j]
-        for i in range(n):
-            # every point: a far one costs a little, a late one a whole extra round
-            face_cand[j, i] = _face_gap(q0, i, j, th, prm) > 1e-12
-        for c in range(4):
-            for k in range(n):
-                corner_cand[j, c, k] = _corner_gap(q0, k, j, th, c, prm) > 1e-12
-            if c % 2 == 0 and prm[P_POLICY] > 0.0:
-                continue  # policy 1, tip corners: every edge clear of them at the start
-            # edges near the arc the corner sweeps as the finger closes (centres computed once
-            # per sample of the arc)
-            reach[:] = False
-            for t in range(CORNER_SWEEP):
-                ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                kx, ky = _corner_centre(j, ths, c, prm)
-                for k in range(n):
-                    if corner_cand[j, c, k] and not reach[k]:
-                        reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < near
-            for k in range(n):
-                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[k]
+    _initial_candidates(x0, n, prm, face_cand, corner_cand, reach)
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
