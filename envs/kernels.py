@@ -94,9 +94,8 @@ def default_options() -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _frame(j, th):
-    s = math.sin(th)
-    c = math.cos(th)
+def _frame(j, s, c):
+    """Unit axis (ex, ey) and inward normal (nx, ny) of finger j at sin/cos of its angle."""
     if j == 0:
         return s, c, -c, s  # ex, ey, nx, ny
     return -s, c, c, s
@@ -118,17 +117,17 @@ def _band_index(n):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _finger_coords(q, i, j, th, prm):
+def _finger_coords(q, i, j, sj, cj, prm):
     """Frame of finger j and the coordinates (s along the bar, m along the inward normal) of
     point i relative to its joint."""
-    ex, ey, nx, ny = _frame(j, th)
+    ex, ey, nx, ny = _frame(j, sj, cj)
     vx = q[i, 0] + prm[P_C0X + 2 * j]
     vy = q[i, 1] + prm[P_C0X + 2 * j + 1]
     return ex, ey, nx, ny, ex * vx + ey * vy, nx * vx + ny * vy
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _face_eval(q, i, j, th, prm, grad, hess):
+def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     """Gap of point i to the body of finger j: value, local grad/Hessian over (qx, qy, theta).
 
     The body is the bar 0 <= s <= l, |m| <= w/2 in finger coordinates (s along the axis, m
@@ -137,13 +136,14 @@ def _face_eval(q, i, j, th, prm, grad, hess):
     outside the body: the gripping face (m = w/2), the tip and root ends and the back of the
     bar, which a disk wrapping round a finger tip can reach.
     """
-    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, th, prm)
+    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
     hc = prm[P_HW] - rho
     for a in range(3):
         grad[a] = 0.0
-        for b in range(3):
-            hess[a, b] = 0.0
+        if want_hess:
+            for b in range(3):
+                hess[a, b] = 0.0
     ds = s - min(max(s, 0.0), prm[P_LMAX])
     dm = m - min(max(m, -hc), hc)
     # derivatives of s and m: ds/dq = e, dm/dq = n, ds/dth = -m, dm/dth = s,
@@ -178,6 +178,8 @@ def _face_eval(q, i, j, th, prm, grad, hess):
     grad[0] = g_s * as0 + g_m * am0
     grad[1] = g_s * as1 + g_m * am1
     grad[2] = g_s * as2 + g_m * am2
+    if not want_hess:
+        return dist - rho
     # second derivatives: sum of g_ab grad(a) grad(b)^T plus g_s Hess(s) + g_m Hess(m)
     sv = (as0, as1, as2)
     mv = (am0, am1, am2)
@@ -197,7 +199,7 @@ def _face_eval(q, i, j, th, prm, grad, hess):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _corner_eval(q, k, j, th, c, prm, grad, hess, want_hess):
+def _corner_eval(q, k, j, sj, cj, c, prm, grad, hess, want_hess):
     """Rounded corner c of finger j vs contour edge k -> k+1.
 
     Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back of the bar.
@@ -210,7 +212,7 @@ def _corner_eval(q, k, j, th, c, prm, grad, hess, want_hess):
     """
     n = q.shape[0]
     k1 = k + 1 if k + 1 < n else 0
-    ex, ey, nx, ny = _frame(j, th)
+    ex, ey, nx, ny = _frame(j, sj, cj)
     rho = prm[P_RHO]
     sc = prm[P_LMAX] if c % 2 == 0 else 0.0
     hw = prm[P_HW] - rho  # centre of the rounded corner, in finger coordinates (sc, hw)
@@ -436,9 +438,9 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _face_gap(q, i, j, th, prm):
+def _face_gap(q, i, j, sj, cj, prm):
     """Value of :func:`_face_eval` only."""
-    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, th, prm)
+    ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
     hc = prm[P_HW] - rho
     ds = s - min(max(s, 0.0), prm[P_LMAX])
@@ -461,30 +463,37 @@ def _seg_dist(q, k, px, py):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _corner_gap(q, k, j, th, c, prm):
+def _corner_gap(q, k, j, sj, cj, c, prm):
     """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
-    kx, ky = _corner_centre(j, th, c, prm)
+    kx, ky = _corner_centre(j, sj, cj, c, prm)
     return _seg_dist(q, k, kx, ky) - prm[P_RHO]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _con_value(kind, j, idx, x, q, n, prm):
-    """Value of constraint (kind, j, idx) only (line searches, candidate checks)."""
-    th = x[2 * n + j]
-    if kind == 0:
-        return _face_gap(q, idx, j, th, prm)
-    if kind == 1:
-        c = idx // n
-        return _corner_gap(q, idx - c * n, j, th, c, prm)
-    return th - prm[P_THMIN]
+def _trig(x, n):
+    """Sines and cosines of the two finger angles of state x (computed once per pass)."""
+    return ((math.sin(x[2 * n]), math.sin(x[2 * n + 1])),
+            (math.cos(x[2 * n]), math.cos(x[2 * n + 1])))
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _con_eval(kind, j, idx, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
+def _con_value(kind, j, idx, x, q, n, prm, sn, cs):
+    """Value of constraint (kind, j, idx) only (line searches, candidate checks); ``sn``, ``cs``
+    hold the sines and cosines of the finger angles (:func:`_trig`)."""
+    if kind == 0:
+        return _face_gap(q, idx, j, sn[j], cs[j], prm)
+    if kind == 1:
+        c = idx // n
+        return _corner_gap(q, idx - c * n, j, sn[j], cs[j], c, prm)
+    return x[2 * n + j] - prm[P_THMIN]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _con_eval(kind, j, idx, x, q, n, prm, sn, cs, grad5, hess5, dofs, want_hess=True):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
     if kind == 0:
-        g = _face_eval(q, idx, j, th, prm, grad5, hess5)
+        g = _face_eval(q, idx, j, sn[j], cs[j], prm, grad5, hess5, want_hess)
         dofs[0] = 2 * idx
         dofs[1] = 2 * idx + 1
         dofs[2] = 2 * n + j
@@ -492,7 +501,7 @@ def _con_eval(kind, j, idx, x, q, n, prm, grad5, hess5, dofs, want_hess=True):
     if kind == 1:
         c = idx // n
         k = idx - c * n
-        g = _corner_eval(q, k, j, th, c, prm, grad5, hess5, want_hess)
+        g = _corner_eval(q, k, j, sn[j], cs[j], c, prm, grad5, hess5, want_hess)
         k1 = k + 1 if k + 1 < n else 0
         dofs[0] = 2 * k
         dofs[1] = 2 * k + 1
@@ -520,8 +529,9 @@ def _to_band(d, n, bidx):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
     q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for m in range(kinds.shape[0]):
-        gout[m] = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+        gout[m] = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
 
 
 # --------------------------------------------------------------------------------------------
@@ -604,9 +614,9 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _corner_centre(j, th, c, prm):
+def _corner_centre(j, sj, cj, c, prm):
     """Centre of the rounded corner c of finger j (disk-centred, units of r)."""
-    ex, ey, nx, ny = _frame(j, th)
+    ex, ey, nx, ny = _frame(j, sj, cj)
     sc = prm[P_LMAX] if c % 2 == 0 else 0.0
     hc = prm[P_HW] - prm[P_RHO]
     if c >= 2:
@@ -630,13 +640,13 @@ def _inside(q, n, px, py):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _bar_crossed(q, n, j, th, prm):
+def _bar_crossed(q, n, j, sj, cj, prm):
     """Does a contour edge cross the axis of finger j (the bar runs right through the disk)?
 
     Every point outside the bar and every corner outside the contour do not exclude an edge
     with one end in front of the bar and the other behind it.
     """
-    ex, ey, _, _ = _frame(j, th)
+    ex, ey, _, _ = _frame(j, sj, cj)
     ax = -prm[P_C0X + 2 * j]
     ay = -prm[P_C0X + 2 * j + 1]
     bx = ax + prm[P_LMAX] * ex
@@ -661,12 +671,12 @@ def _crossed_through(x, n, prm):
     of its corners inside the contour), where every gap is positive again?"""
     nb = 2 * n
     q = x[:nb].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for j in range(2):
-        th = x[nb + j]
-        if _bar_crossed(q, n, j, th, prm):
+        if _bar_crossed(q, n, j, sn[j], cs[j], prm):
             return True
         for c in range(4):
-            kx, ky = _corner_centre(j, th, c, prm)
+            kx, ky = _corner_centre(j, sn[j], cs[j], c, prm)
             if _inside(q, n, kx, ky):
                 return True
     return False
@@ -680,12 +690,13 @@ def _tunnels(x, xt, n, prm):
     can jump across a constraint and land where every gap is positive again. Rejected: a corner
     ending inside the contour, a point crossing a finger's axis line along the bar.
     """
-    nb = 2 * n
     if _crossed_through(xt, n, prm):
         return True
+    sn0, cs0 = _trig(x, n)
+    sn1, cs1 = _trig(xt, n)
     for j in range(2):
-        ex0, ey0, nx0, ny0 = _frame(j, x[nb + j])
-        ex1, ey1, nx1, ny1 = _frame(j, xt[nb + j])
+        ex0, ey0, nx0, ny0 = _frame(j, sn0[j], cs0[j])
+        ex1, ey1, nx1, ny1 = _frame(j, sn1[j], cs1[j])
         cx = prm[P_C0X + 2 * j]
         cy = prm[P_C0X + 2 * j + 1]
         lmax = prm[P_LMAX]
@@ -755,11 +766,12 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
     kmax = max(prm[P_KC], prm[P_KR])
     blk = hess5  # the block is built in place of the constraint Hessian (lower triangle)
     q = x[:nb].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for m in range(mcount):
         # a far constraint: its matrix block is below round-off of the springs (g_out holds
         # the gaps at x on entry: every caller evaluates them just before)
         block = sig[m] + abs(lam[m]) / max(g_out[m], 1e-300) >= 1e-9 * kmax
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
                           block)
         g_out[m] = g
         w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
@@ -825,8 +837,9 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
 def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for m in range(mcount):
-        g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+        g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
         gbuf[m] = g
         if not g > 0.0:
             return math.inf
@@ -840,8 +853,9 @@ def _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, d
     # gradient only: the matrix arguments are not touched
     _spring_terms(x, n, prm, dofs, res, hess5, hess5, hess5, False)
     q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for m in range(mcount):
-        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
+        g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
                           False)
         gbuf[m] = g
         for a in range(nd):
@@ -925,6 +939,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
                 done = True
                 break
+
             if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
                 mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
                 # active gaps scale with mu: let them shrink by that factor in one step
@@ -1016,9 +1031,10 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             return LINESEARCH_FAIL, it
         # multiplier step: Newton direction at the old point, its own fraction-to-boundary step
         q = x[:nb].reshape(n, 2)
+        sn, cs = _trig(x, n)
         alpha_d = 1.0
         for m in range(mcount):
-            _, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, grad5, hess5, dofs,
+            _, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
                               False)
             dl = 0.0
             for a in range(nd):
@@ -1049,8 +1065,9 @@ def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
     """
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
     for m in range(mcount):
-        gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+        gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
         if active[m]:
             e += gm * (0.5 * rho * gm - lam[m])
         elif gm < min(g_ref[m], 0.0) - 1e-12:
@@ -1112,8 +1129,9 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     for _outer in range(40):
         work_it[0] += 1
+        sn, cs = _trig(x, n)
         for m in range(mcount):
-            gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+            gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
             g[m] = gm
             if active[m]:
                 sig[m] = rho
@@ -1156,9 +1174,11 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             for d in range(nx):
                 xt[d] = x[d] + 2.0 * alpha * step[d]
             qt = xt[:nb].reshape(n, 2)
+            snt, cst = _trig(xt, n)
             for m in range(mcount):
                 if not active[m]:
-                    if _con_value(kinds[m], fj[m], fidx[m], xt, qt, n, prm) < min(g[m], 0.0):
+                    gm = _con_value(kinds[m], fj[m], fidx[m], xt, qt, n, prm, snt, cst)
+                    if gm < min(g[m], 0.0):
                         active[m] = True
                         lam[m] = 0.0
             for d in range(nx):
@@ -1166,9 +1186,10 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         for d in range(nx):
             x[d] = xt[d]
         # multiplier update
+        sn, cs = _trig(x, n)
         for m in range(mcount):
             if active[m]:
-                gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm)
+                gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
                 lam[m] = lam[m] - rho * gm
         kkt = _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, g, grad5, hess5, dofs,
                             res)
@@ -1256,14 +1277,15 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach):
     """
     nb = 2 * n
     q0 = x0[:nb].reshape(n, 2)
+    sn, cs = _trig(x0, n)
     for j in range(2):
         th = x0[nb + j]
         for i in range(n):
             # every point: a far one costs a little, a late one a whole extra round
-            face_cand[j, i] = _face_gap(q0, i, j, th, prm) > 1e-12
+            face_cand[j, i] = _face_gap(q0, i, j, sn[j], cs[j], prm) > 1e-12
         for c in range(4):
             for k in range(n):
-                corner_cand[j, c, k] = _corner_gap(q0, k, j, th, c, prm) > 1e-12
+                corner_cand[j, c, k] = _corner_gap(q0, k, j, sn[j], cs[j], c, prm) > 1e-12
             if c % 2 == 0 and prm[P_POLICY] > 0.0:
                 continue  # policy 1, tip corners: every edge clear of them at the start
             # edges near the arc the corner sweeps as the finger closes (centres computed once
@@ -1272,12 +1294,58 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach):
                 reach[k] = False
             for t in range(CORNER_SWEEP):
                 ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                kx, ky = _corner_centre(j, ths, c, prm)
+                kx, ky = _corner_centre(j, math.sin(ths), math.cos(ths), c, prm)
                 for k in range(n):
                     if corner_cand[j, c, k] and not reach[k]:
-                        reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
+                        # cheap reject first: the corner is far from the edge's bounding circle
+                        k1 = k + 1 if k + 1 < n else 0
+                        mx = 0.5 * (q0[k, 0] + q0[k1, 0]) - kx
+                        my = 0.5 * (q0[k, 1] + q0[k1, 1]) - ky
+                        ex = q0[k1, 0] - q0[k, 0]
+                        ey = q0[k1, 1] - q0[k, 1]
+                        far = 0.5 * math.sqrt(ex * ex + ey * ey) + prm[P_RHO] + CORNER_NEAR
+                        if mx * mx + my * my < far * far:
+                            reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
             for k in range(n):
                 corner_cand[j, c, k] = corner_cand[j, c, k] and reach[k]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
+    """Add the constraints left out at the start point ``x0`` that the answer ``xs`` of a round
+    touches or has crossed (and, after a blocked run, the corner edges just short of it).
+    Returns whether any was added."""
+    nb = 2 * n
+    changed = False
+    q = xs[:nb].reshape(n, 2)
+    q0 = x0[:nb].reshape(n, 2)
+    sn, cs = _trig(xs, n)
+    sn0, cs0 = _trig(x0, n)
+    for j in range(2):
+        for i in range(n):
+            if not face_cand[j, i]:
+                g = _face_gap(q, i, j, sn[j], cs[j], prm)
+                if g < 1e-9:
+                    g0 = _face_gap(q0, i, j, sn0[j], cs0[j], prm)
+                    if g0 > 1e-12:
+                        face_cand[j, i] = True
+                        changed = True
+        for c in range(4):
+            # edges left out at the start that the corner now touches or crossed
+            kx, ky = _corner_centre(j, sn[j], cs[j], c, prm)
+            crossed = _inside(q, n, kx, ky)
+            # a blocked interior-point run stopped short of the edge that holds it back
+            near_hit = CORNER_NEAR if crossed else 0.02
+            for k in range(n):
+                if corner_cand[j, c, k]:
+                    continue
+                g = _corner_gap(q, k, j, sn[j], cs[j], c, prm)
+                if g < 1e-9 or ((crossed or blocked) and g < near_hit):
+                    g0 = _corner_gap(q0, k, j, sn0[j], cs0[j], c, prm)
+                    if g0 > 1e-12:
+                        corner_cand[j, c, k] = True
+                        changed = True
+    return changed
 
 
 @njit(cache=True, error_model="numpy")
@@ -1351,7 +1419,6 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     prm[P_POLICY] = policy
     bidx = _band_index(n)
     x0 = x.copy()
-    q0 = x0[:nb].reshape(n, 2)
     mmax = 10 * n + 2
     kinds = np.zeros(mmax, dtype=np.int64)
     fj = np.zeros(mmax, dtype=np.int64)
@@ -1443,33 +1510,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                                  fscale, active, work_it, gbuf, stable_out)
             stable = stable_out[0]
         # check the candidate set against the solution
-        changed = False
-        q = xs[:nb].reshape(n, 2)
-        for j in range(2):
-            th = xs[nb + j]
-            for i in range(n):
-                if not face_cand[j, i]:
-                    g = _face_gap(q, i, j, th, prm)
-                    if g < 1e-9:
-                        g0 = _face_gap(q0, i, j, x0[nb + j], prm)
-                        if g0 > 1e-12:
-                            face_cand[j, i] = True
-                            changed = True
-            for c in range(4):
-                # edges left out at the start that the corner now touches or crossed
-                kx, ky = _corner_centre(j, th, c, prm)
-                crossed = _inside(q, n, kx, ky)
-                # a blocked interior-point run stopped short of the edge that holds it back
-                near_hit = CORNER_NEAR if crossed else 0.02
-                for k in range(n):
-                    if corner_cand[j, c, k]:
-                        continue
-                    g = _corner_gap(q, k, j, th, c, prm)
-                    if g < 1e-9 or ((crossed or blocked) and g < near_hit):
-                        g0 = _corner_gap(q0, k, j, x0[nb + j], c, prm)
-                        if g0 > 1e-12:
-                            corner_cand[j, c, k] = True
-                            changed = True
+        changed = _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked)
         if status == POLISH_FAIL or (blocked and not changed):
             # keep the interior-point answer; the caller reports the reason
             break
@@ -1561,9 +1602,10 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     if status == OK:
         # final guard over every point and corner, candidates or not
         q = xs[:nb].reshape(n, 2)
+        sn, cs = _trig(xs, n)
         for j in range(2):
             for i in range(n):
-                if _face_gap(q, i, j, xs[nb + j], prm) < -1e-9:
+                if _face_gap(q, i, j, sn[j], cs[j], prm) < -1e-9:
                     status = PENETRATION
         if _crossed_through(xs, n, prm):
             status = PENETRATION

@@ -64,6 +64,11 @@ def test_contour_stiffness_ratio_scales_only_the_contour_springs(rule):
     assert k_ext / k_int == pytest.approx(2.5 * ke / ki, rel=1e-15)
 
 
+def _sc(th):
+    """The kernels take a finger angle as its sine and cosine."""
+    return np.sin(th), np.cos(th)
+
+
 def _state(n=12, seed=0):
     rng = np.random.default_rng(seed)
     prob = scaled_problem(Scene.preset("paper-r070"), 0.3, n)
@@ -111,14 +116,17 @@ def test_face_constraint_derivatives(sc_kind):
         qq = q.copy()
         qq[i] = z[:2]
         g5, h5 = np.zeros(5), np.zeros((5, 5))
-        val = K._face_eval(qq, i, j, z[2], prm, g5, h5)
+        val = K._face_eval(qq, i, j, *_sc(z[2]), prm, g5, h5, True)
         return val, g5[:3].copy()
 
     z = np.array([q[i, 0], q[i, 1], x[2 * n + j]])
     g5, h5 = np.zeros(5), np.zeros((5, 5))
-    val = K._face_eval(q, i, j, z[2], prm, g5, h5)
+    val = K._face_eval(q, i, j, *_sc(z[2]), prm, g5, h5, True)
     assert val > 0
-    assert K._face_gap(q, i, j, z[2], prm) == pytest.approx(val, abs=1e-15)
+    assert K._face_gap(q, i, j, *_sc(z[2]), prm) == pytest.approx(val, abs=1e-15)
+    g_only = np.zeros(5)
+    K._face_eval(q, i, j, *_sc(z[2]), prm, g_only, np.zeros((5, 5)), False)
+    np.testing.assert_allclose(g_only, g5, atol=1e-15)
     _fd_check(fun, z, g5[:3], h5[:3, :3])
 
 
@@ -136,15 +144,15 @@ def test_corner_constraint_derivatives(c, k):
         qq[k] = z[:2]
         qq[(k + 1) % n] = z[2:4]
         g5, h5 = np.zeros(5), np.zeros((5, 5))
-        val = K._corner_eval(qq, k, j, z[4], c, prob.params, g5, h5, True)
+        val = K._corner_eval(qq, k, j, *_sc(z[4]), c, prob.params, g5, h5, True)
         return val, g5.copy()
 
     z = np.array([*q[k], *q[(k + 1) % n], x[2 * n + j]])
     g5, h5 = np.zeros(5), np.zeros((5, 5))
-    val = K._corner_eval(q, k, j, z[4], c, prob.params, g5, h5, True)
-    assert K._corner_gap(q, k, j, z[4], c, prob.params) == pytest.approx(val, abs=1e-13)
+    val = K._corner_eval(q, k, j, *_sc(z[4]), c, prob.params, g5, h5, True)
+    assert K._corner_gap(q, k, j, *_sc(z[4]), c, prob.params) == pytest.approx(val, abs=1e-13)
     g_only = np.zeros(5)
-    K._corner_eval(q, k, j, z[4], c, prob.params, g_only, np.zeros((5, 5)), False)
+    K._corner_eval(q, k, j, *_sc(z[4]), c, prob.params, g_only, np.zeros((5, 5)), False)
     np.testing.assert_allclose(g_only, g5, atol=1e-15)
     _fd_check(fun, z, g5, h5)
 
