@@ -540,39 +540,60 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _chol_band(ab, lb, nb, shift):
+    """Banded Cholesky of A + shift I (lower band of A in ``ab``); ``lb`` gets the factor with
+    the reciprocal of each diagonal entry in column 0 (multiplications, not divisions, in the
+    dependent chains of the solves). Returns False if the matrix is not positive definite."""
     for p in range(nb):
+        lo = max(0, p - BW)
         for k in range(BW, 0, -1):
             c = p - k
             if c < 0:
                 lb[p, k] = 0.0
                 continue
             acc = ab[p, k]
-            lo = max(0, p - BW)
-            for m in range(max(lo, c - BW), c):
+            for m in range(lo, c):
                 acc -= lb[p, p - m] * lb[c, c - m]
-            lb[p, k] = acc / lb[c, 0]
+            lb[p, k] = acc * lb[c, 0]
         acc = ab[p, 0] + shift
-        for m in range(max(0, p - BW), p):
+        for m in range(lo, p):
             v = lb[p, p - m]
             acc -= v * v
         if not acc > 0.0:
             return False
-        lb[p, 0] = math.sqrt(acc)
+        lb[p, 0] = 1.0 / math.sqrt(acc)
     return True
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _solve_band(lb, nb, rhs, out):
+def _solve_band3(lb, nb, bb, rb, ybuf, out):
+    """Solve L L^T [Y | z] = [B | r] for the two border columns B and the right-hand side r in
+    one sweep (three independent chains)."""
     for p in range(nb):
-        acc = rhs[p]
+        a0 = bb[p, 0]
+        a1 = bb[p, 1]
+        a2 = rb[p]
         for m in range(max(0, p - BW), p):
-            acc -= lb[p, p - m] * out[m]
-        out[p] = acc / lb[p, 0]
+            v = lb[p, p - m]
+            a0 -= v * ybuf[m, 0]
+            a1 -= v * ybuf[m, 1]
+            a2 -= v * out[m]
+        d = lb[p, 0]
+        ybuf[p, 0] = a0 * d
+        ybuf[p, 1] = a1 * d
+        out[p] = a2 * d
     for p in range(nb - 1, -1, -1):
-        acc = out[p]
+        a0 = ybuf[p, 0]
+        a1 = ybuf[p, 1]
+        a2 = out[p]
         for m in range(p + 1, min(nb, p + BW + 1)):
-            acc -= lb[m, m - p] * out[m]
-        out[p] = acc / lb[p, 0]
+            v = lb[m, m - p]
+            a0 -= v * ybuf[m, 0]
+            a1 -= v * ybuf[m, 1]
+            a2 -= v * out[m]
+        d = lb[p, 0]
+        ybuf[p, 0] = a0 * d
+        ybuf[p, 1] = a1 * d
+        out[p] = a2 * d
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -580,10 +601,7 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
     """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
     if not _chol_band(ab, lb, nb, shift):
         return False
-    for c in range(2):
-        for p in range(nb):
-            tmp[p] = bb[p, c]
-        _solve_band(lb, nb, tmp, ybuf[:, c])
+    _solve_band3(lb, nb, bb, rb, ybuf, out_b)
     s00 = dd[0, 0] + shift
     s11 = dd[1, 1] + shift
     s01 = dd[0, 1]
@@ -594,7 +612,6 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
     det = s00 * s11 - s01 * s01
     if not (s00 > 0.0 and det > 1e-300 * max(1.0, s00 * s11) and det > 0.0):
         return False
-    _solve_band(lb, nb, rb, out_b)
     r0 = rt[0]
     r1 = rt[1]
     for p in range(nb):
