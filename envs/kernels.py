@@ -791,11 +791,15 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
                           block)
         g_out[m] = g
-        w = barrier_mu / g if barrier_mu > 0.0 else lam[m]
+        inv_g = 1.0 / g
+        w = barrier_mu * inv_g if barrier_mu > 0.0 else lam[m]
+        lm = lam[m]
         for a in range(nd):
-            grad[dofs[a]] -= w * grad5[a]
-            res[dofs[a]] -= lam[m] * grad5[a]
-            gb[dofs[a]] += grad5[a] / g
+            d = dofs[a]
+            ga = grad5[a]
+            grad[d] -= w * ga
+            res[d] -= lm * ga
+            gb[d] += ga * inv_g
         if not block:
             continue
         # constraint curvature; dropped in the convexified fallback, where the curved
@@ -852,16 +856,29 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
+    """Barrier merit Pi(x) - mu sum log g (inf outside the constraints); gaps into ``gbuf``.
+
+    The logarithms are taken of products of up to 8 gaps (a gap lies between about 1e-20 and
+    10, so a product neither under- nor overflows): half the cost of the merit was ``log``.
+    """
     e = _energy(x, n, prm)
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
+    logs = 0.0
+    prod = 1.0
+    cnt = 0
     for m in range(mcount):
         g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
         gbuf[m] = g
         if not g > 0.0:
             return math.inf
-        e -= mu * math.log(g)
-    return e
+        prod *= g
+        cnt += 1
+        if cnt == 8 or prod < 1e-200 or prod > 1e200:
+            logs += math.log(prod)
+            prod = 1.0
+            cnt = 0
+    return e - mu * (logs + math.log(prod))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -1286,15 +1303,25 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach):
+def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges):
     """Candidate constraints at the start point ``x0`` (see :func:`solve_one` for the policies).
 
     Every point against each finger body; each corner against the contour edges near the arc
     it sweeps as its finger closes (all edges clear of it for the tip corners of policy 1).
+    Work arrays: ``reach`` bool (4, n), ``edges`` float (n, 3).
     """
     nb = 2 * n
     q0 = x0[:nb].reshape(n, 2)
     sn, cs = _trig(x0, n)
+    for k in range(n):
+        # each edge's bounding circle grown by the corner radius and the band: a cheap reject
+        k1 = k + 1 if k + 1 < n else 0
+        ex = q0[k1, 0] - q0[k, 0]
+        ey = q0[k1, 1] - q0[k, 1]
+        edges[k, 0] = 0.5 * (q0[k, 0] + q0[k1, 0])
+        edges[k, 1] = 0.5 * (q0[k, 1] + q0[k1, 1])
+        far = 0.5 * math.sqrt(ex * ex + ey * ey) + prm[P_RHO] + CORNER_NEAR
+        edges[k, 2] = far * far
     for j in range(2):
         th = x0[nb + j]
         for i in range(n):
@@ -1303,28 +1330,28 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach):
         for c in range(4):
             for k in range(n):
                 corner_cand[j, c, k] = _corner_gap(q0, k, j, sn[j], cs[j], c, prm) > 1e-12
-            if c % 2 == 0 and prm[P_POLICY] > 0.0:
-                continue  # policy 1, tip corners: every edge clear of them at the start
-            # edges near the arc the corner sweeps as the finger closes (centres computed once
-            # per sample of the arc)
-            for k in range(n):
-                reach[k] = False
-            for t in range(CORNER_SWEEP):
-                ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-                kx, ky = _corner_centre(j, math.sin(ths), math.cos(ths), c, prm)
+                reach[c, k] = False
+        # edges near the arc each corner sweeps as the finger closes (policy 1: every edge
+        # clear of the tip corners at the start)
+        for t in range(CORNER_SWEEP):
+            ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
+            st = math.sin(ths)
+            ct = math.cos(ths)
+            for c in range(4):
+                if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                    continue
+                kx, ky = _corner_centre(j, st, ct, c, prm)
                 for k in range(n):
-                    if corner_cand[j, c, k] and not reach[k]:
-                        # cheap reject first: the corner is far from the edge's bounding circle
-                        k1 = k + 1 if k + 1 < n else 0
-                        mx = 0.5 * (q0[k, 0] + q0[k1, 0]) - kx
-                        my = 0.5 * (q0[k, 1] + q0[k1, 1]) - ky
-                        ex = q0[k1, 0] - q0[k, 0]
-                        ey = q0[k1, 1] - q0[k, 1]
-                        far = 0.5 * math.sqrt(ex * ex + ey * ey) + prm[P_RHO] + CORNER_NEAR
-                        if mx * mx + my * my < far * far:
-                            reach[k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
+                    if corner_cand[j, c, k] and not reach[c, k]:
+                        mx = edges[k, 0] - kx
+                        my = edges[k, 1] - ky
+                        if mx * mx + my * my < edges[k, 2]:
+                            reach[c, k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
+        for c in range(4):
+            if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                continue
             for k in range(n):
-                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[k]
+                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[c, k]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -1451,8 +1478,8 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     # initial candidate sets, evaluated at the start point (the same band for every N: with
     # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
     # the paper sweep; an edge met outside it joins in a later round)
-    reach = np.zeros(n, dtype=np.bool_)
-    _initial_candidates(x0, n, prm, face_cand, corner_cand, reach)
+    _initial_candidates(x0, n, prm, face_cand, corner_cand, np.zeros((4, n), dtype=np.bool_),
+                        np.zeros((n, 3)))
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
