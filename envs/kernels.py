@@ -762,7 +762,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                   g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res):
+                   g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res, cg, cd):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
 
     With barrier_mu > 0 the returned gradient is that of Pi - mu sum log g; with barrier_mu = 0
@@ -791,6 +791,9 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
                           block)
         g_out[m] = g
+        for a in range(nd):
+            cg[m, a] = grad5[a]
+            cd[m, a] = dofs[a]
         inv_g = 1.0 / g
         w = barrier_mu * inv_g if barrier_mu > 0.0 else lam[m]
         lm = lam[m]
@@ -931,15 +934,17 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
     gb = np.zeros(nx)
+    cg = np.zeros((mcount, 5))
+    cd = np.zeros((mcount, 5), dtype=np.int64)
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
                      grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig,
-                     dlam, grad5, hess5, dofs, gb)
+                     dlam, grad5, hess5, dofs, gb, cg, cd)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
               grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig, dlam,
-              grad5, hess5, dofs, gb):
+              grad5, hess5, dofs, gb, cg, cd):
     nb = 2 * n
     nx = nb + 2
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
@@ -960,7 +965,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                       g, grad5, hess5, dofs, mu, False, gb, res)
+                       g, grad5, hess5, dofs, mu, False, gb, res, cg, cd)
         kkt = 0.0
         for d in range(nx):
             kkt = max(kkt, abs(res[d]))
@@ -1005,7 +1010,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                     work_it[0] += it
                     return SADDLE, it
             _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb,
-                           dd, g, grad5, hess5, dofs, mu, True, gb, res)
+                           dd, g, grad5, hess5, dofs, mu, True, gb, res, cg, cd)
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
@@ -1064,15 +1069,13 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             work_it[0] += it
             return LINESEARCH_FAIL, it
         # multiplier step: Newton direction at the old point, its own fraction-to-boundary step
-        q = x[:nb].reshape(n, 2)
-        sn, cs = _trig(x, n)
+        # (constraint gradients at x kept by _newton_matrix)
         alpha_d = 1.0
         for m in range(mcount):
-            _, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
-                              False)
+            nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
             dl = 0.0
             for a in range(nd):
-                dl += grad5[a] * step[dofs[a]]
+                dl += cg[m, a] * step[cd[m, a]]
             dlam[m] = mu / g[m] - lam[m] - sig[m] * dl
             if dlam[m] < 0.0:
                 alpha_d = min(alpha_d, -0.99 * lam[m] / dlam[m])
@@ -1141,15 +1144,17 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
+    cg = np.zeros((mcount, 5))
+    cd = np.zeros((mcount, 5), dtype=np.int64)
     return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
                         work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff,
-                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs)
+                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
                  grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff, res, res_p,
-                 gbuf_p, xt, step, grad5, hess5, dofs):
+                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd):
     nb = 2 * n
     nx = nb + 2
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
@@ -1174,7 +1179,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p)
+                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd)
         for d in range(nb):
             i = d // 2
             rb[bidx[i] + (d - 2 * i)] = -grad[d]
