@@ -685,16 +685,30 @@ def _bar_crossed(q, n, j, sj, cj, prm):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _crossed_through(x, n, prm):
     """Has a finger gone right through the disk in state x (an edge across its bar, or one
-    of its corners inside the contour), where every gap is positive again?"""
+    of its corners inside the contour), where every gap is positive again?
+
+    The contour lies in the circle about the pin through its farthest point: a corner or a bar
+    outside that circle is skipped without the O(N) tests.
+    """
     nb = 2 * n
     q = x[:nb].reshape(n, 2)
     sn, cs = _trig(x, n)
+    r2 = 0.0
+    for i in range(n):
+        r2 = max(r2, x[2 * i] * x[2 * i] + x[2 * i + 1] * x[2 * i + 1])
     for j in range(2):
-        if _bar_crossed(q, n, j, sn[j], cs[j], prm):
+        # distance from the pin to the axis segment of the bar
+        ex, ey, _, _ = _frame(j, sn[j], cs[j])
+        ax = -prm[P_C0X + 2 * j]
+        ay = -prm[P_C0X + 2 * j + 1]
+        t = min(max(-(ax * ex + ay * ey), 0.0), prm[P_LMAX])
+        px = ax + t * ex
+        py = ay + t * ey
+        if px * px + py * py <= r2 and _bar_crossed(q, n, j, sn[j], cs[j], prm):
             return True
         for c in range(4):
             kx, ky = _corner_centre(j, sn[j], cs[j], c, prm)
-            if _inside(q, n, kx, ky):
+            if kx * kx + ky * ky <= r2 and _inside(q, n, kx, ky):
                 return True
     return False
 
@@ -858,8 +872,9 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
-    """Barrier merit Pi(x) - mu sum log g (inf outside the constraints); gaps into ``gbuf``.
+def _merit(x, n, prm, kinds, fj, fidx, mcount, gbuf):
+    """Parts (Pi(x), sum log g) of the barrier merit Pi - mu sum log g ((inf, 0) outside the
+    constraints); gaps into ``gbuf``.
 
     The logarithms are taken of products of up to 8 gaps (a gap lies between about 1e-20 and
     10, so a product neither under- nor overflows): half the cost of the merit was ``log``.
@@ -874,14 +889,14 @@ def _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gbuf):
         g = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
         gbuf[m] = g
         if not g > 0.0:
-            return math.inf
+            return math.inf, 0.0
         prod *= g
         cnt += 1
         if cnt == 8 or prod < 1e-200 or prod > 1e200:
             logs += math.log(prod)
             prod = 1.0
             cnt = 0
-    return e - mu * (logs + math.log(prod))
+    return e, logs + math.log(prod)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -957,6 +972,9 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     it = 0
     n_neg = 0
     n_walled = 0
+    have_acc = False  # merit parts at x known (from the line search that reached x)
+    e_acc = 0.0
+    l_acc = 0.0
     _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
     while it < maxit:
         # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
@@ -1032,13 +1050,18 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
         if lim > 1.0:
             alpha = 1.0 / lim
-        phi0 = _merit(x, n, prm, kinds, fj, fidx, mcount, mu, gt)
+        if not have_acc:
+            e_acc, l_acc = _merit(x, n, prm, kinds, fj, fidx, mcount, gt)
+            have_acc = True
+        # the merit at x from its parts (kept from the step that reached x; mu may have moved)
+        phi0 = e_acc - mu * l_acc
         accepted = False
         walled = False
         for _ls in range(60):
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
-            phi = _merit(xt, n, prm, kinds, fj, fidx, mcount, mu, gt)
+            e_t, l_t = _merit(xt, n, prm, kinds, fj, fidx, mcount, gt)
+            phi = e_t - mu * l_t
             if phi < math.inf:
                 feasible = True
                 for m in range(mcount):
@@ -1050,6 +1073,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                     walled = True
                 if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
                     accepted = True
+                    e_acc = e_t
+                    l_acc = l_t
                     break
             alpha *= 0.5
         # a corner or a point held back only by the anti-tunnelling tests (a contact the
