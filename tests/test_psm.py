@@ -190,3 +190,99 @@ def test_band_ordering_keeps_neighbours_within_bandwidth():
         assert sorted(idx // 2) == list(range(n))
         for i in range(n):
             assert abs(idx[i] - idx[(i + 1) % n]) + 1 <= K.BW
+
+
+def _bordered_band_system(n, rng, diag_boost):
+    """A random symmetric matrix [[A, B], [B^T, D]] with A banded (half bandwidth BW) in the
+    kernels' storage, and the same matrix dense."""
+    nb = 2 * n
+    dense = np.zeros((nb + 2, nb + 2))
+    for p in range(nb):
+        for k in range(1, K.BW + 1):
+            if p - k >= 0:
+                dense[p, p - k] = dense[p - k, p] = rng.normal()
+    dense[:nb, nb:] = rng.normal(size=(nb, 2))
+    dense[nb:, :nb] = dense[:nb, nb:].T
+    dense[nb, nb + 1] = dense[nb + 1, nb] = rng.normal()
+    dense[np.diag_indices(nb + 2)] = diag_boost * (np.abs(dense).sum(axis=1) + 1.0)
+    ab = np.zeros((nb, K.BW + 1))
+    for p in range(nb):
+        for k in range(K.BW + 1):
+            if p - k >= 0:
+                ab[p, k] = dense[p, p - k]
+    return dense, ab, dense[:nb, nb:].copy(), dense[nb:, nb:].copy()
+
+
+@pytest.mark.parametrize("n", [4, 7, 20])
+def test_bordered_band_solve_matches_dense_solve(n):
+    # the Newton system: banded Cholesky of the contour block, 2x2 Schur complement of the angles
+    rng = np.random.default_rng(n)
+    nb = 2 * n
+    dense, ab, bb, dd = _bordered_band_system(n, rng, 1.0)
+    rhs = rng.normal(size=nb + 2)
+    shift = 0.3
+    out_b, out_t = np.zeros(nb), np.zeros(2)
+    ok = K._factor_solve(ab, bb, dd, np.zeros_like(ab), np.zeros((nb, 2)), nb, shift,
+                         rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t, np.zeros(nb))
+    assert ok
+    want = np.linalg.solve(dense + shift * np.eye(nb + 2), rhs)
+    np.testing.assert_allclose(np.concatenate([out_b, out_t]), want, rtol=1e-12, atol=1e-12)
+    # an indefinite matrix is refused (the caller then convexifies or shifts)
+    _, ab_bad, bb, dd = _bordered_band_system(n, rng, 1.0)
+    ab_bad[nb // 2, 0] = -5.0
+    assert not K._factor_solve(ab_bad, bb, dd, np.zeros_like(ab), np.zeros((nb, 2)), nb, 0.0,
+                               rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t, np.zeros(nb))
+
+
+def test_barrier_merit_parts_match_energy_and_log_gaps():
+    # the merit sums the logarithms of products of gaps: same value as the plain sum, tiny
+    # gaps included (no underflow)
+    n = 40
+    prob = scaled_problem(Scene.preset("paper-r070"), 0.3, n)
+    prm = prob.params
+    x = np.concatenate([rest_points(n).ravel(), [prm[K.P_TH0]] * 2])
+    kinds = np.zeros(2 * n, dtype=np.int64)
+    fj = np.repeat(np.arange(2), n).astype(np.int64)
+    fidx = np.tile(np.arange(n), 2).astype(np.int64)
+    gaps = np.zeros(2 * n)
+    e, logs = K._merit(x, n, prm, kinds, fj, fidx, 2 * n, gaps)
+    assert e == pytest.approx(K._energy(x, n, prm), rel=1e-15)
+    assert np.all(gaps > 0)
+    assert logs == pytest.approx(np.log(gaps).sum(), rel=1e-13)
+    # points facing the right finger's gripping face moved to within about 1e-13 r of it
+    q = x[: 2 * n].reshape(n, 2)
+    s_th, c_th = _sc(x[2 * n])
+    moved = []
+    for i in range(n):
+        _, _, nx, ny, s_bar, m_bar = K._finger_coords(q, i, 0, s_th, c_th, prm)
+        if 0.0 < s_bar < prm[K.P_LMAX] and m_bar > prm[K.P_HW]:
+            x[2 * i : 2 * i + 2] -= (gaps[i] - 1e-13 * (len(moved) + 1)) * np.array([nx, ny])
+            moved.append(i)
+    assert len(moved) >= 10
+    e, logs = K._merit(x, n, prm, kinds, fj, fidx, 2 * n, gaps)
+    assert gaps[moved].max() < 1e-11 and np.all(gaps > 0)
+    assert logs == pytest.approx(np.log(gaps).sum(), rel=1e-13)
+    x[2 * moved[0] : 2 * moved[0] + 2] -= 1e-3 * np.array([nx, ny])  # into the finger
+    assert K._merit(x, n, prm, kinds, fj, fidx, 2 * n, gaps)[0] == math.inf
+
+
+def test_crossed_through_shortcut_agrees_with_the_full_tests():
+    # corners and bars outside the circle holding the contour are skipped: same verdict as
+    # testing every corner and bar, on fingers swept through and past a deformed disk
+    prob, x = _state(n=20)
+    n, prm = prob.n, prob.params
+    q = x[: 2 * n].reshape(n, 2)
+    verdicts = set()
+    for th_r in np.linspace(-0.4, 1.2, 41):
+        for th_l in (-0.3, 0.2, 0.9):
+            x[2 * n :] = th_r, th_l
+            full = False
+            for j in range(2):
+                s, c = _sc(x[2 * n + j])
+                full |= K._bar_crossed(q, n, j, s, c, prm)
+                for corner in range(4):
+                    kx, ky = K._corner_centre(j, s, c, corner, prm)
+                    full |= K._inside(q, n, kx, ky)
+            assert K._crossed_through(x, n, prm) == full
+            verdicts.add(full)
+    assert verdicts == {True, False}
