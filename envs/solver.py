@@ -230,7 +230,9 @@ def result_from_scaled(
     converged = bool(solver_ok and report.passed and inverted == 0)
     if solver_ok and not report.passed:
         message = f"independent KKT check failed: {report.reason}"
-    elif solver_ok and inverted:
+    elif inverted and report.passed:
+        # a fold the check confirms is reported as such, even where the solver stopped short of
+        # its own (tighter) tolerance: the check has the final say
         message = kernels.STATUS_MESSAGES[kernels.INVERTED]
     return GraspResult(
         converged=converged,

@@ -8,9 +8,9 @@ import pytest
 from scipy.optimize import brentq
 
 from envs.kkt import kkt_check
-from envs.psm import rest_points
+from envs.psm import rest_points, scaled_problem
 from envs.scene import Scene, finger_frame
-from envs.solver import simulate, simulate_ramp
+from envs.solver import result_from_scaled, simulate, simulate_ramp
 
 R070 = Scene.preset("paper-r070")
 
@@ -284,3 +284,26 @@ def test_a_fold_is_reported_only_for_a_checked_equilibrium(name, torque, n):
     assert res.inverted_triangles > 0
     assert res.folded == ("inverted (folded)" in res.message)
     assert res.folded == res.kkt.passed
+
+
+def test_a_checked_fold_is_reported_as_a_fold_whatever_the_solver_claimed():
+    # the solver's own claim does not decide the message: a folded state the independent check
+    # confirms as an equilibrium is a fold, a state it rejects is not
+    scene = Scene.preset("paper-r070")
+    res = simulate(scene, 1.6, 20)
+    assert res.folded
+    n = res.n_triangles
+    prob = scaled_problem(scene, 1.6, n, "van_gelder", np.pi / 2)
+    x = np.concatenate([((res.points_m - scene.disk.center_m) / prob.length_m).ravel(),
+                        res.jaw_angles_rad])
+    args = (scene, prob, 1.6, x, res.contact_forces_n / prob.force_n,
+            res.corner_edge_forces_n / prob.force_n, res.stop_torques_nm / prob.torque_nm)
+    again = result_from_scaled(*args, False, "active-set polish did not reach the contact "
+                               "tolerance", 1, 0.0, "newton", "van_gelder")
+    assert again.folded and not again.converged
+    assert "inverted (folded)" in again.message
+    # the same state with the forces dropped is no equilibrium: not a fold, whatever it claims
+    bad = result_from_scaled(scene, prob, 1.6, x, 0.0 * args[4], 0.0 * args[5], 0.0 * args[6],
+                             True, "converged", 1, 0.0, "newton", "van_gelder")
+    assert not bad.folded and not bad.converged
+    assert "independent KKT check failed" in bad.message
