@@ -518,14 +518,6 @@ def _con_eval(kind, j, idx, x, q, n, prm, sn, cs, grad5, hess5, dofs, want_hess=
     return th - prm[P_THMIN], 1
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _to_band(d, n, bidx):
-    if d >= 2 * n:
-        return d
-    i = d // 2
-    return bidx[i] + (d - 2 * i)
-
-
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
     q = x[: 2 * n].reshape(n, 2)
@@ -597,7 +589,7 @@ def _solve_band3(lb, nb, bb, rb, ybuf, out):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, tmp):
+def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
     """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
     if not _chol_band(ab, lb, nb, shift):
         return False
@@ -685,14 +677,20 @@ def _bar_crossed(q, n, j, sj, cj, prm):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _crossed_through(x, n, prm):
     """Has a finger gone right through the disk in state x (an edge across its bar, or one
-    of its corners inside the contour), where every gap is positive again?
+    of its corners inside the contour), where every gap is positive again?"""
+    sn, cs = _trig(x, n)
+    return _crossed_through_sc(x, n, prm, sn, cs)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _crossed_through_sc(x, n, prm, sn, cs):
+    """:func:`_crossed_through` with the finger sines and cosines given.
 
     The contour lies in the circle about the pin through its farthest point: a corner or a bar
     outside that circle is skipped without the O(N) tests.
     """
     nb = 2 * n
     q = x[:nb].reshape(n, 2)
-    sn, cs = _trig(x, n)
     r2 = 0.0
     for i in range(n):
         r2 = max(r2, x[2 * i] * x[2 * i] + x[2 * i + 1] * x[2 * i + 1])
@@ -721,10 +719,10 @@ def _tunnels(x, xt, n, prm):
     can jump across a constraint and land where every gap is positive again. Rejected: a corner
     ending inside the contour, a point crossing a finger's axis line along the bar.
     """
-    if _crossed_through(xt, n, prm):
+    sn1, cs1 = _trig(xt, n)
+    if _crossed_through_sc(xt, n, prm, sn1, cs1):
         return True
     sn0, cs0 = _trig(x, n)
-    sn1, cs1 = _trig(xt, n)
     for j in range(2):
         ex0, ey0, nx0, ny0 = _frame(j, sn0[j], cs0[j])
         ex1, ey1, nx1, ny1 = _frame(j, sn1[j], cs1[j])
@@ -858,6 +856,16 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _rhs_to_band(grad, bidx, nb, rb, rt):
+    """Right-hand side -grad of the Newton system in band order (points) and angles."""
+    for d in range(nb):
+        i = d // 2
+        rb[bidx[i] + (d - 2 * i)] = -grad[d]
+    rt[0] = -grad[nb]
+    rt[1] = -grad[nb + 1]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _step_from_band(ob, ot, bidx, nb, grad, step):
     """Newton step in natural order from the banded solve; returns its slope grad . step."""
     for d in range(nb):
@@ -938,7 +946,6 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     ybuf = np.zeros((nb, 2))
     rb = np.zeros(nb)
     ob = np.zeros(nb)
-    tmp = np.zeros(nb)
     rt = np.zeros(2)
     ot = np.zeros(2)
     g = np.zeros(mcount)
@@ -952,13 +959,13 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
-                     grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig,
+                     grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig,
                      dlam, grad5, hess5, dofs, gb, cg, cd)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
-              grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, gt, sig, dlam,
+              grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
               grad5, hess5, dofs, gb, cg, cd):
     nb = 2 * n
     nx = nb + 2
@@ -996,7 +1003,6 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
                 done = True
                 break
-
             if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
                 mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
                 # active gaps scale with mu: let them shrink by that factor in one step
@@ -1010,13 +1016,9 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             work_it[0] += it
             return OK, it
         it += 1
-        for d in range(nb):
-            i = d // 2
-            rb[bidx[i] + (d - 2 * i)] = -grad[d]
-        rt[0] = -grad[nb]
-        rt[1] = -grad[nb + 1]
+        _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
-        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
         if ok:
             n_neg = 0
         else:
@@ -1029,11 +1031,11 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                     return SADDLE, it
             _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb,
                            dd, g, grad5, hess5, dofs, mu, True, gb, res, cg, cd)
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
             while not ok:
-                ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
                 if ok:
                     break
                 shift *= 8.0
@@ -1155,7 +1157,6 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     ybuf = np.zeros((nb, 2))
     rb = np.zeros(nb)
     ob = np.zeros(nb)
-    tmp = np.zeros(nb)
     rt = np.zeros(2)
     ot = np.zeros(2)
     g = np.zeros(mcount)
@@ -1172,13 +1173,13 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
     return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
-                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff,
+                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff,
                         res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
-                 grad, ab, lb, bb, dd, ybuf, rb, ob, tmp, rt, ot, g, sig, lam_eff, res, res_p,
+                 grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
                  gbuf_p, xt, step, grad5, hess5, dofs, cg, cd):
     nb = 2 * n
     nx = nb + 2
@@ -1205,19 +1206,15 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 lam_eff[m] = 0.0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
                        dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd)
-        for d in range(nb):
-            i = d // 2
-            rb[bidx[i] + (d - 2 * i)] = -grad[d]
-        rt[0] = -grad[nb]
-        rt[1] = -grad[nb + 1]
+        _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
-        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
         stable = ok
         while not ok:
             shift = max(shift * 8.0, 1e-8 * kscale)
             if shift > 1e6 * kscale:
                 return False, False
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot, tmp)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
         # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
         # step): a plain Newton step from an indefinite matrix can throw the iterate far off
         slope = _step_from_band(ob, ot, bidx, nb, grad, step)

@@ -178,7 +178,8 @@ def finger_frame(gripper: Gripper, side: int, angle_rad: float):
     side
         0 for the right finger, 1 for the left finger.
     angle_rad
-        Finger angle from the +y axis [rad].
+        Finger angle from the +y axis [rad]; an array of K angles gives ``axis`` and ``normal``
+        of shape (2, K).
 
     Returns
     -------
@@ -186,7 +187,7 @@ def finger_frame(gripper: Gripper, side: int, angle_rad: float):
         ``J`` [m], the unit vector ``e`` along the finger and the unit inward normal ``n`` of the
         gripping face.
     """
-    s, c = math.sin(angle_rad), math.cos(angle_rad)
+    s, c = np.sin(angle_rad), np.cos(angle_rad)
     if side == 0:
         return np.array([gripper.joint_offset_m, 0.0]), np.array([s, c]), np.array([-c, s])
     return np.array([-gripper.joint_offset_m, 0.0]), np.array([-s, c]), np.array([c, s])
@@ -207,15 +208,13 @@ def closed_angle_rad(gripper: Gripper) -> float:
 def _distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
     """Distance from ``point`` to the rectangular finger bar (negative inside is reported as 0).
 
-    ``angle_rad`` may be an array of finger angles: one distance per angle (the frames of
-    :func:`finger_frame`, written out so that they vectorize).
+    ``angle_rad`` may be an array of finger angles: one distance per angle.
     """
-    sin_a, cos_a = np.sin(angle_rad), np.cos(angle_rad)
-    sign = 1.0 if side == 0 else -1.0
-    rx = float(point[0]) - sign * gripper.joint_offset_m
-    ry = float(point[1])
-    s = sign * sin_a * rx + cos_a * ry  # along the axis e
-    m = -sign * cos_a * rx + sin_a * ry  # along the inward normal n
+    joint, axis, normal = finger_frame(gripper, side, angle_rad)
+    rx = float(point[0]) - joint[0]
+    ry = float(point[1]) - joint[1]
+    s = axis[0] * rx + axis[1] * ry  # along the axis e
+    m = normal[0] * rx + normal[1] * ry  # along the inward normal n
     hw = gripper.finger_width_m / 2
     ds = np.maximum(0.0, np.maximum(-s, s - gripper.finger_length_m))
     dm = np.maximum(0.0, np.maximum(m - hw, -hw - m))

@@ -62,7 +62,7 @@ def _psm_cell(scene: Scene, method: str, n: int, torque: float) -> dict:
     resid = max(kkt.force_residual_rel, kkt.moment_residual_rel) if kkt else math.nan
     return {"converged": bool(res.converged), "kkt_residual": float(resid), "time_s": wall,
             "stable": bool(res.stable), "message": res.message,
-            "folded": bool(getattr(res, "folded", False))}
+            "folded": res.folded}
 
 
 def _fem_cells(scene: Scene, rings: int, torques: tuple[float, ...]) -> list[dict]:

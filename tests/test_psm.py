@@ -223,7 +223,7 @@ def test_bordered_band_solve_matches_dense_solve(n):
     shift = 0.3
     out_b, out_t = np.zeros(nb), np.zeros(2)
     ok = K._factor_solve(ab, bb, dd, np.zeros_like(ab), np.zeros((nb, 2)), nb, shift,
-                         rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t, np.zeros(nb))
+                         rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t)
     assert ok
     want = np.linalg.solve(dense + shift * np.eye(nb + 2), rhs)
     np.testing.assert_allclose(np.concatenate([out_b, out_t]), want, rtol=1e-12, atol=1e-12)
@@ -231,7 +231,7 @@ def test_bordered_band_solve_matches_dense_solve(n):
     _, ab_bad, bb, dd = _bordered_band_system(n, rng, 1.0)
     ab_bad[nb // 2, 0] = -5.0
     assert not K._factor_solve(ab_bad, bb, dd, np.zeros_like(ab), np.zeros((nb, 2)), nb, 0.0,
-                               rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t, np.zeros(nb))
+                               rhs[:nb].copy(), rhs[nb:].copy(), out_b, out_t)
 
 
 def test_barrier_merit_parts_match_energy_and_log_gaps():
