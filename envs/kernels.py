@@ -532,60 +532,145 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _chol_band(ab, lb, nb, shift):
-    """Banded Cholesky of A + shift I (lower band of A in ``ab``); ``lb`` gets the factor with
-    the reciprocal of each diagonal entry in column 0 (multiplications, not divisions, in the
-    dependent chains of the solves). Returns False if the matrix is not positive definite."""
-    for p in range(nb):
-        lo = max(0, p - BW)
-        for k in range(BW, 0, -1):
-            c = p - k
-            if c < 0:
-                lb[p, k] = 0.0
-                continue
-            acc = ab[p, k]
-            for m in range(lo, c):
-                acc -= lb[p, p - m] * lb[c, c - m]
-            lb[p, k] = acc * lb[c, 0]
-        acc = ab[p, 0] + shift
-        for m in range(lo, p):
-            v = lb[p, p - m]
-            acc -= v * v
-        if not acc > 0.0:
+    """Banded Cholesky of A + shift I (lower band of A in ``ab``) by 2x2 blocks, one block a
+    point (the band ordering couples a point with the two before it); ``lb`` gets the scalar
+    factor with the reciprocal of each diagonal entry in column 0 (multiplications, not
+    divisions, in the dependent chains of the solves). Returns False if the matrix is not
+    positive definite."""
+    for b in range(nb // 2):
+        p0 = 2 * b
+        p1 = p0 + 1
+        # block (b, b-2) of the factor: X = A_{b,b-2} L_{b-2,b-2}^-T
+        x00 = 0.0
+        x01 = 0.0
+        x10 = 0.0
+        x11 = 0.0
+        if b >= 2:
+            c0 = p0 - 4
+            r0 = lb[c0, 0]
+            l10 = lb[c0 + 1, 1]
+            r1 = lb[c0 + 1, 0]
+            x00 = ab[p0, 4] * r0
+            x10 = ab[p1, 5] * r0
+            x01 = (ab[p0, 3] - x00 * l10) * r1
+            x11 = (ab[p1, 4] - x10 * l10) * r1
+        # block (b, b-1): Y = (A_{b,b-1} - X L_{b-1,b-2}^T) L_{b-1,b-1}^-T
+        y00 = 0.0
+        y01 = 0.0
+        y10 = 0.0
+        y11 = 0.0
+        if b >= 1:
+            c0 = p0 - 2
+            s00 = ab[p0, 2]
+            s01 = ab[p0, 1]
+            s10 = ab[p1, 3]
+            s11 = ab[p1, 2]
+            if b >= 2:
+                m00 = lb[c0, 2]
+                m01 = lb[c0, 1]
+                m10 = lb[c0 + 1, 3]
+                m11 = lb[c0 + 1, 2]
+                s00 -= x00 * m00 + x01 * m01
+                s01 -= x00 * m10 + x01 * m11
+                s10 -= x10 * m00 + x11 * m01
+                s11 -= x10 * m10 + x11 * m11
+            r0 = lb[c0, 0]
+            l10 = lb[c0 + 1, 1]
+            r1 = lb[c0 + 1, 0]
+            y00 = s00 * r0
+            y10 = s10 * r0
+            y01 = (s01 - y00 * l10) * r1
+            y11 = (s11 - y10 * l10) * r1
+        # diagonal block: A_bb - X X^T - Y Y^T, its own 2x2 Cholesky
+        d00 = ab[p0, 0] + shift - ((x00 * x00 + x01 * x01) + (y00 * y00 + y01 * y01))
+        if not d00 > 0.0:
             return False
-        lb[p, 0] = 1.0 / math.sqrt(acc)
+        r0 = 1.0 / math.sqrt(d00)
+        l10 = (ab[p1, 1] - ((x10 * x00 + x11 * x01) + (y10 * y00 + y11 * y01))) * r0
+        d11 = ab[p1, 0] + shift - ((x10 * x10 + x11 * x11) + (y10 * y10 + y11 * y11)) - l10 * l10
+        if not d11 > 0.0:
+            return False
+        lb[p0, 0] = r0
+        lb[p0, 1] = y01
+        lb[p0, 2] = y00
+        lb[p0, 3] = x01
+        lb[p0, 4] = x00
+        lb[p0, 5] = 0.0
+        lb[p1, 0] = 1.0 / math.sqrt(d11)
+        lb[p1, 1] = l10
+        lb[p1, 2] = y11
+        lb[p1, 3] = y10
+        lb[p1, 4] = x11
+        lb[p1, 5] = x10
     return True
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _solve_band3(lb, nb, bb, rb, ybuf, out):
     """Solve L L^T [Y | z] = [B | r] for the two border columns B and the right-hand side r in
-    one sweep (three independent chains)."""
-    for p in range(nb):
-        a0 = bb[p, 0]
-        a1 = bb[p, 1]
-        a2 = rb[p]
-        for m in range(max(0, p - BW), p):
-            v = lb[p, p - m]
+    one sweep (three independent chains), by the 2x2 blocks of :func:`_chol_band`."""
+    for b in range(nb // 2):
+        p0 = 2 * b
+        p1 = p0 + 1
+        a0 = bb[p0, 0]
+        a1 = bb[p0, 1]
+        a2 = rb[p0]
+        e0 = bb[p1, 0]
+        e1 = bb[p1, 1]
+        e2 = rb[p1]
+        # the two blocks before: row p0 reaches back 4 entries, row p1 (besides p0) 4 too
+        for m in range(max(0, p0 - 4), p0):
+            v = lb[p0, p0 - m]
+            w = lb[p1, p1 - m]
             a0 -= v * ybuf[m, 0]
             a1 -= v * ybuf[m, 1]
             a2 -= v * out[m]
-        d = lb[p, 0]
-        ybuf[p, 0] = a0 * d
-        ybuf[p, 1] = a1 * d
-        out[p] = a2 * d
-    for p in range(nb - 1, -1, -1):
-        a0 = ybuf[p, 0]
-        a1 = ybuf[p, 1]
-        a2 = out[p]
-        for m in range(p + 1, min(nb, p + BW + 1)):
-            v = lb[m, m - p]
+            e0 -= w * ybuf[m, 0]
+            e1 -= w * ybuf[m, 1]
+            e2 -= w * out[m]
+        d = lb[p0, 0]
+        a0 *= d
+        a1 *= d
+        a2 *= d
+        ybuf[p0, 0] = a0
+        ybuf[p0, 1] = a1
+        out[p0] = a2
+        l10 = lb[p1, 1]
+        d = lb[p1, 0]
+        ybuf[p1, 0] = (e0 - l10 * a0) * d
+        ybuf[p1, 1] = (e1 - l10 * a1) * d
+        out[p1] = (e2 - l10 * a2) * d
+    for b in range(nb // 2 - 1, -1, -1):
+        p0 = 2 * b
+        p1 = p0 + 1
+        a0 = ybuf[p0, 0]
+        a1 = ybuf[p0, 1]
+        a2 = out[p0]
+        e0 = ybuf[p1, 0]
+        e1 = ybuf[p1, 1]
+        e2 = out[p1]
+        # the two blocks after (rows p1 + 1 .. p1 + 4)
+        for m in range(p1 + 1, min(nb, p1 + 5)):
+            v = lb[m, m - p0]
+            w = lb[m, m - p1]
             a0 -= v * ybuf[m, 0]
             a1 -= v * ybuf[m, 1]
             a2 -= v * out[m]
-        d = lb[p, 0]
-        ybuf[p, 0] = a0 * d
-        ybuf[p, 1] = a1 * d
-        out[p] = a2 * d
+            e0 -= w * ybuf[m, 0]
+            e1 -= w * ybuf[m, 1]
+            e2 -= w * out[m]
+        d = lb[p1, 0]
+        e0 *= d
+        e1 *= d
+        e2 *= d
+        ybuf[p1, 0] = e0
+        ybuf[p1, 1] = e1
+        out[p1] = e2
+        l10 = lb[p1, 1]
+        d = lb[p0, 0]
+        ybuf[p0, 0] = (a0 - l10 * e0) * d
+        ybuf[p0, 1] = (a1 - l10 * e1) * d
+        out[p0] = (a2 - l10 * e2) * d
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
