@@ -1386,6 +1386,14 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     return POLISH_FAIL
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _gauge_force(x, prm):
+    """Magnitude of the gauge spring's force on point 0 at state x (scaled units)."""
+    tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
+    ut = (x[0] - ty) * tx + (x[1] + tx) * ty
+    return abs(prm[P_GAUGE] * ut)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
@@ -1587,6 +1595,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     work_it = np.zeros(1, dtype=np.int64)
     tau = prm[P_TAU]
     fscale = max(tau, prm[P_KAPPA] * abs(prm[P_TH0] - prm[P_THMIN]), 1e-300)
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
     # initial candidate sets, evaluated at the start point (the same band for every N: with
     # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
     # the paper sweep; an edge met outside it joins in a later round)
@@ -1661,12 +1670,27 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         active = np.zeros(mcount, dtype=np.bool_)
         for m in range(mcount):
             active[m] = lam[m] > gbuf[m] * fscale and gbuf[m] < 1e-5
-        if opts[O_POLISH] > 0.0 and not blocked:
+        skip_gauge_polish = False
+        if (opts[O_POLISH] > 0.0 and not blocked and prm[P_GAUGE] > 0.0
+                and _gauge_force(xs, prm) <= tol):
+            # the gauge holds nothing (a mirror-symmetric answer): the polish with it would
+            # solve the same equations as the one without it below; go straight there unless
+            # the candidate set changes (then polish as usual, for the next round's start)
+            face_keep = face_cand.copy()
+            corner_keep = corner_cand.copy()
+            if _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
+                face_cand[:, :] = face_keep
+                corner_cand[:, :, :] = corner_keep
+            else:
+                skip_gauge_polish = True
+        if opts[O_POLISH] > 0.0 and not blocked and not skip_gauge_polish:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                  fscale, active, work_it, gbuf, stable_out)
             stable = stable_out[0]
         # check the candidate set against the solution
-        changed = _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked)
+        changed = False
+        if not skip_gauge_polish:
+            changed = _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked)
         if status == POLISH_FAIL or (blocked and not changed):
             # keep the interior-point answer; the caller reports the reason
             break
@@ -1674,8 +1698,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # release the rotation gauge: Newton on the contact set without it (its reaction is
             # zero for a mirror-symmetric answer, small otherwise)
             prm[P_GAUGE] = 0.0
-            for m in range(mcount):
-                active[m] = lam[m] > 0.0
+            if not skip_gauge_polish:
+                for m in range(mcount):
+                    active[m] = lam[m] > 0.0
             xkeep = xs.copy()
             lkeep = lam.copy()
             good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
