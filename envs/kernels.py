@@ -1303,7 +1303,11 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
         # step): a plain Newton step from an indefinite matrix can throw the iterate far off
         slope = _step_from_band(ob, ot, bidx, nb, grad, step)
-        m0 = _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
+        # the merit at x from the gaps above (what _al_merit would evaluate again)
+        m0 = _energy(x, n, prm)
+        for m in range(mcount):
+            if active[m]:
+                m0 += g[m] * (0.5 * rho * g[m] - lam[m])
         alpha = 1.0
         hit = False
         for _ls in range(40):
@@ -1423,12 +1427,13 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges):
+def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep):
     """Candidate constraints at the start point ``x0`` (see :func:`solve_one` for the policies).
 
     Every point against each finger body; each corner against the contour edges near the arc
     it sweeps as its finger closes (all edges clear of it for the tip corners of policy 1).
-    Work arrays: ``reach`` bool (4, n), ``edges`` float (n, 3).
+    Work arrays: ``reach`` bool (4, n), ``edges`` float (n, 4), ``sweep`` float
+    (CORNER_SWEEP, 2).
     """
     nb = 2 * n
     q0 = x0[:nb].reshape(n, 2)
@@ -1452,21 +1457,37 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges):
                 corner_cand[j, c, k] = _corner_gap(q0, k, j, sn[j], cs[j], c, prm) > 1e-12
                 reach[c, k] = False
         # edges near the arc each corner sweeps as the finger closes (policy 1: every edge
-        # clear of the tip corners at the start)
+        # clear of the tip corners at the start), sampled; the samples lie on a circle about
+        # the joint, so an edge whose bounding circle misses that circle's ring is skipped
         for t in range(CORNER_SWEEP):
             ths = th + (prm[P_THMIN] - th) * t / (CORNER_SWEEP - 1)
-            st = math.sin(ths)
-            ct = math.cos(ths)
-            for c in range(4):
-                if c % 2 == 0 and prm[P_POLICY] > 0.0:
+            sweep[t, 0] = math.sin(ths)
+            sweep[t, 1] = math.cos(ths)
+        jx = -prm[P_C0X + 2 * j]
+        jy = -prm[P_C0X + 2 * j + 1]
+        for k in range(n):
+            mx = edges[k, 0] - jx
+            my = edges[k, 1] - jy
+            edges[k, 3] = math.sqrt(mx * mx + my * my)
+        for c in range(4):
+            if c % 2 == 0 and prm[P_POLICY] > 0.0:
+                continue
+            kx, ky = _corner_centre(j, sweep[0, 0], sweep[0, 1], c, prm)
+            rc = math.sqrt((kx - jx) * (kx - jx) + (ky - jy) * (ky - jy))
+            for k in range(n):
+                if not corner_cand[j, c, k]:
                     continue
-                kx, ky = _corner_centre(j, st, ct, c, prm)
-                for k in range(n):
-                    if corner_cand[j, c, k] and not reach[c, k]:
-                        mx = edges[k, 0] - kx
-                        my = edges[k, 1] - ky
-                        if mx * mx + my * my < edges[k, 2]:
-                            reach[c, k] = _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR
+                dr = edges[k, 3] - rc
+                if dr * dr >= edges[k, 2] * (1.0 + 1e-12):
+                    continue
+                for t in range(CORNER_SWEEP):
+                    kx, ky = _corner_centre(j, sweep[t, 0], sweep[t, 1], c, prm)
+                    mx = edges[k, 0] - kx
+                    my = edges[k, 1] - ky
+                    if mx * mx + my * my < edges[k, 2]:
+                        if _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR:
+                            reach[c, k] = True
+                            break
         for c in range(4):
             if c % 2 == 0 and prm[P_POLICY] > 0.0:
                 continue
@@ -1600,7 +1621,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
     # the paper sweep; an edge met outside it joins in a later round)
     _initial_candidates(x0, n, prm, face_cand, corner_cand, np.zeros((4, n), dtype=np.bool_),
-                        np.zeros((n, 3)))
+                        np.zeros((n, 4)), np.zeros((CORNER_SWEEP, 2)))
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
