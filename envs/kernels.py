@@ -139,13 +139,32 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
     hc = prm[P_HW] - rho
+    ds = s - min(max(s, 0.0), prm[P_LMAX])
+    dm = m - min(max(m, -hc), hc)
+    if ds == 0.0 and dm != 0.0:
+        # the common case, beside a long side of the bar: the gap is |m| - w/2
+        g_m = 1.0 if dm > 0.0 else -1.0
+        grad[0] = g_m * nx
+        grad[1] = g_m * ny
+        grad[2] = g_m * s
+        if want_hess:
+            hx = g_m * ex
+            hy = g_m * ey
+            hess[0, 0] = 0.0
+            hess[0, 1] = 0.0
+            hess[1, 0] = 0.0
+            hess[1, 1] = 0.0
+            hess[0, 2] = hx
+            hess[2, 0] = hx
+            hess[1, 2] = hy
+            hess[2, 1] = hy
+            hess[2, 2] = -g_m * m
+        return abs(dm) - rho
     for a in range(3):
         grad[a] = 0.0
         if want_hess:
             for b in range(3):
                 hess[a, b] = 0.0
-    ds = s - min(max(s, 0.0), prm[P_LMAX])
-    dm = m - min(max(m, -hc), hc)
     # derivatives of s and m: ds/dq = e, dm/dq = n, ds/dth = -m, dm/dth = s,
     # d2s/dq dth = -n, d2m/dq dth = e, d2s/dth2 = -s, d2m/dth2 = -m
     if ds != 0.0 and dm != 0.0:
@@ -470,6 +489,12 @@ def _corner_gap(q, k, j, sj, cj, c, prm):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _sel(t, j):
+    """Entry j (0 or 1) of a pair: a tuple indexed by a run-time integer costs tens of ns."""
+    return t[1] if j == 1 else t[0]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _trig(x, n):
     """Sines and cosines of the two finger angles of state x (computed once per pass)."""
     return ((math.sin(x[2 * n]), math.sin(x[2 * n + 1])),
@@ -481,10 +506,10 @@ def _con_value(kind, j, idx, x, q, n, prm, sn, cs):
     """Value of constraint (kind, j, idx) only (line searches, candidate checks); ``sn``, ``cs``
     hold the sines and cosines of the finger angles (:func:`_trig`)."""
     if kind == 0:
-        return _face_gap(q, idx, j, sn[j], cs[j], prm)
+        return _face_gap(q, idx, j, _sel(sn, j), _sel(cs, j), prm)
     if kind == 1:
         c = idx // n
-        return _corner_gap(q, idx - c * n, j, sn[j], cs[j], c, prm)
+        return _corner_gap(q, idx - c * n, j, _sel(sn, j), _sel(cs, j), c, prm)
     return x[2 * n + j] - prm[P_THMIN]
 
 
@@ -493,7 +518,7 @@ def _con_eval(kind, j, idx, x, q, n, prm, sn, cs, grad5, hess5, dofs, want_hess=
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
     if kind == 0:
-        g = _face_eval(q, idx, j, sn[j], cs[j], prm, grad5, hess5, want_hess)
+        g = _face_eval(q, idx, j, _sel(sn, j), _sel(cs, j), prm, grad5, hess5, want_hess)
         dofs[0] = 2 * idx
         dofs[1] = 2 * idx + 1
         dofs[2] = 2 * n + j
@@ -501,7 +526,7 @@ def _con_eval(kind, j, idx, x, q, n, prm, sn, cs, grad5, hess5, dofs, want_hess=
     if kind == 1:
         c = idx // n
         k = idx - c * n
-        g = _corner_eval(q, k, j, sn[j], cs[j], c, prm, grad5, hess5, want_hess)
+        g = _corner_eval(q, k, j, _sel(sn, j), _sel(cs, j), c, prm, grad5, hess5, want_hess)
         k1 = k + 1 if k + 1 < n else 0
         dofs[0] = 2 * k
         dofs[1] = 2 * k + 1
@@ -781,16 +806,16 @@ def _crossed_through_sc(x, n, prm, sn, cs):
         r2 = max(r2, x[2 * i] * x[2 * i] + x[2 * i + 1] * x[2 * i + 1])
     for j in range(2):
         # distance from the pin to the axis segment of the bar
-        ex, ey, _, _ = _frame(j, sn[j], cs[j])
+        ex, ey, _, _ = _frame(j, _sel(sn, j), _sel(cs, j))
         ax = -prm[P_C0X + 2 * j]
         ay = -prm[P_C0X + 2 * j + 1]
         t = min(max(-(ax * ex + ay * ey), 0.0), prm[P_LMAX])
         px = ax + t * ex
         py = ay + t * ey
-        if px * px + py * py <= r2 and _bar_crossed(q, n, j, sn[j], cs[j], prm):
+        if px * px + py * py <= r2 and _bar_crossed(q, n, j, _sel(sn, j), _sel(cs, j), prm):
             return True
         for c in range(4):
-            kx, ky = _corner_centre(j, sn[j], cs[j], c, prm)
+            kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
             if kx * kx + ky * ky <= r2 and _inside(q, n, kx, ky):
                 return True
     return False
@@ -809,8 +834,8 @@ def _tunnels(x, xt, n, prm):
         return True
     sn0, cs0 = _trig(x, n)
     for j in range(2):
-        ex0, ey0, nx0, ny0 = _frame(j, sn0[j], cs0[j])
-        ex1, ey1, nx1, ny1 = _frame(j, sn1[j], cs1[j])
+        ex0, ey0, nx0, ny0 = _frame(j, _sel(sn0, j), _sel(cs0, j))
+        ex1, ey1, nx1, ny1 = _frame(j, _sel(sn1, j), _sel(cs1, j))
         cx = prm[P_C0X + 2 * j]
         cy = prm[P_C0X + 2 * j + 1]
         lmax = prm[P_LMAX]
@@ -1451,10 +1476,11 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep)
         th = x0[nb + j]
         for i in range(n):
             # every point: a far one costs a little, a late one a whole extra round
-            face_cand[j, i] = _face_gap(q0, i, j, sn[j], cs[j], prm) > 1e-12
+            face_cand[j, i] = _face_gap(q0, i, j, _sel(sn, j), _sel(cs, j), prm) > 1e-12
         for c in range(4):
             for k in range(n):
-                corner_cand[j, c, k] = _corner_gap(q0, k, j, sn[j], cs[j], c, prm) > 1e-12
+                gk = _corner_gap(q0, k, j, _sel(sn, j), _sel(cs, j), c, prm)
+                corner_cand[j, c, k] = gk > 1e-12
                 reach[c, k] = False
         # edges near the arc each corner sweeps as the finger closes (policy 1: every edge
         # clear of the tip corners at the start), sampled; the samples lie on a circle about
@@ -1509,24 +1535,24 @@ def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
     for j in range(2):
         for i in range(n):
             if not face_cand[j, i]:
-                g = _face_gap(q, i, j, sn[j], cs[j], prm)
+                g = _face_gap(q, i, j, _sel(sn, j), _sel(cs, j), prm)
                 if g < 1e-9:
-                    g0 = _face_gap(q0, i, j, sn0[j], cs0[j], prm)
+                    g0 = _face_gap(q0, i, j, _sel(sn0, j), _sel(cs0, j), prm)
                     if g0 > 1e-12:
                         face_cand[j, i] = True
                         changed = True
         for c in range(4):
             # edges left out at the start that the corner now touches or crossed
-            kx, ky = _corner_centre(j, sn[j], cs[j], c, prm)
+            kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
             crossed = _inside(q, n, kx, ky)
             # a blocked interior-point run stopped short of the edge that holds it back
             near_hit = CORNER_NEAR if crossed else 0.02
             for k in range(n):
                 if corner_cand[j, c, k]:
                     continue
-                g = _corner_gap(q, k, j, sn[j], cs[j], c, prm)
+                g = _corner_gap(q, k, j, _sel(sn, j), _sel(cs, j), c, prm)
                 if g < 1e-9 or ((crossed or blocked) and g < near_hit):
-                    g0 = _corner_gap(q0, k, j, sn0[j], cs0[j], c, prm)
+                    g0 = _corner_gap(q0, k, j, _sel(sn0, j), _sel(cs0, j), c, prm)
                     if g0 > 1e-12:
                         corner_cand[j, c, k] = True
                         changed = True
@@ -1807,7 +1833,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         sn, cs = _trig(xs, n)
         for j in range(2):
             for i in range(n):
-                if _face_gap(q, i, j, sn[j], cs[j], prm) < -1e-9:
+                if _face_gap(q, i, j, _sel(sn, j), _sel(cs, j), prm) < -1e-9:
                     status = PENETRATION
         if _crossed_through(xs, n, prm):
             status = PENETRATION
