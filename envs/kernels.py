@@ -49,6 +49,7 @@ from .psm import (
 )
 
 BW = 5  # half bandwidth of the interleaved point ordering
+CH_BLOCK = 15  # column of the constraint curvature cache: 1 where the constraint has a block
 P_GAUGE = 15  # extra slot of the kernel's parameter copy: gauge spring stiffness
 P_POLICY = 16  # extra slot: contact policy of this attempt (see solve_one)
 CORNER_NEAR = 0.25  # corner-edge constraints for edges this close to a corner's path (units of r)
@@ -882,16 +883,103 @@ def _build_constraints(face, corner, n, kinds, fj, fidx):
 # the interior-point Newton solve for a fixed candidate set
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _scatter(kind, j, dofs, bidx, nb, blk, ab, bb, dd):
+    """Add a constraint's block ``blk`` (lower triangle over its dofs) to the Newton matrix."""
+    if kind == 0:
+        # point i: its 2x2 diagonal block and its coupling to theta_j
+        p = bidx[dofs[0] // 2]
+        ab[p, 0] += blk[0, 0]
+        ab[p + 1, 1] += blk[1, 0]
+        ab[p + 1, 0] += blk[1, 1]
+        bb[p, j] += blk[2, 0]
+        bb[p + 1, j] += blk[2, 1]
+        dd[j, j] += blk[2, 2]
+    elif kind == 1:
+        # edge k -> k1: two diagonal blocks, their coupling, and theta_j
+        p = bidx[dofs[0] // 2]
+        r = bidx[dofs[2] // 2]
+        ab[p, 0] += blk[0, 0]
+        ab[p + 1, 1] += blk[1, 0]
+        ab[p + 1, 0] += blk[1, 1]
+        ab[r, 0] += blk[2, 2]
+        ab[r + 1, 1] += blk[3, 2]
+        ab[r + 1, 0] += blk[3, 3]
+        for a in range(2, 4):
+            for b in range(2):
+                _add(ab, bb, dd, nb, r + a - 2, p + b, blk[a, b])
+        bb[p, j] += blk[4, 0]
+        bb[p + 1, j] += blk[4, 1]
+        bb[r, j] += blk[4, 2]
+        bb[r + 1, j] += blk[4, 3]
+        dd[j, j] += blk[4, 4]
+    else:
+        dd[j, j] += blk[0, 0]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, bb, dd):
+    """Turn the exact Newton matrix of :func:`_newton_matrix` into its convexified fallback
+    (``psd=True``) in place: the springs' negative geometric stiffness and the constraint
+    curvature (kept in ``ch``) taken out, without evaluating the constraints again."""
+    nb = 2 * n
+    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
+    for i in range(n):
+        qx, qy = x[2 * i], x[2 * i + 1]
+        lr = math.sqrt(qx * qx + qy * qy)
+        tt = kr * (1.0 - 1.0 / lr)
+        if tt < 0.0:
+            ux, uy = qx / lr, qy / lr
+            p = bidx[i]
+            ab[p, 0] -= tt * (1.0 - ux * ux)
+            ab[p + 1, 0] -= tt * (1.0 - uy * uy)
+            ab[p + 1, 1] += tt * ux * uy
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
+        lc = math.sqrt(dx * dx + dy * dy)
+        tt = kc * (1.0 - h / lc)
+        if tt < 0.0:
+            ux, uy = dx / lc, dy / lc
+            kxx = -tt * (1.0 - ux * ux)
+            kyy = -tt * (1.0 - uy * uy)
+            kxy = tt * ux * uy
+            pa, pb = bidx[i], bidx[i1]
+            ab[pa, 0] += kxx
+            ab[pa + 1, 0] += kyy
+            ab[pa + 1, 1] += kxy
+            ab[pb, 0] += kxx
+            ab[pb + 1, 0] += kyy
+            ab[pb + 1, 1] += kxy
+            _add(ab, bb, dd, nb, pa, pb, -kxx)
+            _add(ab, bb, dd, nb, pa + 1, pb + 1, -kyy)
+            _add(ab, bb, dd, nb, pa, pb + 1, -kxy)
+            _add(ab, bb, dd, nb, pa + 1, pb, -kxy)
+    for m in range(mcount):
+        if ch[m, CH_BLOCK] == 0.0:
+            continue
+        nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+        t = 0
+        for a in range(nd):
+            dofs[a] = cd[m, a]
+            for b in range(a + 1):
+                blk[a, b] = ch[m, t]
+                t += 1
+        _scatter(kinds[m], fj[m], dofs, bidx, nb, blk, ab, bb, dd)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                   g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res, cg, cd):
+                   g_out, grad5, hess5, dofs, barrier_mu, psd, gb, res, cg, cd, ch):
     """Assemble W = Hess(Pi) - sum lam Hess(g) + sum sig grad g grad g^T and the merit gradient.
 
     With barrier_mu > 0 the returned gradient is that of Pi - mu sum log g; with barrier_mu = 0
     it is grad Pi - sum lam grad g (used by the augmented-Lagrangian polish, where lam already
     holds lam_k - rho g). Also returns, in the same pass, ``gb = sum grad g / g`` (so the
     barrier gradient for another mu is grad + (barrier_mu - mu) gb) and the stationarity
-    residual ``res = grad Pi - sum lam grad g``.
+    residual ``res = grad Pi - sum lam grad g``. ``cg``, ``cd`` get each constraint's gradient
+    and its dofs, ``ch`` the curvature terms it put into the matrix (lower triangle, row by
+    row) and whether it put in any (column ``CH_BLOCK``).
     """
     nb = 2 * n
     grad[:] = 0.0
@@ -925,44 +1013,21 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
             grad[d] -= w * ga
             res[d] -= lm * ga
             gb[d] += ga * inv_g
+        ch[m, CH_BLOCK] = 0.0
         if not block:
             continue
         # constraint curvature; dropped in the convexified fallback, where the curved
-        # (corner-distance) gaps would make the matrix badly indefinite
+        # (corner-distance) gaps would make the matrix badly indefinite (kept in ``ch`` so
+        # that the fallback can take it out again without a new pass, _drop_curvature)
         curv = 0.0 if psd else lam[m]
+        t = 0
         for a in range(nd):
             for b in range(a + 1):
-                blk[a, b] = sig[m] * grad5[a] * grad5[b] - curv * hess5[a, b]
-        j = fj[m]
-        if kinds[m] == 0:
-            # point i: its 2x2 diagonal block and its coupling to theta_j
-            p = bidx[dofs[0] // 2]
-            ab[p, 0] += blk[0, 0]
-            ab[p + 1, 1] += blk[1, 0]
-            ab[p + 1, 0] += blk[1, 1]
-            bb[p, j] += blk[2, 0]
-            bb[p + 1, j] += blk[2, 1]
-            dd[j, j] += blk[2, 2]
-        elif kinds[m] == 1:
-            # edge k -> k1: two diagonal blocks, their coupling, and theta_j
-            p = bidx[dofs[0] // 2]
-            r = bidx[dofs[2] // 2]
-            ab[p, 0] += blk[0, 0]
-            ab[p + 1, 1] += blk[1, 0]
-            ab[p + 1, 0] += blk[1, 1]
-            ab[r, 0] += blk[2, 2]
-            ab[r + 1, 1] += blk[3, 2]
-            ab[r + 1, 0] += blk[3, 3]
-            for a in range(2, 4):
-                for b in range(2):
-                    _add(ab, bb, dd, nb, r + a - 2, p + b, blk[a, b])
-            bb[p, j] += blk[4, 0]
-            bb[p + 1, j] += blk[4, 1]
-            bb[r, j] += blk[4, 2]
-            bb[r + 1, j] += blk[4, 3]
-            dd[j, j] += blk[4, 4]
-        else:
-            dd[j, j] += blk[0, 0]
+                ch[m, t] = curv * hess5[a, b]
+                blk[a, b] = sig[m] * grad5[a] * grad5[b] - ch[m, t]
+                t += 1
+        ch[m, CH_BLOCK] = 1.0
+        _scatter(kinds[m], fj[m], dofs, bidx, nb, blk, ab, bb, dd)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -1068,15 +1133,16 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     gb = np.zeros(nx)
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
+    ch = np.zeros((mcount, CH_BLOCK + 1))
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
                      grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig,
-                     dlam, grad5, hess5, dofs, gb, cg, cd)
+                     dlam, grad5, hess5, dofs, gb, cg, cd, ch)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
               grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
-              grad5, hess5, dofs, gb, cg, cd):
+              grad5, hess5, dofs, gb, cg, cd, ch):
     nb = 2 * n
     nx = nb + 2
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
@@ -1100,7 +1166,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                       g, grad5, hess5, dofs, mu, False, gb, res, cg, cd)
+                       g, grad5, hess5, dofs, mu, False, gb, res, cg, cd, ch)
         kkt = 0.0
         for d in range(nx):
             kkt = max(kkt, abs(res[d]))
@@ -1139,8 +1205,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                     # descent from a symmetric start cannot leave; the caller perturbs and retries
                     work_it[0] += it
                     return SADDLE, it
-            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb,
-                           dd, g, grad5, hess5, dofs, mu, True, gb, res, cg, cd)
+            _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab, bb,
+                            dd)
             ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
@@ -1282,15 +1348,16 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     dofs = np.zeros(5, dtype=np.int64)
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
+    ch = np.zeros((mcount, CH_BLOCK + 1))
     return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
                         work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff,
-                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd)
+                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
                  grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
-                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd):
+                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
     nb = 2 * n
     nx = nb + 2
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
@@ -1315,7 +1382,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd)
+                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd, ch)
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)

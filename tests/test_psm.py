@@ -287,3 +287,43 @@ def test_crossed_through_shortcut_agrees_with_the_full_tests():
             assert K._crossed_through(x, n, prm) == full
             verdicts.add(full)
     assert verdicts == {True, False}
+
+
+def test_convexified_fallback_from_the_exact_matrix_matches_a_fresh_assembly():
+    # the interior point's fallback (negative spring stiffness and constraint curvature
+    # dropped) is made from the exact matrix in place: the same as assembling it afresh
+    prob, x = _state(n=12, seed=3)
+    n, nb = prob.n, 2 * prob.n
+    prm = np.append(prob.params, 0.0)
+    face = np.ones((2, n), dtype=np.bool_)
+    corner = np.zeros((2, 4, n), dtype=np.bool_)
+    corner[:, :, ::3] = True
+    mmax = 10 * n + 2
+    kinds, fj, fidx = (np.zeros(mmax, dtype=np.int64) for _ in range(3))
+    m = K._build_constraints(face, corner, n, kinds, fj, fidx)
+    rng = np.random.default_rng(0)
+    lam = rng.uniform(0.1, 1.0, m)
+    sig = rng.uniform(0.1, 1.0, m)
+    bidx = K._band_index(n)
+
+    def assemble(psd):
+        g = np.zeros(m)
+        K._all_gaps(x, n, prm, kinds[:m], fj, fidx, g)
+        mats = np.zeros((nb, K.BW + 1)), np.zeros((nb, 2)), np.zeros((2, 2))
+        ch = np.zeros((m, K.CH_BLOCK + 1))
+        cd = np.zeros((m, 5), dtype=np.int64)
+        K._newton_matrix(x, n, prm, bidx, kinds, fj, fidx, m, lam, sig, np.zeros(nb + 2),
+                         *mats, g, np.zeros(5), np.zeros((5, 5)), np.zeros(5, dtype=np.int64),
+                         1e-3, psd, np.zeros(nb + 2), np.zeros(nb + 2), np.zeros((m, 5)), cd,
+                         ch)
+        return mats, cd, ch
+
+    (ab, bb, dd), cd, ch = assemble(False)
+    exact = [a.copy() for a in (ab, bb, dd)]
+    K._drop_curvature(x, n, prm, bidx, kinds, fj, m, cd, ch, np.zeros((5, 5)),
+                      np.zeros(5, dtype=np.int64), ab, bb, dd)
+    fresh, _, _ = assemble(True)
+    for got, want in zip((ab, bb, dd), fresh, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    # the state has compressed springs and curved constraints: the two matrices differ
+    assert max(np.abs(w - e).max() for w, e in zip(fresh, exact, strict=True)) > 1e-3
