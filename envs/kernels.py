@@ -1519,13 +1519,12 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep):
+def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
     """Candidate constraints at the start point ``x0`` (see :func:`solve_one` for the policies).
 
     Every point against each finger body; each corner against the contour edges near the arc
     it sweeps as its finger closes (all edges clear of it for the tip corners of policy 1).
-    Work arrays: ``reach`` bool (4, n), ``edges`` float (n, 4), ``sweep`` float
-    (CORNER_SWEEP, 2).
+    Work arrays: ``edges`` float (n, 4), ``sweep`` float (CORNER_SWEEP, 2).
     """
     nb = 2 * n
     q0 = x0[:nb].reshape(n, 2)
@@ -1544,11 +1543,6 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep)
         for i in range(n):
             # every point: a far one costs a little, a late one a whole extra round
             face_cand[j, i] = _face_gap(q0, i, j, _sel(sn, j), _sel(cs, j), prm) > 1e-12
-        for c in range(4):
-            for k in range(n):
-                gk = _corner_gap(q0, k, j, _sel(sn, j), _sel(cs, j), c, prm)
-                corner_cand[j, c, k] = gk > 1e-12
-                reach[c, k] = False
         # edges near the arc each corner sweeps as the finger closes (policy 1: every edge
         # clear of the tip corners at the start), sampled; the samples lie on a circle about
         # the joint, so an edge whose bounding circle misses that circle's ring is skipped
@@ -1563,15 +1557,20 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep)
             my = edges[k, 1] - jy
             edges[k, 3] = math.sqrt(mx * mx + my * my)
         for c in range(4):
-            if c % 2 == 0 and prm[P_POLICY] > 0.0:
-                continue
+            swept = not (c % 2 == 0 and prm[P_POLICY] > 0.0)
             kx, ky = _corner_centre(j, sweep[0, 0], sweep[0, 1], c, prm)
             rc = math.sqrt((kx - jx) * (kx - jx) + (ky - jy) * (ky - jy))
             for k in range(n):
-                if not corner_cand[j, c, k]:
+                corner_cand[j, c, k] = False
+                if swept:
+                    dr = edges[k, 3] - rc
+                    if dr * dr >= edges[k, 2] * (1.0 + 1e-12):
+                        continue
+                # an edge already crossed at the start is left out
+                if not _corner_gap(q0, k, j, _sel(sn, j), _sel(cs, j), c, prm) > 1e-12:
                     continue
-                dr = edges[k, 3] - rc
-                if dr * dr >= edges[k, 2] * (1.0 + 1e-12):
+                if not swept:
+                    corner_cand[j, c, k] = True
                     continue
                 for t in range(CORNER_SWEEP):
                     kx, ky = _corner_centre(j, sweep[t, 0], sweep[t, 1], c, prm)
@@ -1579,13 +1578,8 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, reach, edges, sweep)
                     my = edges[k, 1] - ky
                     if mx * mx + my * my < edges[k, 2]:
                         if _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR:
-                            reach[c, k] = True
+                            corner_cand[j, c, k] = True
                             break
-        for c in range(4):
-            if c % 2 == 0 and prm[P_POLICY] > 0.0:
-                continue
-            for k in range(n):
-                corner_cand[j, c, k] = corner_cand[j, c, k] and reach[c, k]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -1713,8 +1707,8 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     # initial candidate sets, evaluated at the start point (the same band for every N: with
     # the gauge on fine fans too, a band twice as wide at N > 100 was slower and no safer in
     # the paper sweep; an edge met outside it joins in a later round)
-    _initial_candidates(x0, n, prm, face_cand, corner_cand, np.zeros((4, n), dtype=np.bool_),
-                        np.zeros((n, 4)), np.zeros((CORNER_SWEEP, 2)))
+    _initial_candidates(x0, n, prm, face_cand, corner_cand, np.zeros((n, 4)),
+                        np.zeros((CORNER_SWEEP, 2)))
     lam_guess_face = lam_face.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
