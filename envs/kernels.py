@@ -1161,7 +1161,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
     while it < maxit:
         # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
-        # springs' negative geometric stiffness removed; a diagonal shift only as a last resort.
+        # springs' negative geometric stiffness and the constraint curvature removed (made from
+        # the exact one in place, _drop_curvature); a diagonal shift only as a last resort.
         # The same pass gives the stationarity residual (sig = lam / g does not depend on mu).
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
