@@ -384,6 +384,34 @@ def _add(ab, bb, dd, nb, p, r, v):
             dd[r - nb, p - nb] += v
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _add_point(ab, p, kxx, kyy, kxy):
+    """Add the symmetric block [[kxx, kxy], [kxy, kyy]] of the point at band index p."""
+    ab[p, 0] += kxx
+    ab[p + 1, 0] += kyy
+    ab[p + 1, 1] += kxy
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _add_spring(ab, bb, dd, nb, pa, pb, kxx, kyy, kxy):
+    """Add the stiffness K = [[kxx, kxy], [kxy, kyy]] of a spring between the points at band
+    indices pa and pb: [[K, -K], [-K, K]]."""
+    _add_point(ab, pa, kxx, kyy, kxy)
+    _add_point(ab, pb, kxx, kyy, kxy)
+    _add(ab, bb, dd, nb, pa, pb, -kxx)
+    _add(ab, bb, dd, nb, pa + 1, pb + 1, -kyy)
+    _add(ab, bb, dd, nb, pa, pb + 1, -kxy)
+    _add(ab, bb, dd, nb, pa + 1, pb, -kxy)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _gauge_stretch(x, prm):
+    """Tangent (tx, ty) of the contour at point 0's rest position and point 0's displacement
+    ut along it: the gauge spring's direction and stretch."""
+    tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
+    return tx, ty, (x[0] - ty) * tx + (x[1] + tx) * ty
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Spring and finger energy gradient (natural order) and Hessian (band order)."""
@@ -400,10 +428,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
             tt = kr * (1.0 - 1.0 / lr)
             if psd and tt < 0.0:
                 tt = 0.0
-            p = bidx[i]
-            ab[p, 0] += kr * ux * ux + tt * (1.0 - ux * ux)
-            ab[p + 1, 0] += kr * uy * uy + tt * (1.0 - uy * uy)
-            ab[p + 1, 1] += kr * ux * uy - tt * ux * uy
+            _add_point(ab, bidx[i], kr * ux * ux + tt * (1.0 - ux * ux),
+                       kr * uy * uy + tt * (1.0 - uy * uy), kr * ux * uy - tt * ux * uy)
     for i in range(n):
         i1 = i + 1 if i + 1 < n else 0
         dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
@@ -418,20 +444,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
             tt = kc * (1.0 - h / lc)
             if psd and tt < 0.0:
                 tt = 0.0
-            kxx = kc * ux * ux + tt * (1.0 - ux * ux)
-            kyy = kc * uy * uy + tt * (1.0 - uy * uy)
-            kxy = kc * ux * uy - tt * ux * uy
-            pa, pb = bidx[i], bidx[i1]
-            ab[pa, 0] += kxx
-            ab[pa + 1, 0] += kyy
-            ab[pa + 1, 1] += kxy
-            ab[pb, 0] += kxx
-            ab[pb + 1, 0] += kyy
-            ab[pb + 1, 1] += kxy
-            _add(ab, bb, dd, nb, pa, pb, -kxx)
-            _add(ab, bb, dd, nb, pa + 1, pb + 1, -kyy)
-            _add(ab, bb, dd, nb, pa, pb + 1, -kxy)
-            _add(ab, bb, dd, nb, pa + 1, pb, -kxy)
+            _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], kc * ux * ux + tt * (1.0 - ux * ux),
+                        kc * uy * uy + tt * (1.0 - uy * uy), kc * ux * uy - tt * ux * uy)
     for j in range(2):
         th = x[nb + j]
         grad[nb + j] += prm[P_TAU] + prm[P_KAPPA] * (th - prm[P_TH0])
@@ -441,15 +455,11 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     if kg > 0.0:
         # gauge: a stiff tangential spring on point 0 removes the free rotation of the contour
         # about the pin; its reaction must vanish at the answer (checked by the caller)
-        tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
-        ut = (x[0] - ty) * tx + (x[1] + tx) * ty
+        tx, ty, ut = _gauge_stretch(x, prm)
         grad[0] += kg * ut * tx
         grad[1] += kg * ut * ty
         if want_hess:
-            p = bidx[0]
-            ab[p, 0] += kg * tx * tx
-            ab[p + 1, 0] += kg * ty * ty
-            ab[p + 1, 1] += kg * tx * ty
+            _add_point(ab, bidx[0], kg * tx * tx, kg * ty * ty, kg * tx * ty)
 
 
 # --------------------------------------------------------------------------------------------
@@ -631,6 +641,35 @@ def _chol_band(ab, lb, nb, shift):
     return True
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _eliminate(v, w, ybuf, out, m, a0, a1, a2, e0, e1, e2):
+    """Take row m of the three solution columns, times v and w, off the two rows (a, e) of a
+    block in :func:`_solve_band3`."""
+    y0 = ybuf[m, 0]
+    y1 = ybuf[m, 1]
+    z = out[m]
+    return a0 - v * y0, a1 - v * y1, a2 - v * z, e0 - w * y0, e1 - w * y1, e2 - w * z
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _finish_block(lb, ybuf, out, pf, ps, a0, a1, a2, e0, e1, e2):
+    """Solve a 2x2 diagonal block of :func:`_solve_band3`: row ``pf`` (sums a) first, then row
+    ``ps`` (sums e) less the block's off-diagonal entry times it."""
+    p1 = max(pf, ps)
+    d = lb[pf, 0]
+    a0 *= d
+    a1 *= d
+    a2 *= d
+    ybuf[pf, 0] = a0
+    ybuf[pf, 1] = a1
+    out[pf] = a2
+    l10 = lb[p1, 1]
+    d = lb[ps, 0]
+    ybuf[ps, 0] = (e0 - l10 * a0) * d
+    ybuf[ps, 1] = (e1 - l10 * a1) * d
+    out[ps] = (e2 - l10 * a2) * d
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _solve_band3(lb, nb, bb, rb, ybuf, out):
     """Solve L L^T [Y | z] = [B | r] for the two border columns B and the right-hand side r in
@@ -638,65 +677,24 @@ def _solve_band3(lb, nb, bb, rb, ybuf, out):
     for b in range(nb // 2):
         p0 = 2 * b
         p1 = p0 + 1
-        a0 = bb[p0, 0]
-        a1 = bb[p0, 1]
-        a2 = rb[p0]
-        e0 = bb[p1, 0]
-        e1 = bb[p1, 1]
-        e2 = rb[p1]
+        a0, a1, a2 = bb[p0, 0], bb[p0, 1], rb[p0]
+        e0, e1, e2 = bb[p1, 0], bb[p1, 1], rb[p1]
         # the two blocks before: row p0 reaches back 4 entries, row p1 (besides p0) 4 too
         for m in range(max(0, p0 - 4), p0):
-            v = lb[p0, p0 - m]
-            w = lb[p1, p1 - m]
-            a0 -= v * ybuf[m, 0]
-            a1 -= v * ybuf[m, 1]
-            a2 -= v * out[m]
-            e0 -= w * ybuf[m, 0]
-            e1 -= w * ybuf[m, 1]
-            e2 -= w * out[m]
-        d = lb[p0, 0]
-        a0 *= d
-        a1 *= d
-        a2 *= d
-        ybuf[p0, 0] = a0
-        ybuf[p0, 1] = a1
-        out[p0] = a2
-        l10 = lb[p1, 1]
-        d = lb[p1, 0]
-        ybuf[p1, 0] = (e0 - l10 * a0) * d
-        ybuf[p1, 1] = (e1 - l10 * a1) * d
-        out[p1] = (e2 - l10 * a2) * d
+            a0, a1, a2, e0, e1, e2 = _eliminate(lb[p0, p0 - m], lb[p1, p1 - m], ybuf, out, m,
+                                                a0, a1, a2, e0, e1, e2)
+        _finish_block(lb, ybuf, out, p0, p1, a0, a1, a2, e0, e1, e2)
     for b in range(nb // 2 - 1, -1, -1):
         p0 = 2 * b
         p1 = p0 + 1
-        a0 = ybuf[p0, 0]
-        a1 = ybuf[p0, 1]
-        a2 = out[p0]
-        e0 = ybuf[p1, 0]
-        e1 = ybuf[p1, 1]
-        e2 = out[p1]
+        a0, a1, a2 = ybuf[p0, 0], ybuf[p0, 1], out[p0]
+        e0, e1, e2 = ybuf[p1, 0], ybuf[p1, 1], out[p1]
         # the two blocks after (rows p1 + 1 .. p1 + 4)
         for m in range(p1 + 1, min(nb, p1 + 5)):
-            v = lb[m, m - p0]
-            w = lb[m, m - p1]
-            a0 -= v * ybuf[m, 0]
-            a1 -= v * ybuf[m, 1]
-            a2 -= v * out[m]
-            e0 -= w * ybuf[m, 0]
-            e1 -= w * ybuf[m, 1]
-            e2 -= w * out[m]
-        d = lb[p1, 0]
-        e0 *= d
-        e1 *= d
-        e2 *= d
-        ybuf[p1, 0] = e0
-        ybuf[p1, 1] = e1
-        out[p1] = e2
-        l10 = lb[p1, 1]
-        d = lb[p0, 0]
-        ybuf[p0, 0] = (a0 - l10 * e0) * d
-        ybuf[p0, 1] = (a1 - l10 * e1) * d
-        out[p0] = (a2 - l10 * e2) * d
+            a0, a1, a2, e0, e1, e2 = _eliminate(lb[m, m - p0], lb[m, m - p1], ybuf, out, m,
+                                                a0, a1, a2, e0, e1, e2)
+        # backwards the odd row of the block comes first
+        _finish_block(lb, ybuf, out, p1, p0, e0, e1, e2, a0, a1, a2)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -889,9 +887,7 @@ def _scatter(kind, j, dofs, bidx, nb, blk, ab, bb, dd):
     if kind == 0:
         # point i: its 2x2 diagonal block and its coupling to theta_j
         p = bidx[dofs[0] // 2]
-        ab[p, 0] += blk[0, 0]
-        ab[p + 1, 1] += blk[1, 0]
-        ab[p + 1, 0] += blk[1, 1]
+        _add_point(ab, p, blk[0, 0], blk[1, 1], blk[1, 0])
         bb[p, j] += blk[2, 0]
         bb[p + 1, j] += blk[2, 1]
         dd[j, j] += blk[2, 2]
@@ -899,12 +895,8 @@ def _scatter(kind, j, dofs, bidx, nb, blk, ab, bb, dd):
         # edge k -> k1: two diagonal blocks, their coupling, and theta_j
         p = bidx[dofs[0] // 2]
         r = bidx[dofs[2] // 2]
-        ab[p, 0] += blk[0, 0]
-        ab[p + 1, 1] += blk[1, 0]
-        ab[p + 1, 0] += blk[1, 1]
-        ab[r, 0] += blk[2, 2]
-        ab[r + 1, 1] += blk[3, 2]
-        ab[r + 1, 0] += blk[3, 3]
+        _add_point(ab, p, blk[0, 0], blk[1, 1], blk[1, 0])
+        _add_point(ab, r, blk[2, 2], blk[3, 3], blk[3, 2])
         for a in range(2, 4):
             for b in range(2):
                 _add(ab, bb, dd, nb, r + a - 2, p + b, blk[a, b])
@@ -930,10 +922,7 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
         tt = kr * (1.0 - 1.0 / lr)
         if tt < 0.0:
             ux, uy = qx / lr, qy / lr
-            p = bidx[i]
-            ab[p, 0] -= tt * (1.0 - ux * ux)
-            ab[p + 1, 0] -= tt * (1.0 - uy * uy)
-            ab[p + 1, 1] += tt * ux * uy
+            _add_point(ab, bidx[i], -tt * (1.0 - ux * ux), -tt * (1.0 - uy * uy), tt * ux * uy)
     for i in range(n):
         i1 = i + 1 if i + 1 < n else 0
         dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
@@ -941,20 +930,8 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
         tt = kc * (1.0 - h / lc)
         if tt < 0.0:
             ux, uy = dx / lc, dy / lc
-            kxx = -tt * (1.0 - ux * ux)
-            kyy = -tt * (1.0 - uy * uy)
-            kxy = tt * ux * uy
-            pa, pb = bidx[i], bidx[i1]
-            ab[pa, 0] += kxx
-            ab[pa + 1, 0] += kyy
-            ab[pa + 1, 1] += kxy
-            ab[pb, 0] += kxx
-            ab[pb + 1, 0] += kyy
-            ab[pb + 1, 1] += kxy
-            _add(ab, bb, dd, nb, pa, pb, -kxx)
-            _add(ab, bb, dd, nb, pa + 1, pb + 1, -kyy)
-            _add(ab, bb, dd, nb, pa, pb + 1, -kxy)
-            _add(ab, bb, dd, nb, pa + 1, pb, -kxy)
+            _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], -tt * (1.0 - ux * ux),
+                        -tt * (1.0 - uy * uy), tt * ux * uy)
     for m in range(mcount):
         if ch[m, CH_BLOCK] == 0.0:
             continue
@@ -1486,8 +1463,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _gauge_force(x, prm):
     """Magnitude of the gauge spring's force on point 0 at state x (scaled units)."""
-    tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
-    ut = (x[0] - ty) * tx + (x[1] + tx) * ty
+    _, _, ut = _gauge_stretch(x, prm)
     return abs(prm[P_GAUGE] * ut)
 
 
@@ -1584,10 +1560,11 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
+def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked, commit=True):
     """Add the constraints left out at the start point ``x0`` that the answer ``xs`` of a round
     touches or has crossed (and, after a blocked run, the corner edges just short of it).
-    Returns whether any was added."""
+    Returns whether any was added; with ``commit=False`` only whether any would be (the sets
+    are left as they are)."""
     nb = 2 * n
     changed = False
     q = xs[:nb].reshape(n, 2)
@@ -1601,6 +1578,8 @@ def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
                 if g < 1e-9:
                     g0 = _face_gap(q0, i, j, _sel(sn0, j), _sel(cs0, j), prm)
                     if g0 > 1e-12:
+                        if not commit:
+                            return True
                         face_cand[j, i] = True
                         changed = True
         for c in range(4):
@@ -1616,6 +1595,8 @@ def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
                 if g < 1e-9 or ((crossed or blocked) and g < near_hit):
                     g0 = _corner_gap(q0, k, j, _sel(sn0, j), _sel(cs0, j), c, prm)
                     if g0 > 1e-12:
+                        if not commit:
+                            return True
                         corner_cand[j, c, k] = True
                         changed = True
     return changed
@@ -1785,13 +1766,8 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # the gauge holds nothing (a mirror-symmetric answer): the polish with it would
             # solve the same equations as the one without it below; go straight there unless
             # the candidate set changes (then polish as usual, for the next round's start)
-            face_keep = face_cand.copy()
-            corner_keep = corner_cand.copy()
-            if _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked):
-                face_cand[:, :] = face_keep
-                corner_cand[:, :, :] = corner_keep
-            else:
-                skip_gauge_polish = True
+            skip_gauge_polish = not _grow_candidates(xs, x0, n, prm, face_cand, corner_cand,
+                                                     blocked, False)
         if opts[O_POLISH] > 0.0 and not blocked and not skip_gauge_polish:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                  fscale, active, work_it, gbuf, stable_out)
