@@ -566,6 +566,18 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
 # banded Cholesky with a 2x2 bordered Schur complement
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _times_inv_lt(lb, c0, s00, s01, s10, s11):
+    """S L_c^-T for the 2x2 block S and the diagonal factor block L_c of the point whose rows
+    start at c0 (reciprocal pivots as :func:`_chol_band` keeps them)."""
+    r0 = lb[c0, 0]
+    l10 = lb[c0 + 1, 1]
+    r1 = lb[c0 + 1, 0]
+    x00 = s00 * r0
+    x10 = s10 * r0
+    return x00, (s01 - x00 * l10) * r1, x10, (s11 - x10 * l10) * r1
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _chol_band(ab, lb, nb, shift):
     """Banded Cholesky of A + shift I (lower band of A in ``ab``) by 2x2 blocks, one block a
@@ -582,14 +594,8 @@ def _chol_band(ab, lb, nb, shift):
         x10 = 0.0
         x11 = 0.0
         if b >= 2:
-            c0 = p0 - 4
-            r0 = lb[c0, 0]
-            l10 = lb[c0 + 1, 1]
-            r1 = lb[c0 + 1, 0]
-            x00 = ab[p0, 4] * r0
-            x10 = ab[p1, 5] * r0
-            x01 = (ab[p0, 3] - x00 * l10) * r1
-            x11 = (ab[p1, 4] - x10 * l10) * r1
+            x00, x01, x10, x11 = _times_inv_lt(lb, p0 - 4, ab[p0, 4], ab[p0, 3], ab[p1, 5],
+                                               ab[p1, 4])
         # block (b, b-1): Y = (A_{b,b-1} - X L_{b-1,b-2}^T) L_{b-1,b-1}^-T
         y00 = 0.0
         y01 = 0.0
@@ -610,13 +616,7 @@ def _chol_band(ab, lb, nb, shift):
                 s01 -= x00 * m10 + x01 * m11
                 s10 -= x10 * m00 + x11 * m01
                 s11 -= x10 * m10 + x11 * m11
-            r0 = lb[c0, 0]
-            l10 = lb[c0 + 1, 1]
-            r1 = lb[c0 + 1, 0]
-            y00 = s00 * r0
-            y10 = s10 * r0
-            y01 = (s01 - y00 * l10) * r1
-            y11 = (s11 - y10 * l10) * r1
+            y00, y01, y10, y11 = _times_inv_lt(lb, c0, s00, s01, s10, s11)
         # diagonal block: A_bb - X X^T - Y Y^T, its own 2x2 Cholesky
         d00 = ab[p0, 0] + shift - ((x00 * x00 + x01 * x01) + (y00 * y00 + y01 * y01))
         if not d00 > 0.0:
