@@ -1,0 +1,92 @@
+"""Write the regression corpus that pins the solver's answers while code moves.
+
+Stores in ``tests/data/regression_corpus.npz``:
+
+* 1200 random designs of the default :class:`envs.DesignBounds` on the paper r = 0.07 disk and
+  300 on each of r = 0.05 and r = 0.10 (N = 20), evaluated by :func:`envs.evaluate_designs`:
+  status, converged flag, jaw angles, contacts, peak strain and reward of each row;
+* every preset at four torques through :func:`envs.simulate` (N = 20, and N = 8 / 40 on
+  paper-r070): converged flag, jaw angles, contour points and face forces.
+
+``tests/test_regression.py`` recomputes every answer and compares. Rerun this script only for
+an intended change of answers, and say in the commit which rows changed and why.
+
+Usage: ``python scripts/regression_corpus.py [--out tests/data/regression_corpus.npz]``
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+import envs
+
+SEED = 20261123
+DESIGN_ROWS = {0.07: 1200, 0.05: 300, 0.10: 300}
+PRESET_TORQUES_REL = (0.05, 0.2, 0.5, 1.0)  # of the preset's reference torque below
+REFERENCE_TORQUE_NM = {"paper": 0.4, "forceps": 2e-3}
+EXTRA_N = {"paper-r070": (8, 40)}
+DESIGN_KEYS = ("status", "converged", "jaw_angles_rad", "n_contacts", "peak_strain", "reward")
+
+
+def design_inputs() -> tuple[np.ndarray, np.ndarray]:
+    """Designs (B, 6) and the radius of each row's disk (B,)."""
+    rng = np.random.default_rng(SEED)
+    bounds = envs.DesignBounds()
+    rows, radii = [], []
+    for radius, count in DESIGN_ROWS.items():
+        rows.append(bounds.sample(rng, count))
+        radii.append(np.full(count, radius))
+    return np.concatenate(rows), np.concatenate(radii)
+
+
+def evaluate_corpus_designs(designs: np.ndarray, radii: np.ndarray) -> dict[str, np.ndarray]:
+    """Evaluate the corpus designs (each with its own disk) at N = 20."""
+    disks = [envs.SoftDisk(float(r), 0.0) for r in radii]
+    return envs.evaluate_designs(designs, disks, n_triangles=20)
+
+
+def preset_cases() -> list[tuple[str, float, int]]:
+    """(preset, torque [N·m], N) of every simulate case."""
+    cases = []
+    for name in sorted(envs.PRESETS):
+        ref = REFERENCE_TORQUE_NM[name.split("-")[0]]
+        for n in (20, *EXTRA_N.get(name, ())):
+            cases.extend((name, rel * ref, n) for rel in PRESET_TORQUES_REL)
+    return cases
+
+
+def simulate_case(name: str, torque_nm: float, n: int):
+    """The simulate answer of one case."""
+    return envs.simulate(envs.Scene.preset(name), torque_nm, n)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="tests/data/regression_corpus.npz")
+    args = parser.parse_args()
+    designs, radii = design_inputs()
+    out = evaluate_corpus_designs(designs, radii)
+    data = {"designs": designs, "radii": radii}
+    data.update({f"design_{k}": out[k] for k in DESIGN_KEYS})
+    cases = preset_cases()
+    results = [simulate_case(*c) for c in cases]
+    data["case_names"] = np.array([c[0] for c in cases])
+    data["case_torques_nm"] = np.array([c[1] for c in cases])
+    data["case_n"] = np.array([c[2] for c in cases])
+    data["case_converged"] = np.array([r.converged for r in results])
+    data["case_jaw_angles_rad"] = np.array([r.jaw_angles_rad for r in results])
+    # ragged (N differs): stored flat with offsets
+    data["case_points_m"] = np.concatenate([r.points_m.ravel() for r in results])
+    data["case_face_forces_n"] = np.concatenate([r.contact_forces_n.ravel() for r in results])
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(args.out, **data)
+    conv = int(out["converged"].sum())
+    print(f"{args.out}: {len(designs)} designs ({conv} converged), {len(cases)} simulate cases "
+          f"({int(data['case_converged'].sum())} converged)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,78 @@
+"""Pinned answers: the regression corpus of ``scripts/regression_corpus.py``.
+
+Code that moves must not change what the solver answers. Every design row and preset case of
+the corpus is recomputed and compared to 1e-9 (angles in rad, lengths in units of the radius,
+strains and rewards absolute). An intended change of answers regenerates the corpus in the same
+commit, which says which rows changed and why.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import envs
+
+ROOT = Path(__file__).resolve().parents[1]
+CORPUS = ROOT / "tests" / "data" / "regression_corpus.npz"
+TOL = 1e-9
+
+
+def _corpus_module():
+    spec = importlib.util.spec_from_file_location("regression_corpus",
+                                                  ROOT / "scripts" / "regression_corpus.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    with np.load(CORPUS) as data:
+        return dict(data)
+
+
+@pytest.fixture(scope="module")
+def gen():
+    return _corpus_module()
+
+
+def test_corpus_inputs_are_reproducible(corpus, gen):
+    designs, radii = gen.design_inputs()
+    np.testing.assert_array_equal(designs, corpus["designs"])
+    np.testing.assert_array_equal(radii, corpus["radii"])
+    assert len(gen.preset_cases()) == corpus["case_n"].size
+
+
+def test_design_answers_unchanged(corpus, gen):
+    out = gen.evaluate_corpus_designs(corpus["designs"], corpus["radii"])
+    np.testing.assert_array_equal(out["status"], corpus["design_status"])
+    np.testing.assert_array_equal(out["converged"], corpus["design_converged"])
+    np.testing.assert_array_equal(out["n_contacts"], corpus["design_n_contacts"])
+    for key in ("jaw_angles_rad", "peak_strain", "reward"):
+        np.testing.assert_allclose(out[key], corpus[f"design_{key}"], rtol=0, atol=TOL,
+                                   err_msg=key)
+    # the corpus is not trivial: most valid designs converge, and some of each disk do
+    assert corpus["design_converged"].sum() > 900
+
+
+def test_preset_answers_unchanged(corpus, gen):
+    offset_p = offset_f = 0
+    for k, (name, torque, n) in enumerate(gen.preset_cases()):
+        res = gen.simulate_case(name, torque, n)
+        radius = envs.Scene.preset(name).disk.radius_m
+        assert res.converged == bool(corpus["case_converged"][k]), (name, torque, n)
+        np.testing.assert_allclose(res.jaw_angles_rad, corpus["case_jaw_angles_rad"][k],
+                                   rtol=0, atol=TOL, err_msg=f"{name} {torque} {n}")
+        pts = corpus["case_points_m"][offset_p : offset_p + 2 * n].reshape(n, 2)
+        np.testing.assert_allclose(res.points_m, pts, rtol=0, atol=TOL * radius,
+                                   err_msg=f"{name} {torque} {n}")
+        face = corpus["case_face_forces_n"][offset_f : offset_f + 2 * n].reshape(2, n)
+        scale = max(float(np.abs(face).max()), 1e-30)
+        np.testing.assert_allclose(res.contact_forces_n, face, rtol=0, atol=1e-7 * scale,
+                                   err_msg=f"{name} {torque} {n}")
+        offset_p += 2 * n
+        offset_f += 2 * n
