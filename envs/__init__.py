@@ -14,8 +14,8 @@ from __future__ import annotations
 import gymnasium
 
 from .design_env import GripperDesignEnv, GripperDesignVectorEnv, ObjectDistribution
-from .evaluate import Design, DesignBounds, RewardWeights, evaluate_designs
-from .scene import PRESETS, Gripper, Scene, SoftDisk
+from .evaluate import DesignBounds, RewardWeights, evaluate_designs
+from .scene import PRESETS, Design, Gripper, Scene, SoftDisk
 from .solver import GraspResult, simulate, simulate_ramp
 
 __all__ = [
@@ -34,9 +34,21 @@ __all__ = [
     "GripperDesignEnv",
     "GripperDesignVectorEnv",
     "ENV_ID",
+    "sb3_vec_env",
 ]
 
 ENV_ID = "GripperDesign-v0"
+
+
+def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
+    """A stable-baselines3 ``VecEnv`` of ``GripperDesign-v0`` stepped by one batched evaluation.
+
+    See :func:`envs.sb3_env.sb3_vec_env` (imported here lazily: stable-baselines3 is the
+    optional ``rl`` extra).
+    """
+    from .sb3_env import sb3_vec_env as make
+
+    return make(num_envs, seed=seed, **env_kwargs)
 
 if ENV_ID not in gymnasium.registry:
     gymnasium.register(

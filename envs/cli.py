@@ -65,7 +65,7 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .psm import STIFFNESS_RULES
+    from .model.defaults import STIFFNESS_RULES
     from .scene import PRESETS
     from .solver import METHODS
 

@@ -26,7 +26,8 @@ from .evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from .scene import Gripper, Scene, SoftDisk, check_range
+from .scene import Gripper, Scene, SoftDisk
+from .validation import check_range
 
 __all__ = [
     "OBS_FIELDS",

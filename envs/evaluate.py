@@ -2,8 +2,9 @@
 
 :func:`evaluate_designs` is the one physics entry point of the design environment and of the
 optimizers. It takes a whole population of designs at once (like pymoo's ``_evaluate``), solves
-every grasp with the compiled batch solver :func:`envs.kernels.solve_batch` (rows run in parallel
-threads) and computes the metrics and the reward terms vectorized in numpy. Parallelism beyond one
+every grasp through the one pipeline :func:`envs.solver.pipeline.solve_columns` (compiled, rows
+in parallel threads, each answer checked independently) and computes the metrics and the
+reward terms vectorized in numpy. Parallelism beyond one
 process is injected through ``executor`` (anything with ``.map``), never hard-coded.
 
 A design is six numbers in SI units, in the column order of :data:`DESIGN_FIELDS`:
@@ -24,40 +25,29 @@ from __future__ import annotations
 
 import functools
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
-import numba
 import numpy as np
 
-from . import kernels, psm
-from .psm import (
+from .model.defaults import (
+    DEFAULT_N_TRIANGLES,
+    DEFAULT_PHASE_RAD,
+    DEFAULT_STRAIN_LIMIT,
     MAX_TRIANGLES,
     MIN_TRIANGLES,
-    N_PARAMS,
-    P_C0X,
-    P_C0Y,
-    P_C1X,
-    P_C1Y,
-    P_H,
-    P_HW,
-    P_KAPPA,
-    P_KC,
-    P_KR,
-    P_LMAX,
-    P_PHASE,
-    P_TAU,
-    P_TH0,
-    P_THMIN,
-    rest_points,
-    scaled_problem,
-    spring_stiffness,
+    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
-from .scene import Gripper, Scene, SoftDisk, check_range
+from .model.problem import REST_OK, SceneColumns, rest_codes
+from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
+from .solver.pipeline import BatchSolution, solve_columns
+from .solver.status import CHECK_FAILED, NOT_SOLVED
+from .validation import check_range
 
 __all__ = [
     "DESIGN_FIELDS",
+    "N_DESIGN",
+    "Design",
     "DEFAULT_STRAIN_LIMIT",
     "METRIC_KEYS",
     "Design",
@@ -66,18 +56,7 @@ __all__ = [
     "evaluate_designs",
 ]
 
-DESIGN_FIELDS = (
-    "finger_length_m",
-    "rest_angle_rad",
-    "joint_offset_m",
-    "finger_width_m",
-    "torque_nm",
-    "distance_m",
-)
-N_DESIGN = len(DESIGN_FIELDS)
-DEFAULT_STRAIN_LIMIT = 0.1
 DEFAULT_CHUNK_SIZE = 256
-PHASE_RAD = math.pi / 2  # first contour point at the top: mirror-symmetric for even N
 
 # Keys of the dict returned by evaluate_designs, with their dtype and trailing shape.
 METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
@@ -102,55 +81,6 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
     "penalty_fail": (np.float64, ()),
     "reward": (np.float64, ()),
 }
-NOT_SOLVED = -1  # status of rows that were not solved (invalid at rest)
-
-
-@dataclass(frozen=True)
-class Design:
-    """One gripper design and object placement, in SI units.
-
-    A design may be physically impossible (fingers overlapping the disk, width larger than the
-    length, ...): :func:`evaluate_designs` reports it with ``valid_at_rest=False`` and the invalid
-    penalty instead of raising, so that optimizers can explore freely.
-
-    Parameters
-    ----------
-    finger_length_m
-        Finger length ``l`` from joint to tip [m].
-    rest_angle_rad
-        Rest angle ``theta_a0`` of both fingers, from the +y axis [rad].
-    joint_offset_m
-        Joint distance ``d_3`` from the symmetry axis [m].
-    finger_width_m
-        Finger width ``w`` [m].
-    torque_nm
-        Actuation torque ``T_a`` on each finger [N·m].
-    distance_m
-        Distance ``d_1`` from the joints' line to the nearest point of the undeformed disk [m].
-    """
-
-    finger_length_m: float
-    rest_angle_rad: float
-    joint_offset_m: float
-    finger_width_m: float
-    torque_nm: float
-    distance_m: float
-
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            object.__setattr__(self, f.name, float(getattr(self, f.name)))
-
-    def to_array(self) -> np.ndarray:
-        """The design as a float64 array of shape (6,) in :data:`DESIGN_FIELDS` order."""
-        return np.array([getattr(self, name) for name in DESIGN_FIELDS], dtype=np.float64)
-
-    @classmethod
-    def from_array(cls, values) -> Design:
-        """Build a design from 6 numbers in :data:`DESIGN_FIELDS` order."""
-        arr = np.asarray(values, dtype=np.float64)
-        if arr.shape != (N_DESIGN,):
-            raise ValueError(f"a design needs shape ({N_DESIGN},), got {arr.shape}")
-        return cls(*arr.tolist())
 
 
 @dataclass(frozen=True)
@@ -312,176 +242,45 @@ def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open:
 
 
 # ---------------------------------------------------------------------------------------------
-# packing: the vectorized equivalent of Scene(...) validation + scaled_problem(...).params
+# scenes, solve and metrics
 
 
-def _valid_at_rest(des: np.ndarray, radius: np.ndarray, cos0: np.ndarray, sin0: np.ndarray,
-                   clearance: np.ndarray) -> np.ndarray:
-    """The checks of Gripper, SoftDisk, Scene and scaled_problem, row by row (mirror-symmetric,
-    so the right finger decides for both)."""
-    ln, th0, d3, w, torque, d1 = des.T
-    with np.errstate(invalid="ignore"):
-        ok = np.all(np.isfinite(des), axis=1)
-        ok &= (ln > 0) & (th0 > 0) & (th0 < math.pi / 2) & (d3 >= 0)
-        ok &= (w > 0) & (w < ln) & (torque >= 0) & (w < 2 * radius)
-        # disk centre in front of the gripping face: n . (C - J) - w/2 > 0
-        ok &= cos0 * d3 + sin0 * (d1 + radius) - w / 2 > 0
-        ok &= clearance > 0
-    return ok
-
-
-def _rest_geometry(des: np.ndarray, radius: np.ndarray):
-    """cos/sin of the rest angle, the rest clearance of the disk to a finger bar and the closed
-    angle, with the scalar ``math`` functions of scene.py so that values match it exactly."""
-    batch = des.shape[0]
-    cos0, sin0 = np.zeros(batch), np.zeros(batch)
-    clearance, th_min = np.full(batch, -1.0), np.zeros(batch)
-    for i in range(batch):
-        ln, th0, d3, w, _, d1 = des[i].tolist()
-        r = float(radius[i])
-        if not all(math.isfinite(v) for v in (ln, th0, d3, w, d1)) or ln <= 0 or w <= 0:
-            continue
-        s, c = math.sin(th0), math.cos(th0)
-        cos0[i], sin0[i] = c, s
-        yc = d1 + r
-        # right finger: J = (d3, 0), e = (s, c), n = (-c, s); rel = C - J = (-d3, yc)
-        along = s * (0.0 - d3) + c * yc
-        across = -c * (0.0 - d3) + s * yc
-        hw = w / 2
-        ds = max(0.0, -along, along - ln)
-        dm = max(0.0, across - hw, -hw - across)
-        clearance[i] = math.hypot(ds, dm) - r
-        th_min[i] = math.atan2(hw, ln) - math.asin(min(1.0, d3 / math.hypot(ln, hw)))
-    return cos0, sin0, clearance, th_min
-
-
-def _scene_params(des_row: np.ndarray, disk_row: np.ndarray, n: int, kf: float) -> np.ndarray:
-    """``scaled_problem(...).params`` of one valid row, through the real Scene (slow path)."""
-    ln, th0, d3, w, torque, d1 = des_row.tolist()
-    r, young, nu, thick, scale, ratio = disk_row.tolist()
-    scene = Scene(Gripper(ln, th0, d3, w, kf),
-                  SoftDisk(r, d1, young, nu, thick, scale, contour_stiffness_ratio=ratio))
-    return scaled_problem(scene, torque, int(n), "van_gelder", PHASE_RAD).params
-
-
-_PACK_VERIFIED: set[int] = set()  # N values whose fast packing matched scaled_problem
-
-
-def _pack(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, kf: np.ndarray):
-    """Validity mask and solver parameter rows (zeros for invalid rows).
-
-    The vectorized packing is checked against :func:`envs.psm.scaled_problem` on the first
-    valid row; if they differ (the parameter layout changed in ``psm``), every valid row is
-    packed by ``scaled_problem`` itself, with a warning: correct, only slower.
-    """
-    valid, prm = _pack_fast(des, disk, n_tri, kf)
-    rows = np.flatnonzero(valid)
-    if rows.size == 0:
-        return valid, prm
-    first = rows[0]
-    if int(n_tri[first]) in _PACK_VERIFIED:
-        # checked once per process and N: the code cannot change under a running process,
-        # and the slow path (a Scene with its reach check) would double a single step's cost
-        return valid, prm
-    ref = _scene_params(des[first], disk[first], n_tri[first], kf[first])
-    if ref.shape == prm[first].shape and np.array_equal(ref, prm[first]):
-        _PACK_VERIFIED.add(int(n_tri[first]))
-        return valid, prm
-    warnings.warn(
-        "evaluate_designs: the vectorized parameter packing differs from "
-        "envs.psm.scaled_problem (layout changed?); packing row by row instead (slower). "
-        "Update envs.evaluate._pack_fast.", RuntimeWarning, stacklevel=3,
-    )
-    prm = np.zeros((des.shape[0], ref.size))
-    for i in rows.tolist():
-        prm[i] = _scene_params(des[i], disk[i], n_tri[i], kf[i])
-    return valid, prm
-
-
-def _pack_fast(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, kf: np.ndarray):
-    """Vectorized Scene validation + scaled_problem packing; params shape (B, N_PARAMS)."""
-    radius, young, _, thick, scale, ratio = disk.T
-    cos0, sin0, clearance, th_min = _rest_geometry(des, radius)
-    valid = _valid_at_rest(des, radius, cos0, sin0, clearance)
-    prm = np.zeros((des.shape[0], N_PARAMS))
-    ln, th0, d3, w, torque, d1 = np.where(valid[:, None], des, 0.0).T
-    k_unit = scale * young * thick
-    kr2 = k_unit * radius**2
-    for n in np.unique(n_tri).tolist():
-        rows = n_tri == n
-        k_int, k_ext = spring_stiffness(n, 1.0, "van_gelder")
-        prm[rows, P_KR], prm[rows, P_KC] = k_int, k_ext * ratio[rows]
-        prm[rows, P_H] = 2 * math.sin(math.pi / n)
-    yc = (d1 + radius) / radius
-    prm[:, P_C0X], prm[:, P_C0Y] = (0.0 - d3) / radius, yc
-    prm[:, P_C1X], prm[:, P_C1Y] = (0.0 + d3) / radius, yc
-    prm[:, P_HW] = w / (2 * radius)
-    prm[:, P_LMAX] = ln / radius
-    prm[:, P_TAU] = torque / kr2
-    prm[:, P_KAPPA] = kf / kr2
-    prm[:, P_TH0] = th0
-    prm[:, P_THMIN] = th_min
-    prm[:, P_PHASE] = PHASE_RAD
-    corner_radius = getattr(psm, "corner_radius", None)
-    if corner_radius is not None and hasattr(psm, "P_RHO"):
-        # rounded finger corners (newer parameter layout); _pack checks the result anyway
-        prm[:, psm.P_RHO] = [corner_radius(wi, ri) / ri
-                             for wi, ri in zip(w.tolist(), radius.tolist(), strict=True)]
-    prm[~valid] = 0.0
-    return valid, prm
-
-
-# ---------------------------------------------------------------------------------------------
-# solve and metrics
-
-
-def _solve_group(n: int, prm: np.ndarray) -> dict[str, np.ndarray]:
-    """Solve rows with the same N; return the raw metrics (vectorized, no GraspResult)."""
-    g = prm.shape[0]
-    rest = rest_points(n, PHASE_RAD)
-    xs = np.empty((g, 2 * n + 2))
-    xs[:, : 2 * n] = rest.ravel()
-    xs[:, 2 * n] = prm[:, P_TH0]
-    xs[:, 2 * n + 1] = prm[:, P_TH0]
-    lam_face = np.zeros((g, 2, n))
-    lam_corner = np.zeros((g, 2, 4, n))
-    lam_stop = np.zeros(2 * g).reshape(g, 2)
-    corner_cand = np.zeros((g, 2, 4, n), dtype=np.bool_)
-    cand = np.zeros((g, 2, n), dtype=np.bool_)
-    infos = np.zeros((g, 8))
-    opts = kernels.default_options()
-    prm = np.ascontiguousarray(prm)
-    if g == 1:
-        # a single row needs no thread pool (and stays fork-safe in process-based vector envs)
-        kernels.solve_one(n, prm[0], opts, xs[0], lam_face[0], lam_corner[0], lam_stop[0],
-                          corner_cand[0], cand[0], infos[0])
-    else:
-        # dynamic scheduling, one row at a time: solve times vary by 100x between rows (a row
-        # hitting the iteration limit), so static blocks would leave threads idle
-        with numba.parallel_chunksize(1):
-            kernels.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand, cand,
-                                infos)
-    q = xs[:, : 2 * n].reshape(g, n, 2)
-    radial = np.sqrt(q[..., 0] * q[..., 0] + q[..., 1] * q[..., 1]) - 1.0
-    d = np.roll(q, -1, axis=1) - q
-    contour = np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]) / prm[:, P_H, None] - 1.0
-    du = q - rest
-    disp = np.sqrt(du[..., 0] * du[..., 0] + du[..., 1] * du[..., 1])
-    return {
-        "status": infos[:, 0].astype(np.int64),
-        "iterations": infos[:, 1].astype(np.int64),
-        "stable": infos[:, 3] != 0.0,
-        "jaw_angles_rad": xs[:, 2 * n :].copy(),
-        "n_contacts": np.count_nonzero(lam_face > 0.0, axis=2).astype(np.int64),
-        "corner_force": lam_corner.sum(axis=(2, 3)),
-        "face_force": lam_face.sum(axis=2),
-        "peak_strain": np.maximum(np.abs(radial).max(axis=1), np.abs(contour).max(axis=1)),
-        "max_displacement_ratio": disp.max(axis=1),
-    }
+def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
+    """Scene columns of design rows (the one Design -> Scene mapping, see
+    :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's."""
+    ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des.T)
+    radius, young, nu, thick, scale, ratio = (np.ascontiguousarray(c) for c in disk.T)
+    return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, torque)
 
 
 def _empty_output(batch: int) -> dict[str, np.ndarray]:
     return {k: np.zeros((batch, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
+
+
+def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int) -> None:
+    """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
+    what happened)."""
+    n_contacts = np.count_nonzero(sol.face_forces_n > 0.0, axis=2).astype(np.int64)
+    corner = sol.corner_forces_n.sum(axis=(2, 3))
+    metrics = {
+        "jaw_angles_rad": sol.jaw_angles_rad,
+        "n_contacts": n_contacts,
+        "touching": (n_contacts > 0) | (corner > 0.0),
+        "total_force_n": sol.face_forces_n.sum(axis=2) + corner,
+        "contact_score": n_contacts.sum(axis=1) / n,
+        "peak_strain": sol.peak_strain,
+        "max_displacement_ratio": sol.max_displacement_ratio,
+    }
+    finite = np.ones(rows.size, dtype=bool)
+    for v in metrics.values():
+        finite &= np.all(np.isfinite(v.reshape(rows.size, -1)), axis=1)
+    ok = sol.converged & finite
+    out["status"][rows] = np.where(sol.converged & ~finite, CHECK_FAILED, sol.status)
+    out["iterations"][rows] = sol.iterations
+    out["stable"][rows] = sol.stable
+    out["converged"][rows] = ok
+    for key, v in metrics.items():
+        out[key][rows[ok]] = v[ok]
 
 
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limits: np.ndarray,
@@ -492,33 +291,13 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
     out["n_triangles"][:] = n_tri
     out["strain_limit"][:] = limits
     out["status"][:] = NOT_SOLVED
-    valid, prm = _pack(des, disk, n_tri, kf)
+    cols = _columns(des, disk, kf)
+    valid = rest_codes(cols) == REST_OK
     out["valid_at_rest"][:] = valid
-    force_unit = disk[:, 4] * disk[:, 1] * disk[:, 3] * disk[:, 0]  # s E t r [N]
     for n in np.unique(n_tri[valid]).tolist():
         rows = np.flatnonzero(valid & (n_tri == n))
-        raw = _solve_group(n, prm[rows])
-        force = (raw["face_force"] + raw["corner_force"]) * force_unit[rows, None]
-        metrics = {
-            "jaw_angles_rad": raw["jaw_angles_rad"],
-            "n_contacts": raw["n_contacts"],
-            "touching": (raw["n_contacts"] > 0) | (raw["corner_force"] > 0.0),
-            "total_force_n": force,
-            "contact_score": raw["n_contacts"].sum(axis=1) / n,
-            "peak_strain": raw["peak_strain"],
-            "max_displacement_ratio": raw["max_displacement_ratio"],
-        }
-        finite = np.ones(rows.size, dtype=bool)
-        for v in metrics.values():
-            finite &= np.all(np.isfinite(v.reshape(rows.size, -1)), axis=1)
-        ok = (raw["status"] == kernels.OK) & finite
-        out["status"][rows] = raw["status"]
-        out["iterations"][rows] = raw["iterations"]
-        out["stable"][rows] = raw["stable"]
-        out["converged"][rows] = ok
-        for key, v in metrics.items():
-            # failed rows keep the zeros: finite, and the fail penalty says what happened
-            out[key][rows[ok]] = v[ok]
+        sol = solve_columns(cols.take(rows), n, phase_rad=DEFAULT_PHASE_RAD)
+        _fill_group(out, rows, sol, n)
     _add_reward(out, valid, weights)
     return out
 
@@ -552,8 +331,8 @@ def evaluate_designs(
     designs,
     disks,
     *,
-    torsion_stiffness_nm_per_rad=0.073,
-    n_triangles=20,
+    torsion_stiffness_nm_per_rad=PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+    n_triangles=DEFAULT_N_TRIANGLES,
     weights: RewardWeights | None = None,
     strain_limits=None,
     executor=None,
@@ -574,7 +353,7 @@ def evaluate_designs(
         Joint torsion spring ``k_f`` [N·m/rad], > 0; scalar or shape (B,).
     n_triangles
         Number of fan triangles ``N``; scalar or shape (B,). Rows are grouped by N and each group
-        is solved with one call of :func:`envs.kernels.solve_batch`.
+        is solved with one call of :func:`envs.solver.pipeline.solve_columns`.
     weights
         Reward weights (default :class:`RewardWeights`).
     strain_limits
@@ -597,9 +376,12 @@ def evaluate_designs(
         are not solved and rows whose solve failed keep zero metrics; both get their penalty.
 
         - ``valid_at_rest``: the scene can be built (fingers clear of the disk at rest, ...).
-        - ``converged``: solver status OK (``status == 0``) and finite outputs. Unlike
-          :func:`envs.solver.simulate`, the independent KKT check is not run here.
-        - ``stable``, ``status`` (-1: not solved), ``iterations``: solver diagnostics.
+        - ``converged``: as in :func:`envs.simulate`: the solver claimed an equilibrium, the
+          independent check of :mod:`envs.check` confirmed it, no fan triangle is turned over
+          and every output is finite.
+        - ``stable``, ``status``, ``iterations``: solver diagnostics; ``status`` is a public
+          code of :mod:`envs.solver.status` (-1: not solved, 0: converged, 8: folded, 11: the
+          independent check failed, ...; message in ``STATUS_MESSAGES``).
         - ``jaw_angles_rad`` (B, 2): right and left finger angles [rad].
         - ``n_contacts`` (B, 2): contour points pressed by each face (positive force).
         - ``touching`` (B, 2): each finger touches the disk (face or corner contact).

@@ -79,7 +79,9 @@ from skfem import (
 )
 from skfem.helpers import ddot, grad
 
-from envs.scene import Scene, SoftDisk, check_range, closed_angle_rad, finger_frame
+from envs.model.geometry import closed_angle_rad, finger_frame
+from envs.scene import Scene, SoftDisk
+from envs.validation import check_range
 
 __all__ = [
     "FemResult",

@@ -13,64 +13,44 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from .model.defaults import (
+    DEFAULT_POISSON_RATIO,
+    DEFAULT_STIFFNESS_SCALE,
+    DEFAULT_THICKNESS_M,
+    DEFAULT_YOUNGS_MODULUS_PA,
+    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+)
+from .model.geometry import closed_angle_rad, distance_to_finger_bar
+from .model.problem import (
+    REST_MESSAGES,
+    REST_OK,
+    REST_OVERLAP,
+    REST_WIDTH,
+    SceneColumns,
+    _clearance,
+    rest_codes,
+)
+from .validation import check_range
+
 __all__ = [
     "Gripper",
     "SoftDisk",
     "Scene",
+    "Design",
+    "DESIGN_FIELDS",
     "PRESETS",
-    "check_range",
-    "closed_angle_rad",
-    "finger_frame",
 ]
 
-
-def check_range(
-    name: str,
-    value: float,
-    low: float = -math.inf,
-    high: float = math.inf,
-    *,
-    low_open: bool = False,
-    high_open: bool = False,
-) -> float:
-    """Validate that ``value`` is a finite real number inside an interval.
-
-    Parameters
-    ----------
-    name
-        Name of the parameter, used in the error message.
-    value
-        The value to check.
-    low, high
-        Interval bounds.
-    low_open, high_open
-        Whether the bounds are excluded.
-
-    Returns
-    -------
-    float
-        ``value`` converted to ``float``.
-
-    Raises
-    ------
-    ValueError
-        If ``value`` is not a finite number or lies outside the interval; the message names the
-        parameter, the value and the allowed range.
-    """
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    lo_b = "(" if low_open else "["
-    hi_b = ")" if high_open else "]"
-    allowed = f"{lo_b}{low:g}, {high:g}{hi_b}"
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite and in {allowed}, got {v!r}")
-    below = v <= low if low_open else v < low
-    above = v >= high if high_open else v > high
-    if below or above:
-        raise ValueError(f"{name} = {v!r} is outside the allowed range {allowed}")
-    return v
+# A design is six numbers in SI units, in this column order.
+DESIGN_FIELDS = (
+    "finger_length_m",
+    "rest_angle_rad",
+    "joint_offset_m",
+    "finger_width_m",
+    "torque_nm",
+    "distance_m",
+)
+N_DESIGN = len(DESIGN_FIELDS)
 
 
 @dataclass(frozen=True)
@@ -143,10 +123,10 @@ class SoftDisk:
 
     radius_m: float
     distance_m: float
-    youngs_modulus_pa: float = 100e3
-    poisson_ratio: float = 0.45
-    thickness_m: float = 0.01
-    stiffness_scale: float = 1.0
+    youngs_modulus_pa: float = DEFAULT_YOUNGS_MODULUS_PA
+    poisson_ratio: float = DEFAULT_POISSON_RATIO
+    thickness_m: float = DEFAULT_THICKNESS_M
+    stiffness_scale: float = DEFAULT_STIFFNESS_SCALE
     contour_stiffness_ratio: float = 1.0
 
     def __post_init__(self) -> None:
@@ -168,60 +148,6 @@ class SoftDisk:
         return np.array([0.0, self.distance_m + self.radius_m])
 
 
-def finger_frame(gripper: Gripper, side: int, angle_rad: float):
-    """Joint position, axis and inward face normal of one finger.
-
-    Parameters
-    ----------
-    gripper
-        The gripper.
-    side
-        0 for the right finger, 1 for the left finger.
-    angle_rad
-        Finger angle from the +y axis [rad]; an array of K angles gives ``axis`` and ``normal``
-        of shape (2, K).
-
-    Returns
-    -------
-    joint, axis, normal : numpy.ndarray
-        ``J`` [m], the unit vector ``e`` along the finger and the unit inward normal ``n`` of the
-        gripping face.
-    """
-    s, c = np.sin(angle_rad), np.cos(angle_rad)
-    if side == 0:
-        return np.array([gripper.joint_offset_m, 0.0]), np.array([s, c]), np.array([-c, s])
-    return np.array([-gripper.joint_offset_m, 0.0]), np.array([-s, c]), np.array([c, s])
-
-
-def closed_angle_rad(gripper: Gripper) -> float:
-    """Finger angle at which the gripping-face tip reaches the symmetry axis [rad].
-
-    The jaws cannot close past it (the two faces would meet); the solver treats it as a joint
-    stop. Solves ``d_3 + l sin(theta) - (w/2) cos(theta) = 0`` for ``theta`` in (-pi/2, 0].
-    """
-    d3, ln, hw = gripper.joint_offset_m, gripper.finger_length_m, gripper.finger_width_m / 2
-    # l sin t - hw cos t = R sin(t - phi), R = hypot(l, hw), phi = atan2(hw, l)
-    rr = math.hypot(ln, hw)
-    return math.atan2(hw, ln) - math.asin(min(1.0, d3 / rr))
-
-
-def _distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
-    """Distance from ``point`` to the rectangular finger bar (negative inside is reported as 0).
-
-    ``angle_rad`` may be an array of finger angles: one distance per angle.
-    """
-    joint, axis, normal = finger_frame(gripper, side, angle_rad)
-    rx = float(point[0]) - joint[0]
-    ry = float(point[1]) - joint[1]
-    s = axis[0] * rx + axis[1] * ry  # along the axis e
-    m = normal[0] * rx + normal[1] * ry  # along the inward normal n
-    hw = gripper.finger_width_m / 2
-    ds = np.maximum(0.0, np.maximum(-s, s - gripper.finger_length_m))
-    dm = np.maximum(0.0, np.maximum(m - hw, -hw - m))
-    dist = np.hypot(ds, dm)
-    return float(dist) if np.ndim(dist) == 0 else dist
-
-
 @dataclass(frozen=True)
 class Scene:
     """A gripper and the soft disk it grasps.
@@ -241,25 +167,18 @@ class Scene:
             raise ValueError(f"gripper must be a Gripper, got {type(g).__name__}")
         if not isinstance(d, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(d).__name__}")
-        if g.finger_width_m >= 2 * d.radius_m:
+        code = int(rest_codes(self.columns(0.0))[0])
+        if code == REST_OVERLAP:
+            _, clearance = _clearance(self.columns(0.0))
+            raise ValueError(
+                f"the fingers overlap the disk at rest (clearance {float(clearance[0]):.3g} m): "
+                "increase rest_angle_rad or distance_m (allowed: clearance > 0)")
+        if code == REST_WIDTH:
             raise ValueError(
                 f"finger_width_m = {g.finger_width_m!r} must be smaller than the disk diameter "
-                f"2 * radius_m = {2 * d.radius_m!r}"
-            )
-        centre = d.center_m
-        for side, name in ((0, "right"), (1, "left")):
-            joint, _, normal = finger_frame(g, side, g.rest_angle_rad)
-            if normal @ (centre - joint) - g.finger_width_m / 2 <= 0:
-                raise ValueError(
-                    f"disk centre lies behind the {name} finger's gripping face at rest: "
-                    "decrease joint_offset_m or increase rest_angle_rad/distance_m"
-                )
-            clearance = _distance_to_finger_bar(g, side, g.rest_angle_rad, centre) - d.radius_m
-            if clearance <= 0:
-                raise ValueError(
-                    f"the {name} finger overlaps the disk at rest (clearance {clearance:.3g} m): "
-                    "increase rest_angle_rad or distance_m (allowed: clearance > 0)"
-                )
+                f"2 * radius_m = {2 * d.radius_m!r}")
+        if code != REST_OK:
+            raise ValueError(REST_MESSAGES[code])
         object.__setattr__(self, "warnings", self._reach_warnings())
 
     def _reach_warnings(self) -> tuple[str, ...]:
@@ -267,13 +186,22 @@ class Scene:
         # right finger over 64 angles from closed to rest (the left one mirrors it), in one
         # vectorized call: this runs for every Scene an optimizer builds
         angles = np.linspace(closed_angle_rad(g), g.rest_angle_rad, 64)
-        reach = float(np.min(_distance_to_finger_bar(g, 0, angles, d.center_m)))
+        reach = float(np.min(distance_to_finger_bar(g, 0, angles, d.center_m)))
         if reach > d.radius_m:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "
                 f"{reach - d.radius_m:.3g} m): no grasp is possible",
             )
         return ()
+
+    def columns(self, torque_nm: float = 0.0) -> SceneColumns:
+        """This scene at an actuation torque [N·m] as one row of :class:`SceneColumns`."""
+        g, d = self.gripper, self.disk
+        values = (g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
+                  g.torsion_stiffness_nm_per_rad, d.radius_m, d.distance_m, d.youngs_modulus_pa,
+                  d.poisson_ratio, d.thickness_m, d.stiffness_scale, d.contour_stiffness_ratio,
+                  float(torque_nm))
+        return SceneColumns(*(np.array([v], dtype=np.float64) for v in values))
 
     @property
     def reachable(self) -> bool:
@@ -307,12 +235,81 @@ class Scene:
         return Scene(replace(self.gripper, **gk), replace(self.disk, **dk))
 
 
+@dataclass(frozen=True)
+class Design:
+    """One gripper design and object placement, in SI units.
+
+    A design may be physically impossible (fingers overlapping the disk, width larger than the
+    length, ...): :func:`evaluate_designs` reports it with ``valid_at_rest=False`` and the invalid
+    penalty instead of raising, so that optimizers can explore freely.
+
+    Parameters
+    ----------
+    finger_length_m
+        Finger length ``l`` from joint to tip [m].
+    rest_angle_rad
+        Rest angle ``theta_a0`` of both fingers, from the +y axis [rad].
+    joint_offset_m
+        Joint distance ``d_3`` from the symmetry axis [m].
+    finger_width_m
+        Finger width ``w`` [m].
+    torque_nm
+        Actuation torque ``T_a`` on each finger [N·m].
+    distance_m
+        Distance ``d_1`` from the joints' line to the nearest point of the undeformed disk [m].
+    """
+
+    finger_length_m: float
+    rest_angle_rad: float
+    joint_offset_m: float
+    finger_width_m: float
+    torque_nm: float
+    distance_m: float
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, float(getattr(self, f.name)))
+
+    def to_scene(self, disk: SoftDisk,
+                 torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD
+                 ) -> Scene:
+        """The scene of this design with a disk (its ``distance_m`` replaced by the design's).
+
+        The batch evaluator maps design rows to scenes the same way
+        (:func:`envs.evaluate.evaluate_designs`); raises ``ValueError`` for a design invalid at
+        rest, as :class:`Scene` does.
+        """
+        gripper = Gripper(self.finger_length_m, self.rest_angle_rad, self.joint_offset_m,
+                          self.finger_width_m, torsion_stiffness_nm_per_rad)
+        return Scene(gripper, replace(disk, distance_m=self.distance_m))
+
+    @classmethod
+    def from_scene(cls, scene: Scene, torque_nm: float) -> Design:
+        """The design of a scene's gripper and disk placement at an actuation torque."""
+        g = scene.gripper
+        return cls(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
+                   torque_nm, scene.disk.distance_m)
+
+    def to_array(self) -> np.ndarray:
+        """The design as a float64 array of shape (6,) in :data:`DESIGN_FIELDS` order."""
+        return np.array([getattr(self, name) for name in DESIGN_FIELDS], dtype=np.float64)
+
+    @classmethod
+    def from_array(cls, values) -> Design:
+        """Build a design from 6 numbers in :data:`DESIGN_FIELDS` order."""
+        arr = np.asarray(values, dtype=np.float64)
+        if arr.shape != (N_DESIGN,):
+            raise ValueError(f"a design needs shape ({N_DESIGN},), got {arr.shape}")
+        return cls(*arr.tolist())
+
+
+
 PAPER_GRIPPER = Gripper(
     finger_length_m=0.2,
     rest_angle_rad=math.radians(45.0),
     joint_offset_m=0.025,
     finger_width_m=0.01,
-    torsion_stiffness_nm_per_rad=0.073,
+    torsion_stiffness_nm_per_rad=PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
 FORCEPS_GRIPPER = Gripper(
     finger_length_m=0.016,

@@ -25,7 +25,8 @@ from envs.evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from envs.scene import PRESETS, Scene, SoftDisk, check_range
+from envs.scene import PRESETS, Scene, SoftDisk
+from envs.validation import check_range
 
 from .result import OptimResult, to_jsonable
 

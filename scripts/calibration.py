@@ -53,7 +53,7 @@ from envs.accuracy import (  # noqa: E402
     jsonable,
     paper_heldout_cases,
 )
-from envs.psm import STIFFNESS_RULES  # noqa: E402
+from envs.model.defaults import STIFFNESS_RULES  # noqa: E402
 from envs.scene import Scene  # noqa: E402
 from envs.solver import simulate  # noqa: E402
 

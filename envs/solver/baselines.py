@@ -7,33 +7,51 @@
 * ``"nelder-mead"``: the paper's approach, a Nelder-Mead simplex minimising the squared residual
   of the equilibrium equations, contact represented by a stiff penalty on penetration.
 
-Both return a :class:`envs.solver.GraspResult` checked by the same independent KKT check as the
-Newton solver, so a baseline that stops short is reported as not converged.
+Both return a :class:`envs.solver.result.GraspResult` through the same pipeline tail as the
+Newton solver (:func:`envs.solver.pipeline.checked_solution`: metrics, independent check,
+status), so a baseline that stops short is reported as not converged.
 """
 
 from __future__ import annotations
 
+import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import minimize, nnls
 
-from .psm import (
+from envs.model.energy import energy_scaled, gradient_scaled
+from envs.model.geometry import finger_axes, rest_points
+from envs.model.layout import (
+    I_ITERATIONS,
+    I_STATUS,
+    N_CORNERS,
+    N_INFO,
     P_C0X,
     P_HW,
     P_KC,
     P_KR,
     P_LMAX,
+    P_PHASE,
     P_TAU,
+    P_TH0,
     P_THMIN,
-    ScaledProblem,
-    energy_scaled,
-    gradient_scaled,
-    rest_points,
 )
-from .scene import Scene
+from envs.model.problem import pack_params
+from envs.scene import Scene
+
+from .pipeline import checked_solution
+from .status import ITER_LIMIT, OK
 
 __all__ = ["solve", "face_gaps", "face_gap_jacobian"]
+
+
+class _Scaled(NamedTuple):
+    """A scaled problem as the baselines see it: N and its parameter row."""
+
+    n: int
+    params: np.ndarray
 
 
 class _Timeout(Exception):
@@ -41,13 +59,13 @@ class _Timeout(Exception):
 
 
 def _frames(theta: np.ndarray):
-    s, c = np.sin(theta), np.cos(theta)
-    e = np.array([[s[0], c[0]], [-s[1], c[1]]])
-    nrm = np.array([[-c[0], s[0]], [c[1], s[1]]])
+    axes = [finger_axes(j, math.sin(theta[j]), math.cos(theta[j])) for j in range(2)]
+    e = np.array([[a[0], a[1]] for a in axes])
+    nrm = np.array([[a[2], a[3]] for a in axes])
     return e, nrm
 
 
-def face_gaps(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np.ndarray:
+def face_gaps(x: np.ndarray, prob: _Scaled, idx: np.ndarray) -> np.ndarray:
     """Scaled distance of points ``idx[j]`` to the gripping-face segment of finger ``j``.
 
     Returns the concatenation over the two fingers (right first).
@@ -65,7 +83,7 @@ def face_gaps(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np.ndarray
     return np.concatenate(out)
 
 
-def face_gap_jacobian(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np.ndarray:
+def face_gap_jacobian(x: np.ndarray, prob: _Scaled, idx: np.ndarray) -> np.ndarray:
     """Jacobian of :func:`face_gaps` with respect to ``x``."""
     p, n = prob.params, prob.n
     q = x[: 2 * n].reshape(n, 2)
@@ -96,7 +114,7 @@ def face_gap_jacobian(x: np.ndarray, prob: ScaledProblem, idx: np.ndarray) -> np
     return np.vstack(rows)
 
 
-def _candidates(x0: np.ndarray, prob: ScaledProblem) -> list[np.ndarray]:
+def _candidates(x0: np.ndarray, prob: _Scaled) -> list[np.ndarray]:
     n = prob.n
     q = x0[: 2 * n].reshape(n, 2)
     _, nrm = _frames(x0[2 * n :])
@@ -114,7 +132,7 @@ def _candidates(x0: np.ndarray, prob: ScaledProblem) -> list[np.ndarray]:
     return out
 
 
-def _forces(x: np.ndarray, prob: ScaledProblem, idx: list[np.ndarray], tol: float):
+def _forces(x: np.ndarray, prob: _Scaled, idx: list[np.ndarray], tol: float):
     """Contact forces by NNLS on the active constraints: grad Pi = sum lam grad g."""
     n = prob.n
     g = face_gaps(x, prob, idx)
@@ -131,7 +149,7 @@ def _forces(x: np.ndarray, prob: ScaledProblem, idx: list[np.ndarray], tol: floa
     lam_face = np.zeros((2, n))
     lam_stop = np.zeros(2)
     if a.shape[1]:
-        sol, _ = nnls(a, gradient_scaled(x, prob))
+        sol, _ = nnls(a, gradient_scaled(x, prob.params, prob.n))
         split = np.concatenate([np.zeros(len(idx[0]), int), np.ones(len(idx[1]), int)])
         pts = np.concatenate(idx)
         for lam, m in zip(sol[: len(active)], active, strict=True):
@@ -141,14 +159,14 @@ def _forces(x: np.ndarray, prob: ScaledProblem, idx: list[np.ndarray], tol: floa
     return lam_face, lam_stop
 
 
-def _start(prob: ScaledProblem) -> np.ndarray:
+def _start(prob: _Scaled) -> np.ndarray:
     x = np.empty(2 * prob.n + 2)
-    x[: 2 * prob.n] = rest_points(prob.n, prob.params[13]).ravel()
-    x[2 * prob.n :] = prob.params[11]
+    x[: 2 * prob.n] = rest_points(prob.n, prob.params[P_PHASE]).ravel()
+    x[2 * prob.n :] = prob.params[P_TH0]
     return x
 
 
-def _slsqp(prob: ScaledProblem, time_limit_s: float):
+def _slsqp(prob: _Scaled, time_limit_s: float):
     x0 = _start(prob)
     idx = _candidates(x0, prob)
     n = prob.n
@@ -167,8 +185,8 @@ def _slsqp(prob: ScaledProblem, time_limit_s: float):
     ]
     try:
         res = minimize(
-            lambda x: energy_scaled(x, prob) / scale, x0,
-            jac=lambda x: gradient_scaled(x, prob) / scale, method="SLSQP",
+            lambda x: energy_scaled(x, prob.params, prob.n) / scale, x0,
+            jac=lambda x: gradient_scaled(x, prob.params, prob.n) / scale, method="SLSQP",
             constraints=cons, callback=callback, options={"maxiter": 2000, "ftol": 1e-14},
         )
         x, ok, msg, nit = res.x, bool(res.success), f"slsqp: {res.message}", int(res.nit)
@@ -177,7 +195,7 @@ def _slsqp(prob: ScaledProblem, time_limit_s: float):
     return x, idx, ok, msg, nit
 
 
-def _nelder_mead(prob: ScaledProblem, time_limit_s: float):
+def _nelder_mead(prob: _Scaled, time_limit_s: float):
     x0 = _start(prob)
     idx = _candidates(x0, prob)
     k_pen = 1e4 * max(prob.params[P_KC], prob.params[P_KR])
@@ -189,7 +207,8 @@ def _nelder_mead(prob: ScaledProblem, time_limit_s: float):
         count[0] += 1
         g = face_gaps(x, prob, idx)
         pen = np.minimum(g, 0.0)
-        r = gradient_scaled(x, prob) + face_gap_jacobian(x, prob, idx).T @ (k_pen * pen)
+        r = gradient_scaled(x, prob.params, prob.n)
+        r += face_gap_jacobian(x, prob, idx).T @ (k_pen * pen)
         return float(r @ r) / scale**2
 
     def callback(_xk):
@@ -208,17 +227,14 @@ def _nelder_mead(prob: ScaledProblem, time_limit_s: float):
     return x, idx, ok, msg, count[0]
 
 
-def solve(
-    scene: Scene,
-    prob: ScaledProblem,
-    torque_nm: float,
-    stiffness_rule: str,
-    method: str,
-    time_limit_s: float,
-):
-    """Run a baseline and wrap its answer in a checked :class:`envs.solver.GraspResult`."""
-    from .solver import result_from_scaled
+def solve(scene: Scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
+          phase_rad: float, method: str, time_limit_s: float):
+    """Run a baseline and return its answer as a checked :class:`GraspResult`."""
+    from .simulate import grasp_result
 
+    cols = scene.columns(torque_nm)
+    prm = pack_params(cols, n_triangles, stiffness_rule, phase_rad)
+    prob = _Scaled(int(n_triangles), prm[0])
     t0 = time.perf_counter()
     if method == "slsqp":
         x, idx, ok, msg, nit = _slsqp(prob, time_limit_s)
@@ -228,9 +244,12 @@ def solve(
         raise ValueError(f"baseline method {method!r} is unknown; allowed: slsqp, nelder-mead")
     elapsed = time.perf_counter() - t0
     lam_face, lam_stop = _forces(x, prob, idx, tol=1e-8)
-    if ok:
-        msg = "converged"
-    return result_from_scaled(
-        scene, prob, torque_nm, x, lam_face, np.zeros((2, 4, prob.n)), lam_stop, ok, msg, nit,
-        elapsed, method, stiffness_rule,
-    )
+    n = prob.n
+    info = np.zeros((1, N_INFO))
+    info[0, I_STATUS] = OK if ok else ITER_LIMIT
+    info[0, I_ITERATIONS] = nit
+    sol = checked_solution(cols, n, prm, x[None, :], lam_face[None],
+                           np.zeros((1, 2, N_CORNERS, n)), lam_stop[None], info, elapsed)
+    # the baseline's own reason where it gave up; otherwise the pipeline's (check, fold)
+    message = None if (ok or sol.folded[0]) else msg
+    return grasp_result(sol, 0, torque_nm, method, stiffness_rule, message=message)

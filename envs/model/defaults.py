@@ -1,0 +1,35 @@
+"""Defaults of the model, each stated once, with where it comes from.
+
+Paper values are from Tables 1 and 2 of the source paper (``shared/paper.md``) as fixed by
+``shared/CONVENTIONS.md``; the others are choices of this package, with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+
+# --- discretization ------------------------------------------------------------------------
+MIN_TRIANGLES = 4  # N = 3 gives 120-degree triangles: negative stiffness under the area rule
+MAX_TRIANGLES = 20000
+DEFAULT_N_TRIANGLES = 20  # the paper's mesh; ~3 % of the FEM closing angle after calibration
+DEFAULT_PHASE_RAD = math.pi / 2  # first contour point at the top: mirror-symmetric for even N
+STIFFNESS_RULES = ("van_gelder", "cst_fit")
+DEFAULT_STIFFNESS_RULE = "van_gelder"  # CONVENTIONS.md: the area rule
+
+# --- gripper and material (CONVENTIONS.md, paper Tables 1 and 2) -----------------------------
+PAPER_TORSION_STIFFNESS_NM_PER_RAD = 0.073  # k_f of the paper gripper
+DEFAULT_YOUNGS_MODULUS_PA = 100e3
+DEFAULT_POISSON_RATIO = 0.45
+DEFAULT_THICKNESS_M = 0.01
+DEFAULT_STIFFNESS_SCALE = 1.0
+
+# --- contact geometry ----------------------------------------------------------------------
+# Finger end corners are rounded with this radius (fraction of the disk radius, at most a
+# twentieth of the finger width): it makes point-on-corner contact differentiable; its effect
+# on the geometry is below 1e-3 r.
+CORNER_ROUNDING = 1e-3
+
+# --- design objective ----------------------------------------------------------------------
+# admissible peak strain of the grasped object, relative (soft tissue and produce bruise at
+# strains of 0.1-0.2); the environment draws its own per object
+DEFAULT_STRAIN_LIMIT = 0.1

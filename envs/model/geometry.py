@@ -1,0 +1,130 @@
+"""Geometry of the model: the disk's contour points and the two finger bars.
+
+Conventions of ``shared/CONVENTIONS.md``: x to the right, y up, the gripper's symmetry axis is
+the y axis, the right finger's joint at ``(+d_3, 0)`` and the left one's at ``(-d_3, 0)``, finger
+angles from +y, positive when opening. Finger ``j`` (0 right, 1 left) at angle ``theta`` has the
+unit axis ``e`` and the inward face normal ``n``::
+
+    right: e = ( sin, cos), n = (-cos, sin)
+    left:  e = (-sin, cos), n = ( cos, sin)
+
+:func:`finger_axes` is the one definition: the compiled solver calls it, and the Python helpers
+below are built on it. (The independent check of :mod:`envs.check` keeps its own copy on
+purpose.)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numba import njit
+
+from .defaults import CORNER_ROUNDING
+
+if TYPE_CHECKING:
+    from envs.scene import Gripper
+
+__all__ = [
+    "finger_axes",
+    "finger_frame",
+    "closed_angle_rad",
+    "distance_to_finger_bar",
+    "rest_points",
+    "corner_radius",
+]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def finger_axes(j, s, c):
+    """Unit axis ``(ex, ey)`` and inward normal ``(nx, ny)`` of finger ``j`` (0 right, 1 left)
+    from the sine ``s`` and cosine ``c`` of its angle."""
+    if j == 0:
+        return s, c, -c, s  # ex, ey, nx, ny
+    return -s, c, c, s
+
+
+def finger_frame(gripper: Gripper, side: int, angle_rad):
+    """Joint position, axis and inward face normal of one finger.
+
+    Parameters
+    ----------
+    gripper
+        The gripper.
+    side
+        0 for the right finger, 1 for the left finger.
+    angle_rad
+        Finger angle from the +y axis [rad]; an array of K angles gives ``axis`` and ``normal``
+        of shape (2, K).
+
+    Returns
+    -------
+    joint, axis, normal : numpy.ndarray
+        ``J`` [m], the unit vector ``e`` along the finger and the unit inward normal ``n`` of the
+        gripping face.
+    """
+    ex, ey, nx, ny = finger_axes(0 if side == 0 else 1, np.sin(angle_rad), np.cos(angle_rad)) \
+        if np.ndim(angle_rad) == 0 else _finger_axes_array(side, np.asarray(angle_rad))
+    joint = np.array([gripper.joint_offset_m if side == 0 else -gripper.joint_offset_m, 0.0])
+    return joint, np.array([ex, ey]), np.array([nx, ny])
+
+
+def _finger_axes_array(side: int, angles: np.ndarray):
+    # finger_axes is written for scalars; the same signs, elementwise
+    s, c = np.sin(angles), np.cos(angles)
+    return (s, c, -c, s) if side == 0 else (-s, c, c, s)
+
+
+def closed_angle_rad(gripper: Gripper) -> float:
+    """Finger angle at which the gripping-face tip reaches the symmetry axis [rad].
+
+    The jaws cannot close past it (the two faces would meet); the solver treats it as a joint
+    stop. Solves ``d_3 + l sin(theta) - (w/2) cos(theta) = 0`` for ``theta`` in (-pi/2, 0].
+    """
+    return closed_angle_of(gripper.finger_length_m, gripper.joint_offset_m,
+                           gripper.finger_width_m)
+
+
+def closed_angle_of(length_m: float, joint_offset_m: float, width_m: float) -> float:
+    """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m]."""
+    hw = width_m / 2
+    # l sin t - hw cos t = R sin(t - phi), R = hypot(l, hw), phi = atan2(hw, l)
+    rr = math.hypot(length_m, hw)
+    return math.atan2(hw, length_m) - math.asin(min(1.0, joint_offset_m / rr))
+
+
+def bar_distance(along_m, across_m, length_m: float, width_m: float):
+    """Distance from a point to a finger bar (0 inside) from its coordinates along the bar axis
+    and along the inward normal, relative to the joint [m]; elementwise on arrays."""
+    hw = width_m / 2
+    ds = np.maximum(0.0, np.maximum(-along_m, along_m - length_m))
+    dm = np.maximum(0.0, np.maximum(across_m - hw, -hw - across_m))
+    return np.hypot(ds, dm)
+
+
+def distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
+    """Distance from ``point`` to the rectangular finger bar (0 inside) [m].
+
+    ``angle_rad`` may be an array of finger angles: one distance per angle.
+    """
+    joint, axis, normal = finger_frame(gripper, side, angle_rad)
+    rx = float(point[0]) - joint[0]
+    ry = float(point[1]) - joint[1]
+    dist = bar_distance(axis[0] * rx + axis[1] * ry, normal[0] * rx + normal[1] * ry,
+                        gripper.finger_length_m, gripper.finger_width_m)
+    return float(dist) if np.ndim(dist) == 0 else dist
+
+
+def rest_points(n_triangles: int, phase_rad: float = math.pi / 2) -> np.ndarray:
+    """Unit contour points of the fan, counter-clockwise, the first at ``phase_rad``, (N, 2)."""
+    ang = phase_rad + 2 * math.pi * np.arange(n_triangles) / n_triangles
+    return np.column_stack([np.cos(ang), np.sin(ang)])
+
+
+def corner_radius(finger_width_m, radius_m):
+    """Rounding radius of the finger end corners [m] (see :data:`CORNER_ROUNDING`); elementwise
+    on arrays."""
+    return np.minimum(CORNER_ROUNDING * radius_m, 0.05 * finger_width_m) \
+        if np.ndim(finger_width_m) or np.ndim(radius_m) \
+        else min(CORNER_ROUNDING * radius_m, 0.05 * finger_width_m)

@@ -1,0 +1,74 @@
+"""Named layouts of the arrays shared by the Python side and the compiled solver.
+
+The compiled kernels take plain float64 vectors; every slot has a name here, and nothing reads
+them by bare index.
+
+Parameter vector of a scaled problem (lengths in units of the radius r, forces in units of
+``s E t r``, torques in units of ``s E t r^2``), written by :func:`envs.model.problem.pack_params`:
+
+========  ==================================================================================
+P_KR      radial spring stiffness per ``s E t``
+P_KC      contour spring stiffness per ``s E t`` (times the contour stiffness ratio)
+P_H       contour rest length ``2 sin(pi / N)``
+P_C0X/Y   disk centre relative to the right joint
+P_C1X/Y   disk centre relative to the left joint
+P_HW      half finger width
+P_LMAX    finger length
+P_TAU     actuation torque
+P_KAPPA   joint torsion stiffness
+P_TH0     rest angle of the fingers [rad]
+P_THMIN   closed-jaw angle (joint stop) [rad]
+P_PHASE   angle of the first contour point [rad]
+P_RHO     rounding radius of the finger corners
+========  ==================================================================================
+
+The solver keeps a longer private copy with two more slots: P_GAUGE (stiffness of the rotation
+gauge spring) and P_POLICY (contact policy of the attempt).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# parameter vector
+P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
+P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO = range(9, 15)
+N_PARAMS = 15
+P_GAUGE = 15  # solver copy only: gauge spring stiffness
+P_POLICY = 16  # solver copy only: contact policy of this attempt
+N_KERNEL_PARAMS = 17
+
+# solver options
+O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)
+N_OPTIONS = 6
+
+# info vector written by the compiled solve of one grasp
+I_STATUS = 0  # status code (envs.solver.status)
+I_ITERATIONS = 1  # Newton iterations of all rounds, polishes and policies
+I_ROUNDS = 2  # outer rounds over the contact candidate sets
+I_STABLE = 3  # 1.0: strict local minimum (the constrained Newton matrix positive definite)
+I_STATIONARITY = 4  # stationarity residual / force scale
+I_CONTACT_GAP = 5  # largest |gap| of a loaded constraint
+I_MIN_GAP = 6  # smallest gap of a considered constraint
+I_INVERTED = 7  # fan triangles turned over
+N_INFO = 8
+
+# constraint kinds
+KIND_FACE, KIND_CORNER, KIND_STOP = 0, 1, 2
+N_CORNERS = 4  # per finger: face tip, face root, back tip, back root
+
+
+def default_options() -> np.ndarray:
+    """Solver options, indexed by the ``O_*`` names.
+
+    Stationarity tolerance (relative to the force scale), interior-point iteration limit,
+    outer-round limit, initial barrier factor, polish on/off and gauge stiffness factor.
+    """
+    opts = np.zeros(N_OPTIONS)
+    opts[O_TOL] = 1e-12
+    opts[O_MAXIT] = 300.0
+    opts[O_MAXROUND] = 12.0
+    opts[O_MU0] = 1e-2
+    opts[O_POLISH] = 1.0
+    opts[O_GAUGE] = 1.0
+    return opts

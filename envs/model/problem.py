@@ -1,0 +1,207 @@
+"""What the compiled solver is given: scenes as columns of numbers, checked and packed.
+
+A :class:`SceneColumns` holds B scenes (gripper, disk and actuation torque) as float64 columns
+in SI units. :func:`rest_codes` is the one check that a scene is valid at rest (used by
+:class:`envs.scene.Scene`, which raises, and by the batch, which reports), and
+:func:`pack_params` the one packing into the solver's scaled parameter rows (layout
+:mod:`envs.model.layout`): lengths in units of the radius r, forces in units of ``s E t r``,
+torques in units of ``s E t r^2``, so that tolerances do not depend on the physical size.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .defaults import DEFAULT_PHASE_RAD
+from .geometry import bar_distance, corner_radius, rest_points
+from .layout import (
+    N_PARAMS,
+    P_C0X,
+    P_C0Y,
+    P_C1X,
+    P_C1Y,
+    P_H,
+    P_HW,
+    P_KAPPA,
+    P_KC,
+    P_KR,
+    P_LMAX,
+    P_PHASE,
+    P_RHO,
+    P_TAU,
+    P_TH0,
+    P_THMIN,
+)
+from .stiffness import spring_stiffness
+
+__all__ = [
+    "SceneColumns",
+    "REST_OK",
+    "REST_NOT_FINITE",
+    "REST_GRIPPER",
+    "REST_WIDTH",
+    "REST_BEHIND_FACE",
+    "REST_OVERLAP",
+    "REST_MESSAGES",
+    "rest_codes",
+    "pack_params",
+    "units",
+    "rest_state",
+    "spring_strains",
+]
+
+# why a scene is invalid at rest (0: valid)
+REST_OK, REST_NOT_FINITE, REST_GRIPPER, REST_WIDTH, REST_BEHIND_FACE, REST_OVERLAP = range(6)
+REST_MESSAGES = {
+    REST_OK: "valid",
+    REST_NOT_FINITE: "a design value is not a finite number",
+    REST_GRIPPER: "the gripper is out of range (finger_length_m > 0, 0 < rest_angle_rad < pi/2, "
+                  "joint_offset_m >= 0, 0 < finger_width_m < finger_length_m, torque_nm >= 0)",
+    REST_WIDTH: "finger_width_m must be smaller than the disk diameter 2 * radius_m",
+    REST_BEHIND_FACE: "the disk centre lies behind the fingers' gripping faces at rest: "
+                      "decrease joint_offset_m or increase rest_angle_rad/distance_m",
+    REST_OVERLAP: "the fingers overlap the disk at rest: increase rest_angle_rad or distance_m "
+                  "(allowed: clearance > 0)",
+}
+
+
+class SceneColumns(NamedTuple):
+    """B scenes and torques as float64 columns of shape (B,) [SI units]."""
+
+    finger_length_m: np.ndarray
+    rest_angle_rad: np.ndarray
+    joint_offset_m: np.ndarray
+    finger_width_m: np.ndarray
+    torsion_stiffness_nm_per_rad: np.ndarray
+    radius_m: np.ndarray
+    distance_m: np.ndarray
+    youngs_modulus_pa: np.ndarray
+    poisson_ratio: np.ndarray
+    thickness_m: np.ndarray
+    stiffness_scale: np.ndarray
+    contour_stiffness_ratio: np.ndarray
+    torque_nm: np.ndarray
+
+    def take(self, rows) -> SceneColumns:
+        """The scenes of some rows."""
+        return SceneColumns(*(c[rows] for c in self))
+
+    @property
+    def size(self) -> int:
+        return int(self.radius_m.shape[0])
+
+
+def _clearance(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance of the disk centre in front of the right gripping face, and the rest
+    clearance between the disk and the right finger bar [m] (the left finger mirrors it)."""
+    s, c = np.sin(cols.rest_angle_rad), np.cos(cols.rest_angle_rad)
+    rel_x = -cols.joint_offset_m  # centre (0, d_1 + r) relative to the right joint (d_3, 0)
+    rel_y = cols.distance_m + cols.radius_m
+    along = s * rel_x + c * rel_y  # right finger: e = (s, c), n = (-c, s)
+    across = -c * rel_x + s * rel_y
+    front = across - cols.finger_width_m / 2
+    clearance = bar_distance(along, across, cols.finger_length_m, cols.finger_width_m)
+    return front, clearance - cols.radius_m
+
+
+def rest_codes(cols: SceneColumns) -> np.ndarray:
+    """Why each scene is invalid at rest (:data:`REST_OK` where it is valid), shape (B,).
+
+    The material fields are validated where a disk is built (:class:`envs.scene.SoftDisk`);
+    here the geometry of the gripper and the disk together, and the torque.
+    """
+    codes = np.full(cols.size, REST_OK, dtype=np.int64)
+    with np.errstate(invalid="ignore", over="ignore"):
+        finite = np.all(np.isfinite(np.stack(cols)), axis=0)
+        ln, th0, d3, w = (cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
+                          cols.finger_width_m)
+        gripper_ok = ((ln > 0) & (th0 > 0) & (th0 < math.pi / 2) & (d3 >= 0) & (w > 0)
+                      & (w < ln) & (cols.torque_nm >= 0))
+        front, clearance = _clearance(cols)
+    codes[~(clearance > 0)] = REST_OVERLAP
+    codes[~(front > 0)] = REST_BEHIND_FACE
+    codes[~(w < 2 * cols.radius_m)] = REST_WIDTH
+    codes[~gripper_ok] = REST_GRIPPER
+    codes[~finite] = REST_NOT_FINITE
+    return codes
+
+
+def units(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scaling units of each row: length r [m], force ``s E t r`` [N], torque ``s E t r^2``
+    [N·m]."""
+    k_unit = cols.stiffness_scale * cols.youngs_modulus_pa * cols.thickness_m  # N/m
+    return cols.radius_m, k_unit * cols.radius_m, k_unit * cols.radius_m**2
+
+
+def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van_gelder",
+                phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+    """Scaled solver parameters of valid scenes, shape (B, N_PARAMS) (layout ``P_*``).
+
+    Parameters
+    ----------
+    cols
+        The scenes (valid at rest: see :func:`rest_codes`).
+    n_triangles
+        Number of fan triangles ``N`` of every row.
+    stiffness_rule
+        See :func:`envs.model.stiffness.spring_stiffness` (the Poisson-aware rule uses each
+        row's Poisson ratio).
+    phase_rad
+        Angle of the first contour point [rad].
+    """
+    r, _, torque_unit = units(cols)
+    prm = np.zeros((cols.size, N_PARAMS))
+    if stiffness_rule == "van_gelder":
+        k_int, k_ext = spring_stiffness(n_triangles, 1.0, stiffness_rule)
+        prm[:, P_KR], prm[:, P_KC] = k_int, k_ext * cols.contour_stiffness_ratio
+    else:
+        for i, nu in enumerate(cols.poisson_ratio.tolist()):
+            k_int, k_ext = spring_stiffness(n_triangles, 1.0, stiffness_rule, nu)
+            prm[i, P_KR], prm[i, P_KC] = k_int, k_ext * cols.contour_stiffness_ratio[i]
+    prm[:, P_H] = 2 * math.sin(math.pi / n_triangles)
+    yc = (cols.distance_m + r) / r
+    prm[:, P_C0X], prm[:, P_C0Y] = (0.0 - cols.joint_offset_m) / r, yc
+    prm[:, P_C1X], prm[:, P_C1Y] = (0.0 + cols.joint_offset_m) / r, yc
+    prm[:, P_HW] = cols.finger_width_m / (2 * r)
+    prm[:, P_LMAX] = cols.finger_length_m / r
+    prm[:, P_TAU] = cols.torque_nm / torque_unit
+    prm[:, P_KAPPA] = cols.torsion_stiffness_nm_per_rad / torque_unit
+    prm[:, P_TH0] = cols.rest_angle_rad
+    hw = cols.finger_width_m / 2
+    # closed-jaw stop: the face tip reaches the symmetry axis, see geometry.closed_angle_of
+    prm[:, P_THMIN] = np.arctan2(hw, cols.finger_length_m) - np.arcsin(
+        np.minimum(1.0, cols.joint_offset_m / np.hypot(cols.finger_length_m, hw)))
+    prm[:, P_PHASE] = phase_rad
+    prm[:, P_RHO] = corner_radius(cols.finger_width_m, r) / r
+    return prm
+
+
+def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
+    """Scaled start states of parameter rows: undeformed contour, fingers at rest, (B, 2N+2)."""
+    params = np.atleast_2d(params)
+    n = int(n_triangles)
+    x = np.empty((params.shape[0], 2 * n + 2))
+    for b in range(params.shape[0]):
+        x[b, : 2 * n] = rest_points(n, params[b, P_PHASE]).ravel()
+    x[:, 2 * n] = params[:, P_TH0]
+    x[:, 2 * n + 1] = params[:, P_TH0]
+    return x
+
+
+def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:
+    """Engineering strains ``(L - L0) / L0`` of the radial and contour springs.
+
+    Parameters
+    ----------
+    q
+        Contour points relative to the centre, in units of ``r``, shape (..., N, 2).
+    h
+        Contour rest length in units of ``r``: a scalar or shape (...,).
+    """
+    radial = np.sqrt(q[..., 0] ** 2 + q[..., 1] ** 2) - 1.0
+    d = np.roll(q, -1, axis=-2) - q
+    contour = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2) / np.asarray(h)[..., None] - 1.0
+    return radial, contour

@@ -1,0 +1,188 @@
+"""Banded linear algebra of the Newton matrix: interleaved point ordering, block Cholesky by 2x2
+point blocks, bordered solve for the two finger angles.
+
+The Newton matrix is a cyclic block-tridiagonal matrix (springs) bordered by the two finger
+angles; ordering the contour points 0, N-1, 1, N-2, ... makes it banded (half bandwidth 5), so
+each factorization is a banded Cholesky plus a 2x2 Schur complement: O(N) work.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+BW = 5  # half bandwidth of the interleaved point ordering
+
+
+@njit(cache=True, error_model="numpy")
+def _band_index(n):
+    """Scalar index of component 0 of each point in the interleaved (banded) ordering."""
+    idx = np.empty(n, dtype=np.int64)
+    half = (n - 1) // 2
+    for i in range(n):
+        pos = 2 * i if i <= half else 2 * (n - 1 - i) + 1
+        idx[i] = 2 * pos
+    return idx
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _times_inv_lt(lb, c0, s00, s01, s10, s11):
+    """S L_c^-T for the 2x2 block S and the diagonal factor block L_c of the point whose rows
+    start at c0 (reciprocal pivots as :func:`_chol_band` keeps them)."""
+    r0 = lb[c0, 0]
+    l10 = lb[c0 + 1, 1]
+    r1 = lb[c0 + 1, 0]
+    x00 = s00 * r0
+    x10 = s10 * r0
+    return x00, (s01 - x00 * l10) * r1, x10, (s11 - x10 * l10) * r1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _chol_band(ab, lb, nb, shift):
+    """Banded Cholesky of A + shift I (lower band of A in ``ab``) by 2x2 blocks, one block a
+    point (the band ordering couples a point with the two before it); ``lb`` gets the scalar
+    factor with the reciprocal of each diagonal entry in column 0 (multiplications, not
+    divisions, in the dependent chains of the solves). Returns False if the matrix is not
+    positive definite."""
+    for b in range(nb // 2):
+        p0 = 2 * b
+        p1 = p0 + 1
+        # block (b, b-2) of the factor: X = A_{b,b-2} L_{b-2,b-2}^-T
+        x00 = 0.0
+        x01 = 0.0
+        x10 = 0.0
+        x11 = 0.0
+        if b >= 2:
+            x00, x01, x10, x11 = _times_inv_lt(lb, p0 - 4, ab[p0, 4], ab[p0, 3], ab[p1, 5],
+                                               ab[p1, 4])
+        # block (b, b-1): Y = (A_{b,b-1} - X L_{b-1,b-2}^T) L_{b-1,b-1}^-T
+        y00 = 0.0
+        y01 = 0.0
+        y10 = 0.0
+        y11 = 0.0
+        if b >= 1:
+            c0 = p0 - 2
+            s00 = ab[p0, 2]
+            s01 = ab[p0, 1]
+            s10 = ab[p1, 3]
+            s11 = ab[p1, 2]
+            if b >= 2:
+                m00 = lb[c0, 2]
+                m01 = lb[c0, 1]
+                m10 = lb[c0 + 1, 3]
+                m11 = lb[c0 + 1, 2]
+                s00 -= x00 * m00 + x01 * m01
+                s01 -= x00 * m10 + x01 * m11
+                s10 -= x10 * m00 + x11 * m01
+                s11 -= x10 * m10 + x11 * m11
+            y00, y01, y10, y11 = _times_inv_lt(lb, c0, s00, s01, s10, s11)
+        # diagonal block: A_bb - X X^T - Y Y^T, its own 2x2 Cholesky
+        d00 = ab[p0, 0] + shift - ((x00 * x00 + x01 * x01) + (y00 * y00 + y01 * y01))
+        if not d00 > 0.0:
+            return False
+        r0 = 1.0 / math.sqrt(d00)
+        l10 = (ab[p1, 1] - ((x10 * x00 + x11 * x01) + (y10 * y00 + y11 * y01))) * r0
+        d11 = ab[p1, 0] + shift - ((x10 * x10 + x11 * x11) + (y10 * y10 + y11 * y11)) - l10 * l10
+        if not d11 > 0.0:
+            return False
+        lb[p0, 0] = r0
+        lb[p0, 1] = y01
+        lb[p0, 2] = y00
+        lb[p0, 3] = x01
+        lb[p0, 4] = x00
+        lb[p0, 5] = 0.0
+        lb[p1, 0] = 1.0 / math.sqrt(d11)
+        lb[p1, 1] = l10
+        lb[p1, 2] = y11
+        lb[p1, 3] = y10
+        lb[p1, 4] = x11
+        lb[p1, 5] = x10
+    return True
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _eliminate(v, w, ybuf, out, m, a0, a1, a2, e0, e1, e2):
+    """Take row m of the three solution columns, times v and w, off the two rows (a, e) of a
+    block in :func:`_solve_band3`."""
+    y0 = ybuf[m, 0]
+    y1 = ybuf[m, 1]
+    z = out[m]
+    return a0 - v * y0, a1 - v * y1, a2 - v * z, e0 - w * y0, e1 - w * y1, e2 - w * z
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _finish_block(lb, ybuf, out, pf, ps, a0, a1, a2, e0, e1, e2):
+    """Solve a 2x2 diagonal block of :func:`_solve_band3`: row ``pf`` (sums a) first, then row
+    ``ps`` (sums e) less the block's off-diagonal entry times it."""
+    p1 = max(pf, ps)
+    d = lb[pf, 0]
+    a0 *= d
+    a1 *= d
+    a2 *= d
+    ybuf[pf, 0] = a0
+    ybuf[pf, 1] = a1
+    out[pf] = a2
+    l10 = lb[p1, 1]
+    d = lb[ps, 0]
+    ybuf[ps, 0] = (e0 - l10 * a0) * d
+    ybuf[ps, 1] = (e1 - l10 * a1) * d
+    out[ps] = (e2 - l10 * a2) * d
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _solve_band3(lb, nb, bb, rb, ybuf, out):
+    """Solve L L^T [Y | z] = [B | r] for the two border columns B and the right-hand side r in
+    one sweep (three independent chains), by the 2x2 blocks of :func:`_chol_band`."""
+    for b in range(nb // 2):
+        p0 = 2 * b
+        p1 = p0 + 1
+        a0, a1, a2 = bb[p0, 0], bb[p0, 1], rb[p0]
+        e0, e1, e2 = bb[p1, 0], bb[p1, 1], rb[p1]
+        # the two blocks before: row p0 reaches back 4 entries, row p1 (besides p0) 4 too
+        for m in range(max(0, p0 - 4), p0):
+            a0, a1, a2, e0, e1, e2 = _eliminate(lb[p0, p0 - m], lb[p1, p1 - m], ybuf, out, m,
+                                                a0, a1, a2, e0, e1, e2)
+        _finish_block(lb, ybuf, out, p0, p1, a0, a1, a2, e0, e1, e2)
+    for b in range(nb // 2 - 1, -1, -1):
+        p0 = 2 * b
+        p1 = p0 + 1
+        a0, a1, a2 = ybuf[p0, 0], ybuf[p0, 1], out[p0]
+        e0, e1, e2 = ybuf[p1, 0], ybuf[p1, 1], out[p1]
+        # the two blocks after (rows p1 + 1 .. p1 + 4)
+        for m in range(p1 + 1, min(nb, p1 + 5)):
+            a0, a1, a2, e0, e1, e2 = _eliminate(lb[m, m - p0], lb[m, m - p1], ybuf, out, m,
+                                                a0, a1, a2, e0, e1, e2)
+        # backwards the odd row of the block comes first
+        _finish_block(lb, ybuf, out, p1, p0, e0, e1, e2, a0, a1, a2)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
+    """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
+    if not _chol_band(ab, lb, nb, shift):
+        return False
+    _solve_band3(lb, nb, bb, rb, ybuf, out_b)
+    s00 = dd[0, 0] + shift
+    s11 = dd[1, 1] + shift
+    s01 = dd[0, 1]
+    for p in range(nb):
+        s00 -= bb[p, 0] * ybuf[p, 0]
+        s11 -= bb[p, 1] * ybuf[p, 1]
+        s01 -= bb[p, 0] * ybuf[p, 1]
+    det = s00 * s11 - s01 * s01
+    if not (s00 > 0.0 and det > 1e-300 * max(1.0, s00 * s11) and det > 0.0):
+        return False
+    r0 = rt[0]
+    r1 = rt[1]
+    for p in range(nb):
+        r0 -= bb[p, 0] * out_b[p]
+        r1 -= bb[p, 1] * out_b[p]
+    t0 = (s11 * r0 - s01 * r1) / det
+    t1 = (s00 * r1 - s01 * r0) / det
+    out_t[0] = t0
+    out_t[1] = t1
+    for p in range(nb):
+        out_b[p] -= ybuf[p, 0] * t0 + ybuf[p, 1] * t1
+    return True

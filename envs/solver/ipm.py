@@ -1,0 +1,238 @@
+"""Primal-dual interior-point Newton iterations on a fixed constraint set, with exact Hessians,
+inertia correction and a backtracking line search on the barrier merit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..model.layout import (
+    N_OPTIONS,
+    O_MAXIT,
+    O_TOL,
+    P_KC,
+    P_KR,
+)
+from .assembly import (
+    CH_BLOCK,
+    _drop_curvature,
+    _merit,
+    _newton_matrix,
+    _rhs_to_band,
+    _step_from_band,
+)
+from .banded import (
+    BW,
+    _factor_solve,
+)
+from .contact import (
+    _all_gaps,
+    _tunnels,
+)
+from .status import (
+    BLOCKED,
+    ITER_LIMIT,
+    LINALG_FAIL,
+    LINESEARCH_FAIL,
+    OK,
+    SADDLE,
+)
+
+
+@njit(cache=True, error_model="numpy")
+def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it):
+    """Primal-dual interior point on a fixed constraint set. Returns (status, iterations).
+
+    Allocates the work arrays; the iterations run in :func:`_ipm_core`, compiled without
+    reference counting (array views and helper calls inside it then cost nothing extra).
+    """
+    nb = 2 * n
+    nx = nb + 2
+    grad = np.zeros(nx)
+    step = np.zeros(nx)
+    xt = np.zeros(nx)
+    res = np.zeros(nx)
+    ab = np.zeros((nb, BW + 1))
+    lb = np.zeros((nb, BW + 1))
+    bb = np.zeros((nb, 2))
+    dd = np.zeros((2, 2))
+    ybuf = np.zeros((nb, 2))
+    rb = np.zeros(nb)
+    ob = np.zeros(nb)
+    rt = np.zeros(2)
+    ot = np.zeros(2)
+    g = np.zeros(mcount)
+    gt = np.zeros(mcount)
+    sig = np.zeros(mcount)
+    dlam = np.zeros(mcount)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    gb = np.zeros(nx)
+    cg = np.zeros((mcount, 5))
+    cd = np.zeros((mcount, 5), dtype=np.int64)
+    ch = np.zeros((mcount, CH_BLOCK + 1))
+    return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
+                     grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig,
+                     dlam, grad5, hess5, dofs, gb, cg, cd, ch)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
+              grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
+              grad5, hess5, dofs, gb, cg, cd, ch):
+    nb = 2 * n
+    nx = nb + 2
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
+    maxit = int(opts[O_MAXIT])
+    mu = mu0
+    mu_min = 1e-3 * tol
+    shrink = 0.01
+    shift_last = 0.0
+    kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    it = 0
+    n_neg = 0
+    n_walled = 0
+    have_acc = False  # merit parts at x known (from the line search that reached x)
+    e_acc = 0.0
+    l_acc = 0.0
+    _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
+    while it < maxit:
+        # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
+        # springs' negative geometric stiffness and the constraint curvature removed (made from
+        # the exact one in place, _drop_curvature); a diagonal shift only as a last resort.
+        # The same pass gives the stationarity residual (sig = lam / g does not depend on mu).
+        for m in range(mcount):
+            sig[m] = lam[m] / g[m]
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
+                       g, grad5, hess5, dofs, mu, False, gb, res, cg, cd, ch)
+        kkt = 0.0
+        for d in range(nx):
+            kkt = max(kkt, abs(res[d]))
+        # convergence test; reduce mu while the barrier subproblem is solved
+        done = False
+        while True:
+            cmax = 0.0
+            for m in range(mcount):
+                cmax = max(cmax, abs(lam[m] * g[m] - mu))
+            if mu <= mu_min and kkt <= 10.0 * tol and cmax <= 10.0 * tol:
+                done = True
+                break
+            if mu > mu_min and kkt <= 10.0 * max(mu, tol) and cmax <= 10.0 * max(mu, tol):
+                mu_new = max(mu_min, min(0.2 * mu, mu ** 1.5))
+                # active gaps scale with mu: let them shrink by that factor in one step
+                shrink = min(0.01, 0.1 * mu_new / mu)
+                for d in range(nx):
+                    grad[d] += (mu - mu_new) * gb[d]
+                mu = mu_new
+                continue
+            break
+        if done:
+            work_it[0] += it
+            return OK, it
+        it += 1
+        _rhs_to_band(grad, bidx, nb, rb, rt)
+        shift = kreg
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        if ok:
+            n_neg = 0
+        else:
+            if mu < 1e-7 * fscale:
+                n_neg += 1
+                if n_neg >= 6:
+                    # negative curvature at a nearly converged barrier problem: a saddle that
+                    # descent from a symmetric start cannot leave; the caller perturbs and retries
+                    work_it[0] += it
+                    return SADDLE, it
+            _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab, bb,
+                            dd)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        if not ok:
+            shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
+            while not ok:
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+                if ok:
+                    break
+                shift *= 8.0
+                if shift > 1e12 * max(prm[P_KC], 1.0):
+                    work_it[0] += it
+                    return LINALG_FAIL, it
+            shift_last = shift
+        slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+        # damp huge finger rotations (a full step can jump a finger past a vertex)
+        smax = 0.0
+        for d in range(nb):
+            smax = max(smax, abs(step[d]))
+        alpha = 1.0
+        lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
+        if lim > 1.0:
+            alpha = 1.0 / lim
+        if not have_acc:
+            e_acc, l_acc = _merit(x, n, prm, kinds, fj, fidx, mcount, gt)
+            have_acc = True
+        # the merit at x from its parts (kept from the step that reached x; mu may have moved)
+        phi0 = e_acc - mu * l_acc
+        accepted = False
+        walled = False
+        for _ls in range(60):
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+            e_t, l_t = _merit(xt, n, prm, kinds, fj, fidx, mcount, gt)
+            phi = e_t - mu * l_t
+            if phi < math.inf:
+                feasible = True
+                for m in range(mcount):
+                    if gt[m] < shrink * g[m]:
+                        feasible = False
+                        break
+                if feasible and _tunnels(x, xt, n, prm):
+                    feasible = False
+                    walled = True
+                if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
+                    accepted = True
+                    e_acc = e_t
+                    l_acc = l_t
+                    break
+            alpha *= 0.5
+        # a corner or a point held back only by the anti-tunnelling tests (a contact the
+        # candidate set lacks): hand back to the caller, which adds what is touched
+        n_walled = n_walled + 1 if (walled and alpha < 1e-2) else 0
+        if n_walled >= 3:
+            work_it[0] += it
+            return BLOCKED, it
+        if not accepted:
+            # tiny progress is impossible at this mu: accept if already stationary to round-off
+            if kkt <= 1e3 * tol:
+                mu = max(mu_min, 0.2 * mu)
+                if mu <= mu_min:
+                    work_it[0] += it
+                    return OK, it
+                continue
+            work_it[0] += it
+            return LINESEARCH_FAIL, it
+        # multiplier step: Newton direction at the old point, its own fraction-to-boundary step
+        # (constraint gradients at x kept by _newton_matrix)
+        alpha_d = 1.0
+        for m in range(mcount):
+            nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+            dl = 0.0
+            for a in range(nd):
+                dl += cg[m, a] * step[cd[m, a]]
+            dlam[m] = mu / g[m] - lam[m] - sig[m] * dl
+            if dlam[m] < 0.0:
+                alpha_d = min(alpha_d, -0.99 * lam[m] / dlam[m])
+        for m in range(mcount):
+            lam_new = lam[m] + alpha_d * dlam[m]
+            gm = gt[m]
+            lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
+        if opts.shape[0] > N_OPTIONS:
+            print("ipm", it, mu / fscale, kkt / fscale, alpha, shift, ok, mcount)
+        for d in range(nx):
+            x[d] = xt[d]
+        for m in range(mcount):
+            g[m] = gt[m]  # the gaps at the accepted point, from its merit evaluation
+    work_it[0] += it
+    return ITER_LIMIT, it

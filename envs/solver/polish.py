@@ -1,0 +1,224 @@
+"""Augmented-Lagrangian Newton polish on the identified contact set, so that contacts hold to
+round-off.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..model.layout import (
+    O_TOL,
+    P_KAPPA,
+    P_KC,
+    P_KR,
+)
+from .assembly import (
+    CH_BLOCK,
+    _energy,
+    _newton_matrix,
+    _rhs_to_band,
+    _stationarity,
+    _step_from_band,
+)
+from .banded import (
+    BW,
+    _factor_solve,
+)
+from .contact import (
+    _all_gaps,
+    _con_value,
+    _trig,
+)
+from .status import (
+    OK,
+    POLISH_FAIL,
+)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
+    """Augmented Lagrangian E - sum lam g + rho/2 sum g^2 over the active constraints.
+
+    Infinite where an inactive constraint is violated more than at the reference gaps
+    ``g_ref`` (the polish walks along the active set; it must not run through another contact).
+    """
+    e = _energy(x, n, prm)
+    q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
+    for m in range(mcount):
+        gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
+        if active[m]:
+            e += gm * (0.5 * rho * gm - lam[m])
+        elif gm < min(g_ref[m], 0.0) - 1e-12:
+            return math.inf
+    return e
+
+
+@njit(cache=True, error_model="numpy")
+def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
+    """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
+
+    Allocates the work arrays for :func:`_polish_core` (compiled without reference counting).
+
+    Returns (ok, stable) where stable means the final Newton matrix needed no shift.
+    """
+    nb = 2 * n
+    nx = nb + 2
+    grad = np.zeros(nx)
+    ab = np.zeros((nb, BW + 1))
+    lb = np.zeros((nb, BW + 1))
+    bb = np.zeros((nb, 2))
+    dd = np.zeros((2, 2))
+    ybuf = np.zeros((nb, 2))
+    rb = np.zeros(nb)
+    ob = np.zeros(nb)
+    rt = np.zeros(2)
+    ot = np.zeros(2)
+    g = np.zeros(mcount)
+    sig = np.zeros(mcount)
+    lam_eff = np.zeros(mcount)
+    res = np.zeros(nx)
+    res_p = np.zeros(nx)
+    gbuf_p = np.zeros(nx)
+    xt = np.zeros(nx)
+    step = np.zeros(nx)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    cg = np.zeros((mcount, 5))
+    cd = np.zeros((mcount, 5), dtype=np.int64)
+    ch = np.zeros((mcount, CH_BLOCK + 1))
+    return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
+                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff,
+                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
+                 grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
+                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
+    nb = 2 * n
+    nx = nb + 2
+    kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
+    rho = 1e2 * kscale
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
+    q = x[:nb].reshape(n, 2)
+    for m in range(mcount):
+        if not active[m]:
+            lam[m] = 0.0
+    stable = True
+    kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    for _outer in range(40):
+        work_it[0] += 1
+        sn, cs = _trig(x, n)
+        for m in range(mcount):
+            gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
+            g[m] = gm
+            if active[m]:
+                sig[m] = rho
+                lam_eff[m] = lam[m] - rho * gm
+            else:
+                sig[m] = 0.0
+                lam_eff[m] = 0.0
+        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
+                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd, ch)
+        _rhs_to_band(grad, bidx, nb, rb, rt)
+        shift = kreg
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        stable = ok
+        while not ok:
+            shift = max(shift * 8.0, 1e-8 * kscale)
+            if shift > 1e6 * kscale:
+                return False, False
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
+        # step): a plain Newton step from an indefinite matrix can throw the iterate far off
+        slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+        # the merit at x from the gaps above (what _al_merit would evaluate again)
+        m0 = _energy(x, n, prm)
+        for m in range(mcount):
+            if active[m]:
+                m0 += g[m] * (0.5 * rho * g[m] - lam[m])
+        alpha = 1.0
+        hit = False
+        for _ls in range(40):
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+            mt = _al_merit(xt, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
+            if mt <= m0 + 1e-4 * alpha * slope + 1e-13 * abs(m0):
+                break
+            hit = hit or mt == math.inf
+            alpha *= 0.5
+        if hit:
+            # the full step ran through contacts left out of the set: take them in (the
+            # caller drops them again should they come out pulling)
+            for d in range(nx):
+                xt[d] = x[d] + 2.0 * alpha * step[d]
+            qt = xt[:nb].reshape(n, 2)
+            snt, cst = _trig(xt, n)
+            for m in range(mcount):
+                if not active[m]:
+                    gm = _con_value(kinds[m], fj[m], fidx[m], xt, qt, n, prm, snt, cst)
+                    if gm < min(g[m], 0.0):
+                        active[m] = True
+                        lam[m] = 0.0
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+        for d in range(nx):
+            x[d] = xt[d]
+        # multiplier update
+        sn, cs = _trig(x, n)
+        for m in range(mcount):
+            if active[m]:
+                gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
+                lam[m] = lam[m] - rho * gm
+        kkt = _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, g, grad5, hess5, dofs,
+                            res)
+        viol = 0.0
+        for m in range(mcount):
+            if active[m]:
+                viol = max(viol, abs(g[m]))
+        if kkt <= 10.0 * tol and viol <= 1e-13:
+            return True, stable
+        if _outer >= 8 and kkt <= 100.0 * tol and viol <= 1e-12:
+            # stagnating at round-off level: good enough (the independent check has the say)
+            return True, stable
+    return False, stable
+
+
+@njit(cache=True, error_model="numpy")
+def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
+                work_it, gbuf, stable_out):
+    """Polish on a contact set, correcting the set (primal-dual active set) a few times.
+
+    Drops contacts that come out with a pulling force and adds constraints that come out
+    violated. On success ``xs`` and ``lam`` hold the polished answer; returns a status.
+    """
+    nb = 2 * n
+    for _attempt in range(6):
+        xp = xs.copy()
+        lp = lam[:mcount].copy()
+        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
+                              active, work_it)
+        stable_out[0] = stable
+        if not okp:
+            return POLISH_FAIL
+        _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, gbuf)
+        good = True
+        for m in range(mcount):
+            if active[m] and lp[m] < -1e-12 * fscale:
+                active[m] = False
+                good = False
+            elif (not active[m]) and gbuf[m] < -1e-10:
+                active[m] = True
+                good = False
+        if good:
+            for d in range(nb + 2):
+                xs[d] = xp[d]
+            for m in range(mcount):
+                lam[m] = max(lp[m], 0.0) if active[m] else 0.0
+            return OK
+    return POLISH_FAIL

@@ -1,0 +1,159 @@
+"""The result of one grasp: :class:`GraspResult`.
+
+Every field comes from the one batch pipeline (:mod:`envs.solver.pipeline`), so a grasp
+simulated alone and the same grasp in a batch mean the same thing: ``converged`` is True only
+when the solver claims an equilibrium, the independent check of :mod:`envs.check` confirms it
+and no fan triangle is turned over.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from envs.check import KKTReport
+
+__all__ = ["GraspResult"]
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    """Equilibrium grasp of the point-spring disk at one actuation torque.
+
+    Attributes
+    ----------
+    converged : bool
+        True when the solver converged *and* the independent KKT check passed.
+    message : str
+        ``"converged"`` or the reason for failure.
+    jaw_angles_rad : tuple[float, float]
+        Right and left finger angles from the +y axis [rad].
+    points_m : numpy.ndarray
+        Deformed contour points [m], shape (N, 2), counter-clockwise from the top.
+    contact_mask : numpy.ndarray
+        Whether each point touches each finger (gap ~ 0 and positive force), shape (2, N).
+    contact_forces_n : numpy.ndarray
+        Normal force of each finger on each point [N], shape (2, N) (thickness included).
+    peak_strain : float
+        Largest ``|L - L0| / L0`` over all springs [-].
+    iterations : int
+        Newton iterations (all rounds and the polish) or baseline iterations.
+    solve_time_s : float
+        Time spent in the solver [s] (all attempts; the independent check is not counted).
+    torque_nm, n_triangles, method, stiffness_rule
+        The problem solved.
+    corner_forces_n : numpy.ndarray
+        Total force of each rounded corner of each finger on the contour [N], (2, 4); corners
+        in the order: tip and root of the gripping face, tip and root of the back of the bar.
+    corner_edges : numpy.ndarray
+        Edge ``k`` (from point k to k+1) carrying most of each corner's force, -1 for none,
+        (2, 4).
+    corner_edge_forces_n : numpy.ndarray
+        Force of each corner on each contour edge ``k`` [N], (2, 4, N): a corner pressing on a
+        vertex bears on both edges that meet there.
+    stop_torques_nm : numpy.ndarray
+        Reaction torque of the closed-jaw stop of each finger [N·m] (non-zero: jaws closed).
+    energy_j : float
+        Total potential energy (springs, actuation, torsion springs) [J].
+    max_displacement_ratio : float
+        Largest contour-point displacement divided by the radius [-].
+    stable : bool
+        The Newton matrix of the contact-constrained problem was positive definite (a strict
+        local minimum, not a saddle).
+    kkt : KKTReport
+        The independent equilibrium check.
+    rounds : int
+        Outer rounds updating the contact candidate set.
+    inverted_triangles : int
+        Fan triangles (centre, point i, point i+1) turned over in the returned state. The
+        springs allow such a fold at finite energy; a result with any is reported as not
+        converged (the squeeze is beyond the model's valid range). A failed solve can also end
+        on a folded iterate: :attr:`folded` tells the two apart.
+    """
+
+    converged: bool
+    message: str
+    jaw_angles_rad: tuple[float, float]
+    points_m: np.ndarray
+    contact_mask: np.ndarray
+    contact_forces_n: np.ndarray
+    peak_strain: float
+    iterations: int
+    solve_time_s: float
+    torque_nm: float = 0.0
+    n_triangles: int = 0
+    method: str = "newton"
+    stiffness_rule: str = "van_gelder"
+    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4)))
+    corner_edges: np.ndarray = field(default_factory=lambda: -np.ones((2, 4), dtype=int))
+    corner_edge_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4, 0)))
+    stop_torques_nm: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    energy_j: float = math.nan
+    max_displacement_ratio: float = math.nan
+    stable: bool = True
+    kkt: KKTReport | None = None
+    rounds: int = 1
+    inverted_triangles: int = 0
+
+    @property
+    def folded(self) -> bool:
+        """An equilibrium (the independent check passed) with inverted fan triangles.
+
+        The model's own limit, not a solver failure: such a state is never passed off as a
+        grasp (``converged`` is False), but unlike a failed solve it is a correct answer.
+        """
+        return self.inverted_triangles > 0 and self.kkt is not None and self.kkt.passed
+
+    @property
+    def n_contacts(self) -> tuple[int, int]:
+        """Number of contour points touching the right and left finger faces."""
+        return int(self.contact_mask[0].sum()), int(self.contact_mask[1].sum())
+
+    @property
+    def contact_fraction(self) -> float:
+        """Fraction of contour points touching a finger [-]."""
+        return float(self.contact_mask.any(axis=0).mean())
+
+    @property
+    def total_force_n(self) -> tuple[float, float]:
+        """Total normal force of each finger on the disk (faces and corners) [N]."""
+        tot = self.contact_forces_n.sum(axis=1) + self.corner_forces_n.sum(axis=1)
+        return float(tot[0]), float(tot[1])
+
+    @property
+    def asymmetry_rad(self) -> float:
+        """Difference between the right and left jaw angles [rad] (0 for a symmetric grasp)."""
+        return float(self.jaw_angles_rad[0] - self.jaw_angles_rad[1])
+
+    @property
+    def jaw_gap_angle_rad(self) -> float:
+        """Angle between the two fingers [rad] (the paper's Fig. 4 quantity)."""
+        return float(self.jaw_angles_rad[0] + self.jaw_angles_rad[1])
+
+    def to_dict(self) -> dict:
+        """JSON-friendly summary."""
+        return {
+            "converged": self.converged,
+            "message": self.message,
+            "method": self.method,
+            "torque_nm": self.torque_nm,
+            "n_triangles": self.n_triangles,
+            "jaw_angles_rad": list(self.jaw_angles_rad),
+            "peak_strain": self.peak_strain,
+            "max_displacement_ratio": self.max_displacement_ratio,
+            "n_contacts": list(self.n_contacts),
+            "total_force_n": list(self.total_force_n),
+            "corner_forces_n": self.corner_forces_n.tolist(),
+            "stop_torques_nm": self.stop_torques_nm.tolist(),
+            "energy_j": self.energy_j,
+            "stable": self.stable,
+            "iterations": self.iterations,
+            "rounds": self.rounds,
+            "inverted_triangles": self.inverted_triangles,
+            "folded": self.folded,
+            "solve_time_s": self.solve_time_s,
+            "kkt": self.kkt._asdict() if self.kkt is not None else None,
+            "points_m": self.points_m.tolist(),
+        }

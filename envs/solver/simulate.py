@@ -1,0 +1,289 @@
+"""Quasi-static grasp solver front end: :func:`simulate` and :func:`simulate_ramp`.
+
+The grasp at torque ``T_a`` is the stable equilibrium of the point-spring disk squeezed by the
+two torque-driven fingers, with frictionless unilateral contact on the whole of each finger bar
+(gripping face, ends, back) and its rounded corners. ``method="newton"`` (default) solves
+through the one batch pipeline (:mod:`envs.solver.pipeline`); ``"slsqp"`` and ``"nelder-mead"``
+are the baselines of :mod:`envs.solver.baselines`. Every result is verified by the independent
+check of :mod:`envs.check`; a result that fails it is returned with ``converged=False`` and the
+reason in ``message``, and so is an equilibrium with a turned-over fan triangle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from envs import check
+from envs.model.defaults import DEFAULT_N_TRIANGLES, DEFAULT_PHASE_RAD, STIFFNESS_RULES
+from envs.scene import Scene
+from envs.validation import check_choice, check_n_triangles, check_range
+
+from .pipeline import BatchSolution, row_message, solve_columns
+from .result import GraspResult
+
+__all__ = ["METHODS", "simulate", "simulate_ramp", "grasp_result"]
+
+METHODS = ("newton", "slsqp", "nelder-mead")
+WARM_OPENING_RAD = 1e-3
+NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
+NESTED_FACTOR = 4
+CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does not help
+
+
+def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
+                 stiffness_rule: str = "van_gelder", *, message: str | None = None,
+                 iterations: int | None = None, solve_time_s: float | None = None
+                 ) -> GraspResult:
+    """Row ``i`` of a batch solution as a :class:`GraspResult`."""
+    corner = sol.corner_forces_n[i]
+    corner_total = corner.sum(axis=2)
+    edges = np.where(corner_total > 0.0, np.argmax(corner, axis=2), -1)
+    face = sol.face_forces_n[i]
+    return GraspResult(
+        converged=bool(sol.converged[i]),
+        message=row_message(sol, i) if message is None else message,
+        jaw_angles_rad=(float(sol.jaw_angles_rad[i, 0]), float(sol.jaw_angles_rad[i, 1])),
+        points_m=sol.points_m[i],
+        contact_mask=face > 0.0,
+        contact_forces_n=face,
+        peak_strain=float(sol.peak_strain[i]),
+        iterations=int(sol.iterations[i]) if iterations is None else int(iterations),
+        solve_time_s=sol.solve_time_s if solve_time_s is None else float(solve_time_s),
+        torque_nm=float(torque_nm),
+        n_triangles=int(sol.points_m.shape[1]),
+        method=method,
+        stiffness_rule=stiffness_rule,
+        corner_forces_n=corner_total,
+        corner_edges=edges,
+        corner_edge_forces_n=corner,
+        stop_torques_nm=sol.stop_torques_nm[i],
+        energy_j=float(sol.energy_j[i]),
+        max_displacement_ratio=float(sol.max_displacement_ratio[i]),
+        stable=bool(sol.stable[i]),
+        kkt=check.report_from_output(sol.check[i]),
+        rounds=int(sol.rounds[i]),
+        inverted_triangles=int(sol.inverted[i]),
+    )
+
+
+class _Problem:
+    """One scene at one torque and mesh, solved through the pipeline (newton)."""
+
+    def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float):
+        self.scene, self.torque_nm, self.n, self.rule, self.phase = (
+            scene, float(torque_nm), int(n), rule, float(phase_rad))
+        self.cols = scene.columns(self.torque_nm)
+
+    def at(self, torque_nm: float, n: int | None = None) -> _Problem:
+        return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
+                        self.phase)
+
+    def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
+              ) -> tuple[GraspResult, BatchSolution]:
+        sol = solve_columns(self.cols, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
+                            x0=x0, lam0=lam0)
+        return grasp_result(sol, 0, self.torque_nm, "newton", self.rule), sol
+
+
+def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarray]:
+    """Start from a previous equilibrium, fingers opened slightly (every gap strictly
+    positive)."""
+    n, r = prob.n, prob.scene.disk.radius_m
+    x = np.empty(2 * n + 2)
+    x[: 2 * n] = ((prev.points_m - prob.scene.disk.center_m) / r).ravel()
+    x[2 * n :] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
+    force_unit = float(prob.cols.stiffness_scale[0] * prob.cols.youngs_modulus_pa[0]
+                       * prob.cols.thickness_m[0]) * r
+    return x, prev.contact_forces_n / force_unit
+
+
+def _prolong(prob: _Problem, coarse: GraspResult) -> tuple[np.ndarray, np.ndarray]:
+    """Fine-mesh start from a coarse solution: points on the coarse chords, forces spread."""
+    n, nc, r = prob.n, coarse.n_triangles, prob.scene.disk.radius_m
+    qc = (coarse.points_m - prob.scene.disk.center_m) / r
+    u = np.arange(n) * nc / n
+    k = np.floor(u).astype(int) % nc
+    k1 = (k + 1) % nc
+    t = (u - np.floor(u))[:, None]
+    x = np.empty(2 * n + 2)
+    x[: 2 * n] = ((1 - t) * qc[k] + t * qc[k1]).ravel()
+    x[2 * n :] = np.asarray(coarse.jaw_angles_rad) + WARM_OPENING_RAD
+    _, lam_c = _warm_start(prob.at(prob.torque_nm, nc), coarse)
+    lam = ((1 - t.T) * lam_c[:, k] + t.T * lam_c[:, k1]) * nc / n
+    return x, lam
+
+
+def _solve_newton(prob: _Problem) -> GraspResult:
+    """Newton solve from rest; fine meshes start from a coarser solution (nested iteration).
+
+    A solve that fails is retried by continuation: the torque is ramped from zero with
+    adaptive steps, each started from the previous equilibrium.
+    """
+    spent = 0.0  # compiled-solver time of every attempt (the checks are not counted)
+    if prob.n <= NESTED_ABOVE:
+        res, _ = prob.solve()
+        extra = 0
+    else:
+        nc = max(NESTED_ABOVE // 2, prob.n // NESTED_FACTOR)
+        coarse = _solve_newton(prob.at(prob.torque_nm, nc))
+        extra, spent = coarse.iterations, coarse.solve_time_s
+        res = None
+        if coarse.converged:
+            res, _ = prob.solve(*_prolong(prob, coarse))
+        if res is None or not res.converged:
+            if res is not None:
+                spent += res.solve_time_s
+            res, _ = prob.solve()
+    # no continuation after a fold, nor after a failed solve that ended on a folded iterate:
+    # measured on the solver sweep, continuation rescued none of the latter (N = 200 - 500)
+    # and cost up to 10 s each
+    if (not res.converged and prob.torque_nm > 0 and prob.n <= CONTINUATION_MAX_N
+            and res.inverted_triangles == 0):
+        failed = res
+        spent += failed.solve_time_s
+        res = _continuation(prob)
+        extra += failed.iterations
+        if not res.converged:
+            res = replace(res, message=f"{failed.message}; continuation: {res.message}")
+    return replace(res, solve_time_s=spent + res.solve_time_s, iterations=res.iterations + extra)
+
+
+def _continuation(prob: _Problem, first_step: float = 0.125, min_step: float = 1e-4
+                  ) -> GraspResult:
+    """Ramp the torque from 0 to the problem's torque with adaptive steps and warm starts."""
+    torque = prob.torque_nm
+    done, step = 0.0, first_step * torque
+    prev: GraspResult | None = None
+    iterations = 0
+    spent = 0.0
+    last = None
+    while done < torque:
+        t = min(torque, done + step)
+        sub = prob.at(t)
+        last, _ = sub.solve() if prev is None else sub.solve(*_warm_start(sub, prev))
+        iterations += last.iterations
+        spent += last.solve_time_s
+        if last.converged:
+            prev, done, step = last, t, step * 1.5
+        else:
+            step /= 4.0
+            if step < min_step * torque:
+                return replace(last, message=f"failed at T = {t:.4g} N·m: {last.message}",
+                               iterations=iterations, solve_time_s=spent)
+    return replace(last, iterations=iterations, solve_time_s=spent)
+
+
+def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s) -> int:
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
+    check_choice("method", method, METHODS)
+    check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
+    check_range("phase_rad", phase_rad)
+    check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
+    return check_n_triangles(n_triangles)
+
+
+def simulate(
+    scene: Scene,
+    torque_nm: float,
+    n_triangles: int = DEFAULT_N_TRIANGLES,
+    method: str = "newton",
+    *,
+    stiffness_rule: str = "van_gelder",
+    phase_rad: float = DEFAULT_PHASE_RAD,
+    time_limit_s: float = 30.0,
+) -> GraspResult:
+    """Solve the grasp at one actuation torque, starting from the rest configuration.
+
+    Parameters
+    ----------
+    scene
+        Gripper and disk.
+    torque_nm
+        Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
+    n_triangles
+        Number of fan triangles ``N`` (4 to 20000).
+    method
+        ``"newton"`` (default), ``"slsqp"`` or ``"nelder-mead"``.
+    stiffness_rule
+        ``"van_gelder"`` (default) or ``"cst_fit"``.
+    phase_rad
+        Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
+    time_limit_s
+        Wall-time budget for the baselines [s] (the Newton solver needs none).
+
+    Returns
+    -------
+    GraspResult
+        ``converged`` is False, with the reason in ``message``, when the solver failed or the
+        independent check rejected its answer.
+
+    Raises
+    ------
+    ValueError
+        For a bad argument, naming it and its allowed range.
+    """
+    n = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s)
+    torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
+    prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad))
+    if method == "newton":
+        return _solve_newton(prob)
+    from . import baselines
+
+    return baselines.solve(scene, torque, n, stiffness_rule, float(phase_rad), method,
+                           float(time_limit_s))
+
+
+def simulate_ramp(
+    scene: Scene,
+    torques_nm,
+    n_triangles: int = DEFAULT_N_TRIANGLES,
+    method: str = "newton",
+    *,
+    stiffness_rule: str = "van_gelder",
+    phase_rad: float = DEFAULT_PHASE_RAD,
+    time_limit_s: float = 30.0,
+) -> list[GraspResult]:
+    """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
+
+    Each step starts from the previous equilibrium with the fingers opened by a small angle
+    (so that the start is strictly inside the contact constraints), which follows the branch of
+    equilibria the ramp reaches. A step whose warm start fails is retried from rest.
+
+    Parameters
+    ----------
+    torques_nm
+        Non-decreasing actuation torques [N·m].
+    Other parameters
+        As in :func:`simulate`.
+    """
+    n = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s)
+    try:
+        torques = np.asarray(torques_nm, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"torques_nm must be a sequence of numbers, got {torques_nm!r}") from None
+    if torques.size == 0:
+        raise ValueError("torques_nm must contain at least one torque")
+    for i, t in enumerate(torques.tolist()):
+        check_range(f"torques_nm[{i}]", t, 0.0, math.inf)
+    if np.any(np.diff(torques) < 0):
+        raise ValueError("torques_nm must be non-decreasing (a loading ramp)")
+    if method != "newton":
+        return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
+                         phase_rad=phase_rad, time_limit_s=time_limit_s) for t in torques]
+    base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad))
+    out: list[GraspResult] = []
+    prev: GraspResult | None = None
+    for t in torques.tolist():
+        prob = base.at(t)
+        res = None
+        if prev is not None and prev.converged:
+            res, _ = prob.solve(*_warm_start(prob, prev))
+        if res is None or not res.converged:
+            res = _solve_newton(prob)
+        out.append(res)
+        prev = res
+    return out

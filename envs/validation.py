@@ -1,0 +1,101 @@
+"""Validation of public inputs, one function per kind of field, used at every public entry.
+
+Every failure is a ``ValueError`` whose message names the parameter, the value given and the
+allowed range, so that a user sees at once what to change.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from envs.model.defaults import MAX_TRIANGLES, MIN_TRIANGLES
+
+__all__ = ["check_range", "check_integer", "check_n_triangles", "check_choice"]
+
+
+def check_range(
+    name: str,
+    value: float,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> float:
+    """Validate that ``value`` is a finite real number inside an interval.
+
+    Parameters
+    ----------
+    name
+        Name of the parameter, used in the error message.
+    value
+        The value to check.
+    low, high
+        Interval bounds.
+    low_open, high_open
+        Whether the bounds are excluded.
+
+    Returns
+    -------
+    float
+        ``value`` converted to ``float``.
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is not a finite number or lies outside the interval; the message names the
+        parameter, the value and the allowed range.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    lo_b = "(" if low_open else "["
+    hi_b = ")" if high_open else "]"
+    allowed = f"{lo_b}{low:g}, {high:g}{hi_b}"
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite and in {allowed}, got {v!r}")
+    below = v <= low if low_open else v < low
+    above = v >= high if high_open else v > high
+    if below or above:
+        raise ValueError(f"{name} = {v!r} is outside the allowed range {allowed}")
+    return v
+
+
+def check_integer(name: str, value, low: int, high: int) -> int:
+    """Validate that ``value`` is an integer (a Python or numpy integer, or a float with an
+    integral value) in ``[low, high]``; returns it as ``int``.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter, the value and the allowed range.
+    """
+    if isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}") from None
+    if not math.isfinite(v) or v != int(v):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    if not low <= int(v) <= high:
+        raise ValueError(f"{name} = {int(v)} is outside the allowed range [{low}, {high}]")
+    return int(v)
+
+
+def check_n_triangles(n_triangles) -> int:
+    """Validate the number of fan triangles ``N``.
+
+    ``N = 3`` gives 120-degree triangles, i.e. negative stiffness under the area rule.
+    """
+    return check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES)
+
+
+def check_choice(name: str, value, allowed) -> str:
+    """Validate that ``value`` is one of ``allowed``."""
+    if not isinstance(value, str) or value not in allowed:
+        raise ValueError(f"{name} = {value!r} is not one of {tuple(allowed)}")
+    return value
