@@ -26,7 +26,8 @@ from .evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from .scene import Gripper, Scene, SoftDisk
+from .model.defaults import DEFAULT_N_TRIANGLES, PAPER_TORSION_STIFFNESS_NM_PER_RAD
+from .scene import Design, SoftDisk
 from .validation import check_range
 
 __all__ = [
@@ -208,11 +209,10 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
         draw_design(fig.add_subplot(), np.array([0.2, math.radians(45.0), 0.025, 0.01, 0.0, 0.0]),
                     disk.radius_m, title="no design yet: call step()")
         return figure_rgb_array(fig)
-    ln, th0, d3, w, torque, d1 = design.tolist()
+    chosen = Design.from_array(design)
     try:
-        scene = Scene(Gripper(ln, th0, d3, w, torsion),
-                      SoftDisk(disk.radius_m, d1, disk.youngs_modulus_pa, disk.poisson_ratio,
-                               disk.thickness_m, disk.stiffness_scale))
+        # the one Design -> Scene mapping, the one evaluate_designs scored
+        scene = chosen.to_scene(disk, torsion)
     except ValueError as exc:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
         draw_design(fig.add_subplot(), design, disk.radius_m,
@@ -221,7 +221,7 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
     key = (tuple(design.tolist()), disk, n_triangles, torsion)
     if cache.get("key") != key:
         cache.clear()
-        cache["key"], cache["result"] = key, simulate(scene, torque, n_triangles)
+        cache["key"], cache["result"] = key, simulate(scene, chosen.torque_nm, n_triangles)
     fig = grasp_figure(scene, cache["result"], strain_limit=strain_limit, dpi=80)
     return figure_rgb_array(fig)
 
@@ -316,7 +316,8 @@ class GripperDesignEnv(gym.Env):
     - `distribution`: :class:`ObjectDistribution` of the objects drawn at reset.
     - `weights`: :class:`~envs.evaluate.RewardWeights`.
     - `n_triangles`: number of fan triangles `N` of the disk model (default 20).
-    - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` (default 0.073 N·m/rad).
+    - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` [N·m/rad] (default: the paper
+      gripper's 0.073).
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
@@ -336,8 +337,8 @@ class GripperDesignEnv(gym.Env):
         bounds: DesignBounds | None = None,
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
-        n_triangles: int = 20,
-        torsion_stiffness_nm_per_rad: float = 0.073,
+        n_triangles: int = DEFAULT_N_TRIANGLES,
+        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
@@ -474,8 +475,8 @@ class GripperDesignVectorEnv(VectorEnv):
         bounds: DesignBounds | None = None,
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
-        n_triangles: int = 20,
-        torsion_stiffness_nm_per_rad: float = 0.073,
+        n_triangles: int = DEFAULT_N_TRIANGLES,
+        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     ) -> None:

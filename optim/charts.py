@@ -15,8 +15,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from envs.evaluate import DESIGN_FIELDS
+from envs.model.defaults import (
+    DEFAULT_CONTOUR_STIFFNESS_RATIO,
+    DEFAULT_N_TRIANGLES,
+    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+)
 from envs.render import draw_design, draw_grasp, grasp_figure
-from envs.scene import Gripper, Scene, SoftDisk
+from envs.scene import Design, Scene, SoftDisk
 
 from .result import OptimResult
 
@@ -42,12 +47,12 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     ValueError
         If the design is invalid at rest (the fingers overlap the disk, ...).
     """
-    gripper = Gripper(design["finger_length_m"], design["rest_angle_rad"],
-                      design["joint_offset_m"], design["finger_width_m"],
-                      obj.get("torsion_stiffness_nm_per_rad", 0.073))
     disk = SoftDisk(obj["radius_m"], design["distance_m"], obj["youngs_modulus_pa"],
-                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"])
-    return Scene(gripper, disk)
+                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
+                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
+    torsion = obj.get("torsion_stiffness_nm_per_rad", PAPER_TORSION_STIFFNESS_NM_PER_RAD)
+    # the one Design -> Scene mapping, the one evaluate_designs scored
+    return Design(**{k: design[k] for k in DESIGN_FIELDS}).to_scene(disk, torsion)
 
 
 def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title: str) -> None:
@@ -60,7 +65,7 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
         row = np.array([design[k] for k in DESIGN_FIELDS])
         draw_design(ax, row, obj["radius_m"], title=title + " (invalid)")
         return
-    res = simulate(scene, design["torque_nm"], int(obj.get("n_triangles", 20)))
+    res = simulate(scene, design["torque_nm"], int(obj.get("n_triangles", DEFAULT_N_TRIANGLES)))
     draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title)
 
 
@@ -120,7 +125,8 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
         row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)")
         return _save(fig, path)
-    res = simulate(scene, result.best_design["torque_nm"], int(obj.get("n_triangles", 20)))
+    n = int(obj.get("n_triangles", DEFAULT_N_TRIANGLES))
+    res = simulate(scene, result.best_design["torque_nm"], n)
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
                        figsize=(6.0, 6.0))
     return _save(fig, path)

@@ -25,8 +25,13 @@ from envs.evaluate import (
     RewardWeights,
     evaluate_designs,
 )
+from envs.model.defaults import (
+    DEFAULT_N_TRIANGLES,
+    DEFAULT_STRAIN_LIMIT,
+    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+)
 from envs.scene import PRESETS, Scene, SoftDisk
-from envs.validation import check_range
+from envs.validation import check_n_triangles, check_range
 
 from .result import OptimResult, to_jsonable
 
@@ -40,7 +45,6 @@ __all__ = [
     "paper_design",
 ]
 
-DEFAULT_STRAIN_LIMIT = 0.15
 DEFAULT_CHUNK_SIZE = 256
 MIN_CHUNK_SIZE = 8  # rows per task at least: one solve is ~5 ms, a dask task costs ~1-5 ms
 # metric keys copied into OptimResult.best_metrics
@@ -169,8 +173,8 @@ class DesignProblem:
         disk: SoftDisk,
         strain_limit: float = DEFAULT_STRAIN_LIMIT,
         *,
-        torsion_stiffness_nm_per_rad: float = 0.073,
-        n_triangles: int = 20,
+        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        n_triangles: int = DEFAULT_N_TRIANGLES,
         bounds: DesignBounds | None = None,
         weights: RewardWeights | None = None,
         executor: Any = None,
@@ -185,9 +189,7 @@ class DesignProblem:
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
-        if isinstance(n_triangles, bool) or int(n_triangles) != n_triangles:
-            raise ValueError(f"n_triangles must be an integer, got {n_triangles!r}")
-        self.n_triangles = int(n_triangles)
+        self.n_triangles = check_n_triangles(n_triangles)
         self.bounds = DesignBounds() if bounds is None else bounds
         self.weights = RewardWeights() if weights is None else weights
         if executor is not None and not callable(getattr(executor, "map", None)):
@@ -378,6 +380,7 @@ class DesignProblem:
             "poisson_ratio": d.poisson_ratio,
             "thickness_m": d.thickness_m,
             "stiffness_scale": d.stiffness_scale,
+            "contour_stiffness_ratio": d.contour_stiffness_ratio,
             "strain_limit": self.strain_limit,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             "n_triangles": self.n_triangles,

@@ -23,8 +23,8 @@ from envs import (
     SoftDisk,
     evaluate_designs,
 )
-from envs.evaluate import METRIC_KEYS, _disk_table, _pack
-from envs.psm import scaled_problem
+from envs.evaluate import METRIC_KEYS, _columns, _disk_table
+from envs.model.problem import REST_OK, pack_params, rest_codes, scaled_params
 from envs.scene import PRESETS, Gripper
 
 GRIPPER, DISK = PRESETS["paper-r070"]
@@ -80,20 +80,24 @@ def test_matches_simulate_on_the_paper_scene():
     np.testing.assert_array_equal(out["n_contacts"][0], res.n_contacts)
 
 
-def test_vectorized_validity_and_params_match_scene_and_scaled_problem():
+def test_batch_design_to_scene_is_the_scene_path():
+    # validity and packing of design rows are those of Design.to_scene + Scene, row by row
     rng = np.random.default_rng(7)
     designs = DesignBounds().sample(rng, 400)
-    valid, prm = _pack(designs, _disk_table(DISK, 400), np.full(400, 20), np.full(400, 0.073))
+    cols = _columns(designs, _disk_table(DISK, 400), np.full(400, 0.073))
+    valid = rest_codes(cols) == REST_OK
+    prm = pack_params(cols, 20)
     assert 0.2 < valid.mean() < 0.95
     for i, row in enumerate(designs):
-        ln, th0, d3, w, torque, d1 = row.tolist()
+        design = Design.from_array(row)
         try:
-            scene = Scene(Gripper(ln, th0, d3, w, 0.073), SoftDisk(DISK.radius_m, d1))
+            scene = design.to_scene(DISK, 0.073)
         except ValueError:
             assert not valid[i]
             continue
         assert valid[i]
-        np.testing.assert_array_equal(prm[i], scaled_problem(scene, torque, 20).params)
+        assert Design.from_scene(scene, design.torque_nm) == design
+        np.testing.assert_array_equal(prm[i], scaled_params(scene, design.torque_nm, 20))
 
 
 def test_batched_and_single_evaluation_agree_exactly():
@@ -363,3 +367,18 @@ def test_vector_env_rejects_bad_actions():
     bad[1, 2] = np.nan
     with pytest.raises(ValueError):
         env.step(bad)
+
+
+def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
+    from envs.design_env import _render_frame
+
+    disk = SoftDisk(0.07, 0.0, stiffness_scale=1.7, contour_stiffness_ratio=2.5)
+    design = np.array([0.2, 0.8, 0.025, 0.01, 0.3, 0.013])
+    out = evaluate_designs(design[None, :], disk)
+    assert out["converged"][0]
+    cache: dict = {}
+    frame = _render_frame(design, disk, 0.15, 20, 0.073, cache)
+    assert frame.ndim == 3 and frame.shape[2] == 3
+    assert cache["result"].converged
+    np.testing.assert_allclose(cache["result"].jaw_angles_rad, out["jaw_angles_rad"][0],
+                               rtol=0, atol=1e-12)

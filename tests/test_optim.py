@@ -13,6 +13,7 @@ import os
 import numpy as np
 import pytest
 
+import envs
 from envs.evaluate import evaluate_designs
 from envs.scene import PRESETS, SoftDisk
 from optim import DesignProblem, OptimResult, optimize
@@ -339,3 +340,21 @@ def test_demo_writes_its_files(tmp_path):
     assert run_demo(tmp_path) == 0
     for name in ("demo_result.json", "demo_convergence.png", "demo_best_grasp.png"):
         assert (tmp_path / name).stat().st_size > 0
+
+
+def test_charted_grasp_is_the_scored_grasp_with_calibration_fields():
+    # a disk with non-default calibration: the chart must re-solve the scene that was scored
+    from optim.charts import scene_of
+
+    disk = SoftDisk(0.07, 0.013, stiffness_scale=1.7, contour_stiffness_ratio=2.5)
+    problem = DesignProblem(disk, n_triangles=20)
+    design = np.array([0.2, 0.8, 0.025, 0.01, 0.3, 0.013])
+    out = problem.evaluate_physical(design[None, :])
+    assert out["converged"][0]
+    scene = scene_of(problem.design_dict(problem.bounds.unscale(design)), problem.object_info())
+    assert scene.disk.contour_stiffness_ratio == 2.5
+    res = envs.simulate(scene, design[4], 20)
+    np.testing.assert_allclose(res.jaw_angles_rad, out["jaw_angles_rad"][0], rtol=0, atol=1e-12)
+    # and the plain disk would have given another grasp (the test can fail)
+    plain = envs.simulate(scene.with_changes(contour_stiffness_ratio=1.0), design[4], 20)
+    assert abs(plain.jaw_angles_rad[0] - res.jaw_angles_rad[0]) > 1e-4

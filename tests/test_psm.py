@@ -5,16 +5,23 @@ import math
 import numpy as np
 import pytest
 
-from envs import kernels as K
-from envs.psm import (
-    P_KC,
-    P_KR,
-    disk_spring_stiffness,
-    rest_points,
-    scaled_problem,
-    spring_stiffness,
-)
+from envs.model.geometry import rest_points
+from envs.model.layout import P_KC, P_KR
+from envs.model.problem import scaled_params
+from envs.model.stiffness import disk_spring_stiffness, spring_stiffness
 from envs.scene import Scene
+from tests.kernels import K
+
+
+class _Prob:
+    """The solver's parameter row of a scene, as the tests below use it."""
+
+    def __init__(self, scene, torque_nm, n, rule="van_gelder"):
+        self.n = n
+        self.params = scaled_params(scene, torque_nm, n, rule)
+
+
+scaled_problem = _Prob
 
 
 def test_van_gelder_matches_conventions():

@@ -85,7 +85,7 @@ def test_contour_stiffness_ratio_defaults_to_one_and_names_its_range():
 
 def test_scene_rejects_overlap_and_wide_fingers():
     s = Scene.preset("paper-r070")
-    with pytest.raises(ValueError, match="overlaps the disk"):
+    with pytest.raises(ValueError, match="overlap the disk"):
         Scene(s.gripper, replace(s.disk, distance_m=0.0))
     with pytest.raises(ValueError, match="finger_width_m"):
         Scene(replace(s.gripper, finger_width_m=0.15), s.disk)

@@ -7,10 +7,14 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from envs.kkt import kkt_check
-from envs.psm import rest_points, scaled_problem
-from envs.scene import Scene, finger_frame
-from envs.solver import result_from_scaled, simulate, simulate_ramp
+from envs.check import check_grasp as kkt_check
+from envs.model.geometry import finger_frame, rest_points
+from envs.model.layout import I_STATUS, N_CORNERS, N_INFO
+from envs.model.problem import scaled_params
+from envs.scene import Scene
+from envs.solver import grasp_result, simulate, simulate_ramp
+from envs.solver.pipeline import checked_solution
+from envs.solver.status import OK, POLISH_FAIL
 
 R070 = Scene.preset("paper-r070")
 
@@ -216,7 +220,11 @@ def test_jaw_angle_converges_in_n_at_a_fitted_rate():
         ({"n_triangles": 3}, "n_triangles"),
         ({"n_triangles": 20.5}, "n_triangles"),
         ({"method": "bfgs"}, "method"),
-        ({"stiffness_rule": "magic"}, "stiffness rule"),
+        ({"stiffness_rule": "magic"}, r"stiffness_rule = 'magic' is not one of"),
+        ({"n_triangles": np.nan}, r"n_triangles must be an integer in \[4, 20000\]"),
+        ({"n_triangles": True}, "n_triangles"),
+        ({"torque_nm": None}, "torque_nm must be a real number"),
+        ({"phase_rad": math.inf}, "phase_rad"),
     ],
 )
 def test_bad_solver_input_raises(kwargs, match):
@@ -224,6 +232,24 @@ def test_bad_solver_input_raises(kwargs, match):
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         simulate(R070, **args)
+
+
+@pytest.mark.parametrize("scene", [None, "paper-r070", 3.0])
+def test_simulate_names_a_scene_that_is_not_one(scene):
+    with pytest.raises(ValueError, match="scene must be an envs.Scene"):
+        simulate(scene, 0.2, 20)
+
+
+def test_float32_and_numpy_scalars_give_the_python_float_answer():
+    # the check once computed in the torque's dtype: float32 torques failed it
+    torques = np.linspace(0.05, 0.5, 7, dtype=np.float32)
+    for t in torques:
+        a = simulate(R070, float(t), np.int64(20))
+        b = simulate(R070, t, 20)
+        c = simulate(R070, np.float64(t), 20)
+        assert a.converged and b.converged and c.converged
+        assert a.jaw_angles_rad == b.jaw_angles_rad == c.jaw_angles_rad
+        assert a.kkt == b.kkt
 
 
 def test_ramp_rejects_decreasing_torques():
@@ -293,17 +319,27 @@ def test_a_checked_fold_is_reported_as_a_fold_whatever_the_solver_claimed():
     res = simulate(scene, 1.6, 20)
     assert res.folded
     n = res.n_triangles
-    prob = scaled_problem(scene, 1.6, n, "van_gelder", np.pi / 2)
-    x = np.concatenate([((res.points_m - scene.disk.center_m) / prob.length_m).ravel(),
-                        res.jaw_angles_rad])
-    args = (scene, prob, 1.6, x, res.contact_forces_n / prob.force_n,
-            res.corner_edge_forces_n / prob.force_n, res.stop_torques_nm / prob.torque_nm)
-    again = result_from_scaled(*args, False, "active-set polish did not reach the contact "
-                               "tolerance", 1, 0.0, "newton", "van_gelder")
+    r = scene.disk.radius_m
+    prm = scaled_params(scene, 1.6, n)[None, :]
+    cols = scene.columns(1.6)
+    force_unit = float(cols.stiffness_scale[0] * cols.youngs_modulus_pa[0]
+                       * cols.thickness_m[0]) * r
+    x = np.concatenate([((res.points_m - scene.disk.center_m) / r).ravel(),
+                        res.jaw_angles_rad])[None, :]
+    face = (res.contact_forces_n / force_unit)[None]
+    corner = (res.corner_edge_forces_n / force_unit)[None]
+    stop = (res.stop_torques_nm / (force_unit * r))[None]
+
+    def result(claim, face, corner, stop):
+        info = np.zeros((1, N_INFO))
+        info[0, I_STATUS] = claim
+        sol = checked_solution(cols, n, prm, x.copy(), face, corner, stop, info, 0.0)
+        return grasp_result(sol, 0, 1.6)
+
+    again = result(POLISH_FAIL, face, corner, stop)
     assert again.folded and not again.converged
     assert "inverted (folded)" in again.message
     # the same state with the forces dropped is no equilibrium: not a fold, whatever it claims
-    bad = result_from_scaled(scene, prob, 1.6, x, 0.0 * args[4], 0.0 * args[5], 0.0 * args[6],
-                             True, "converged", 1, 0.0, "newton", "van_gelder")
+    bad = result(OK, 0.0 * face, np.zeros((1, 2, N_CORNERS, n)), 0.0 * stop)
     assert not bad.folded and not bad.converged
     assert "independent KKT check failed" in bad.message

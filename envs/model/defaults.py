@@ -22,6 +22,7 @@ DEFAULT_YOUNGS_MODULUS_PA = 100e3
 DEFAULT_POISSON_RATIO = 0.45
 DEFAULT_THICKNESS_M = 0.01
 DEFAULT_STIFFNESS_SCALE = 1.0
+DEFAULT_CONTOUR_STIFFNESS_RATIO = 1.0  # the plain stiffness rule
 
 # --- contact geometry ----------------------------------------------------------------------
 # Finger end corners are rounded with this radius (fraction of the disk radius, at most a
@@ -31,5 +32,6 @@ CORNER_ROUNDING = 1e-3
 
 # --- design objective ----------------------------------------------------------------------
 # admissible peak strain of the grasped object, relative (soft tissue and produce bruise at
-# strains of 0.1-0.2); the environment draws its own per object
-DEFAULT_STRAIN_LIMIT = 0.1
+# strains of 0.1-0.2); the environment draws its own per object. The optimizers' and the
+# batch evaluator's default (they disagreed before: 0.15 and 0.1)
+DEFAULT_STRAIN_LIMIT = 0.15

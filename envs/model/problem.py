@@ -51,6 +51,7 @@ __all__ = [
     "units",
     "rest_state",
     "spring_strains",
+    "scaled_params",
 ]
 
 # why a scene is invalid at rest (0: valid)
@@ -205,3 +206,11 @@ def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:
     d = np.roll(q, -1, axis=-2) - q
     contour = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2) / np.asarray(h)[..., None] - 1.0
     return radial, contour
+
+
+def scaled_params(scene, torque_nm: float, n_triangles: int,
+                  stiffness_rule: str = "van_gelder",
+                  phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+    """The solver's parameter row of one scene at one torque, float64[N_PARAMS]."""
+    return pack_params(scene.columns(torque_nm), int(n_triangles), stiffness_rule,
+                       float(phase_rad))[0]

@@ -1,0 +1,770 @@
+"""Compiled independent equilibrium check of a grasp (KKT conditions in physical units).
+
+The numba version of :func:`envs.kkt.kkt_check`, with the same semantics (same tolerances, same
+residual definitions, same reason strings). It recomputes, from the returned contour points,
+finger angles and contact forces only, the spring forces, the force balance at every contour
+point, the moment balance at each joint, the gaps to the finite fingers (bar with rounded
+corners) and their corners, the sign of every contact force and complementarity.
+
+It is independent of the solver on purpose: nothing here comes from :mod:`envs.kernels`,
+:mod:`envs.psm` or :mod:`envs.solver`; the finger frames, the rounded-bar distance, the corners
+and the polygon tests are written again from ``shared/CONVENTIONS.md``. Only the Python wrapper
+reads the scene and the spring stiffnesses (given by the stiffness rule of :mod:`envs.psm`,
+which defines the model being checked, not the solver).
+
+The compiled core works on plain float64 arrays; the problem is packed in a parameter vector
+and the verdict comes back in an output vector, both laid out by the named offsets below:
+
+Parameter vector (``N_CK`` floats, SI units)
+
+==================  ===========================================================  =====
+offset              meaning                                                      unit
+==================  ===========================================================  =====
+``CK_RADIUS``       disk radius ``r``                                            m
+``CK_CENTRE_X/Y``   pinned centre ``C``                                          m
+``CK_JOINT_OFFSET`` joint distance ``d_3`` from the symmetry axis                m
+``CK_LENGTH``       finger length ``l``                                          m
+``CK_HALF_WIDTH``   half finger width ``w/2``                                    m
+``CK_RHO``          rounding radius of the finger's end corners                  m
+``CK_KF``           torsion spring ``k_f`` of each joint                         N·m/rad
+``CK_TH0``          rest angle ``theta_a0``                                      rad
+``CK_THMIN``        closed-jaw angle (joint stop)                                rad
+``CK_TORQUE``       actuation torque ``T_a``                                     N·m
+``CK_KINT``         radial spring stiffness                                      N/m
+``CK_KEXT``         contour spring stiffness                                     N/m
+``CK_REST_CONTOUR`` rest length ``h = 2 r sin(pi/N)`` of the contour springs     m
+==================  ===========================================================  =====
+
+Output vector (``N_OUT`` floats): ``OUT_PASSED`` (1.0 or 0.0), ``OUT_FORCE_RES`` and
+``OUT_MOMENT_RES`` (relative residuals), ``OUT_PENETRATION`` [m], ``OUT_CONTACT_GAP`` (largest gap
+of a loaded contact) [m], ``OUT_MIN_FORCE`` [N] and ``OUT_REASONS``, a bit field of the
+``FAIL_*`` flags.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.extending import intrinsic
+
+__all__ = [
+    "KKTReport",
+    "FORCE_TOL",
+    "GAP_TOL",
+    "CK_RADIUS",
+    "CK_CENTRE_X",
+    "CK_CENTRE_Y",
+    "CK_JOINT_OFFSET",
+    "CK_LENGTH",
+    "CK_HALF_WIDTH",
+    "CK_RHO",
+    "CK_KF",
+    "CK_TH0",
+    "CK_THMIN",
+    "CK_TORQUE",
+    "CK_KINT",
+    "CK_KEXT",
+    "CK_REST_CONTOUR",
+    "N_CK",
+    "OUT_PASSED",
+    "OUT_FORCE_RES",
+    "OUT_MOMENT_RES",
+    "OUT_PENETRATION",
+    "OUT_CONTACT_GAP",
+    "OUT_MIN_FORCE",
+    "OUT_REASONS",
+    "N_OUT",
+    "FAIL_FORCE",
+    "FAIL_MOMENT",
+    "FAIL_PENETRATION",
+    "FAIL_GAP",
+    "FAIL_NEGATIVE",
+    "check_params",
+    "check_one",
+    "check_batch",
+    "report_from_output",
+    "check_grasp",
+]
+
+FORCE_TOL = 1e-8  # relative force and moment residual
+GAP_TOL = 1e-9  # contact gap tolerance, in units of the radius
+
+# parameter vector layout
+CK_RADIUS = 0
+CK_CENTRE_X = 1
+CK_CENTRE_Y = 2
+CK_JOINT_OFFSET = 3
+CK_LENGTH = 4
+CK_HALF_WIDTH = 5
+CK_RHO = 6
+CK_KF = 7
+CK_TH0 = 8
+CK_THMIN = 9
+CK_TORQUE = 10
+CK_KINT = 11
+CK_KEXT = 12
+CK_REST_CONTOUR = 13
+N_CK = 14
+
+# output vector layout
+OUT_PASSED = 0
+OUT_FORCE_RES = 1
+OUT_MOMENT_RES = 2
+OUT_PENETRATION = 3
+OUT_CONTACT_GAP = 4
+OUT_MIN_FORCE = 5
+OUT_REASONS = 6
+N_OUT = 7
+
+# failure bits of OUT_REASONS, in the order the reasons are written
+FAIL_FORCE = 1
+FAIL_MOMENT = 2
+FAIL_PENETRATION = 4
+FAIL_GAP = 8
+FAIL_NEGATIVE = 16
+
+# accumulator layout of the core's work vector (internal)
+_ACC_PEN = 0  # largest penetration [m]
+_ACC_GAP = 1  # largest |gap| of a loaded contact [m]
+_ACC_FMIN = 2  # smallest contact force or stop torque (inf: none)
+_ACC_SCALE = 3  # largest contact moment scale [N·m]
+_ACC_MOMENT = 4  # net moment on finger j at _ACC_MOMENT + j [N·m]
+_N_ACC = 6
+
+_FLAGS = dict(cache=True, error_model="numpy", _nrt=False)
+
+
+class KKTReport(NamedTuple):
+    """Outcome of :func:`check_grasp` (relative residuals are dimensionless)."""
+
+    passed: bool
+    force_residual_rel: float
+    moment_residual_rel: float
+    max_penetration_m: float
+    max_contact_gap_m: float
+    min_contact_force_n: float
+    reason: str
+
+
+# --------------------------------------------------------------------------------------------
+# scalar helpers. The reference check mixes Python's max/min (a NaN argument after the first
+# is dropped) with numpy's max/min over arrays (a NaN anywhere wins); both are kept so that even
+# a state with NaN gets the same verdict.
+
+
+@njit(inline="always", **_FLAGS)
+def _pymax(a, b):
+    """Python's ``max(a, b)``."""
+    return b if b > a else a
+
+
+@njit(inline="always", **_FLAGS)
+def _pymin(a, b):
+    """Python's ``min(a, b)``."""
+    return b if b < a else a
+
+
+@njit(inline="always", **_FLAGS)
+def _npmax(a, b):
+    """Running ``numpy.max``: NaN propagates."""
+    if a != a:
+        return a
+    return b if (b > a or b != b) else a
+
+
+@njit(inline="always", **_FLAGS)
+def _npmin(a, b):
+    """Running ``numpy.min``: NaN propagates."""
+    if a != a:
+        return a
+    return b if (b < a or b != b) else a
+
+
+# --------------------------------------------------------------------------------------------
+# Python's math.hypot. The reference check measures every length with it; it is correctly
+# rounded (CPython's vector_norm: power-of-two scaling, exact squares, compensated sum and one
+# Newton correction of the root) while the C library's hypot, which numba calls, is off by one
+# ulp now and then. One ulp of a spring length shows in the residual of an unloaded disk at
+# 1e-10 (its spring forces are cancellation noise judged against a 1e-6 strain), so the same
+# algorithm is used here: the reference's residuals are then reproduced to round-off.
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (LLVM's fma: the instruction, or the C library's fma)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        dbl = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [dbl], ir.FunctionType(dbl, [dbl] * 3))
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+@intrinsic
+def _bits(typingctx, x):
+    """The IEEE 754 bits of a float64, as an int64."""
+    sig = types.int64(types.float64)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+
+    return sig, codegen
+
+
+@intrinsic
+def _from_bits(typingctx, i):
+    """The float64 with the given IEEE 754 bits."""
+    sig = types.float64(types.int64)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.DoubleType())
+
+    return sig, codegen
+
+
+@njit(inline="always", **_FLAGS)
+def _hypot_scaled(x, y, scale):
+    """CPython's ``vector_norm`` of (x, y) >= 0 with ``max(x, y) * scale`` in [0.5, 1).
+
+    Exact squares (fma), a compensated sum that starts at 1 so that it is always the larger
+    addend, then one Newton step on ``h**2 = sum`` in the same arithmetic.
+    """
+    x, y = x * scale, y * scale
+    hx, hy = x * x, y * y
+    frac1 = _fma(x, x, -hx) + _fma(y, y, -hy)
+    csum = 1.0 + hx
+    frac2 = (1.0 - csum) + hx
+    total = csum + hy
+    frac2 += (csum - total) + hy
+    csum = total
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    hh = -h * h
+    frac1 += _fma(-h, h, -hh)
+    total = csum + hh
+    frac2 += (csum - total) + hh
+    h += (total - 1.0 + (frac1 + frac2)) / (2.0 * h)
+    return h / scale
+
+
+@njit(**_FLAGS)
+def _hypot(x, y):
+    """``sqrt(x**2 + y**2)`` as Python's ``math.hypot`` computes it.
+
+    The algorithm of CPython 3.12+ (3.10 and 3.11 square exactly with Veltkamp's split rather
+    than fma: the same squares, summed in another order; both round correctly in all but
+    vanishingly rare cases and agreed bit for bit on millions of pairs under 3.11), and 3.11's
+    path for subnormal inputs.
+    """
+    x, y = abs(x), abs(y)
+    if x == math.inf or y == math.inf:  # even with a NaN beside it
+        return math.inf
+    if x != x or y != y:
+        return math.nan
+    big = x if x > y else y
+    if big == 0.0:
+        return big
+    biased = (_bits(big) >> 52) & 0x7FF  # big = 1.f * 2**(biased - 1023)
+    if 0 < biased < 2045:
+        # 2**-(biased - 1022): the power of two that takes big into [0.5, 1)
+        return _hypot_scaled(x, y, _from_bits((2045 - biased) << 52))
+    e = math.frexp(big)[1]
+    if e >= -1023:  # huge, or not too small a subnormal
+        return _hypot_scaled(x, y, math.ldexp(1.0, -e))
+    # tiny: the scale would overflow; CPython 3.11 divides by the largest instead
+    qx, qy = x / big, y / big
+    csum = 1.0 + qx * qx
+    frac = (1.0 - csum) + qx * qx
+    total = csum + qy * qy
+    frac += (csum - total) + qy * qy
+    return big * math.sqrt(total - 1.0 + frac)
+
+
+@njit(inline="always", **_FLAGS)
+def _npclip(a, lo, hi):
+    """``numpy.clip(a, lo, hi)`` of a scalar: NaN propagates."""
+    if a != a:
+        return a
+    return lo if a < lo else (hi if a > hi else a)
+
+
+@njit(inline="always", **_FLAGS)
+def _frame(prm, j, theta):
+    """Joint, unit axis ``e`` and inward face normal ``n`` of finger j (CONVENTIONS.md).
+
+    Returns ``jx, jy, ex, ey, nx, ny``; j = 0 is the right finger, 1 the left one.
+    """
+    s, c = math.sin(theta), math.cos(theta)
+    d3 = prm[CK_JOINT_OFFSET]
+    if j == 0:
+        return d3, 0.0, s, c, -c, s
+    return -d3, 0.0, -s, c, c, s
+
+
+# --------------------------------------------------------------------------------------------
+# polygon geometry (the deformed contour, counter-clockwise)
+
+
+@njit(**_FLAGS)
+def _inside(p, x, y):
+    """Whether ``(x, y)`` lies inside the contour polygon (even-odd ray casting along +x)."""
+    n = p.shape[0]
+    inside = False
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        x1, y1 = p[i, 0], p[i, 1]
+        x2, y2 = p[i1, 0], p[i1, 1]
+        if (y1 > y) != (y2 > y):
+            xc = x1 + (y - y1) * (x2 - x1) / (y2 - y1)
+            if xc > x:
+                inside = not inside
+    return inside
+
+
+@njit(**_FLAGS)
+def _dist_polygon(p, x, y):
+    """Distance from ``(x, y)`` to the contour polygon's boundary [m]."""
+    n = p.shape[0]
+    best = math.inf
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        ax, ay = p[i, 0], p[i, 1]
+        dx, dy = p[i1, 0] - ax, p[i1, 1] - ay
+        t = ((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy)
+        t = _npclip(t, 0.0, 1.0)
+        vx, vy = x - (ax + t * dx), y - (ay + t * dy)
+        best = _npmin(best, math.sqrt(vx * vx + vy * vy))
+    return best
+
+
+@njit(inline="always", **_FLAGS)
+def _orient(ux, uy, vx, vy, wx, wy):
+    """Twice the signed area of the triangle (u, v, w)."""
+    return (vx - ux) * (wy - uy) - (vy - uy) * (wx - ux)
+
+
+@njit(**_FLAGS)
+def _segment_crosses(p, ax, ay, bx, by):
+    """Whether a contour edge properly crosses the segment a-b."""
+    n = p.shape[0]
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        px, py, qx, qy = p[i, 0], p[i, 1], p[i1, 0], p[i1, 1]
+        d1 = _orient(ax, ay, bx, by, px, py)
+        d2 = _orient(ax, ay, bx, by, qx, qy)
+        d3 = _orient(px, py, qx, qy, ax, ay)
+        d4 = _orient(px, py, qx, qy, bx, by)
+        if d1 * d2 < 0 and d3 * d4 < 0:
+            return True
+    return False
+
+
+# --------------------------------------------------------------------------------------------
+# forces and moments
+
+
+@njit(**_FLAGS)
+def _spring_forces(prm, p, force):
+    """Add the radial and contour spring forces to ``force``; return the largest |force| [N].
+
+    Lengths are exact (geometrically nonlinear springs), as in the model.
+    """
+    n = p.shape[0]
+    r, cx, cy = prm[CK_RADIUS], prm[CK_CENTRE_X], prm[CK_CENTRE_Y]
+    k_int, k_ext, h = prm[CK_KINT], prm[CK_KEXT], prm[CK_REST_CONTOUR]
+    biggest = 0.0
+    for i in range(n):
+        vx, vy = p[i, 0] - cx, p[i, 1] - cy
+        length = _hypot(vx, vy)
+        f = k_int * (length - r)
+        force[i, 0] -= f * vx / length
+        force[i, 1] -= f * vy / length
+        # the reference takes Python's max over a list that starts with this first spring
+        biggest = abs(f) if i == 0 else _pymax(biggest, abs(f))
+        i1 = i + 1 if i + 1 < n else 0
+        wx, wy = p[i1, 0] - p[i, 0], p[i1, 1] - p[i, 1]
+        length = _hypot(wx, wy)
+        f = k_ext * (length - h)
+        force[i, 0] += f * wx / length
+        force[i, 1] += f * wy / length
+        force[i1, 0] -= f * wx / length
+        force[i1, 1] -= f * wy / length
+        biggest = _pymax(biggest, abs(f))
+    return biggest
+
+
+@njit(**_FLAGS)
+def _face_contacts(prm, p, face, j, theta, force, acc):
+    """Gaps of every point to the body of finger j, and the forces its face contacts carry.
+
+    The body is the bar ``0 <= s <= l``, ``|m| <= w/2`` with its corners rounded to ``rho``: the
+    rectangle ``[0, l] x [-(w/2 - rho), w/2 - rho]`` grown by ``rho``. A point's force acts along
+    the outward normal of the body at the nearest surface point, about which the moment is
+    taken.
+    """
+    jx, jy, ex, ey, nx, ny = _frame(prm, j, theta)
+    ln, rho = prm[CK_LENGTH], prm[CK_RHO]
+    core = prm[CK_HALF_WIDTH] - rho
+    for i in range(p.shape[0]):
+        rx, ry = p[i, 0] - jx, p[i, 1] - jy
+        s = rx * ex + ry * ey
+        m = rx * nx + ry * ny
+        ds = s - _npclip(s, 0.0, ln)
+        dm = m - _npclip(m, -core, core)
+        dist = _hypot(ds, dm)
+        gap = dist - rho
+        if dist > 0:
+            ux, uy = (ds * ex + dm * nx) / dist, (ds * ey + dm * ny) / dist
+        else:
+            ux, uy = nx, ny  # inside the core: push along the face normal
+        acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], -gap)
+        lam = face[j, i]
+        if lam != 0.0:
+            acc[_ACC_FMIN] = _pymin(acc[_ACC_FMIN], lam)
+            acc[_ACC_GAP] = _pymax(acc[_ACC_GAP], abs(gap))
+            force[i, 0] += lam * ux
+            force[i, 1] += lam * uy
+            # arm from the joint to the touching point of the finger surface
+            armx = (p[i, 0] - gap * ux) - jx
+            army = (p[i, 1] - gap * uy) - jy
+            acc[_ACC_MOMENT + j] += armx * (-lam * uy) - army * (-lam * ux)
+            acc[_ACC_SCALE] = _pymax(acc[_ACC_SCALE], abs(lam) * _hypot(armx, army))
+
+
+@njit(**_FLAGS)
+def _corner_contacts(prm, p, corner, j, c, theta, force, acc):
+    """Depth of corner c of finger j in the contour, and the forces it bears on the edges.
+
+    Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back. A corner's
+    force on edge ``(k, k+1)`` acts along the shortest segment from the edge to the corner's
+    centre and is shared by the two points in proportion to where it bears.
+    """
+    jx, jy, ex, ey, nx, ny = _frame(prm, j, theta)
+    rho = prm[CK_RHO]
+    sc = prm[CK_LENGTH] if c % 2 == 0 else 0.0
+    off = (1.0 if c < 2 else -1.0) * (prm[CK_HALF_WIDTH] - rho)
+    kx = (jx + sc * ex) + off * nx
+    ky = (jy + sc * ey) + off * ny
+    depth = _dist_polygon(p, kx, ky)
+    depth = rho + depth if _inside(p, kx, ky) else rho - depth
+    acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], depth)
+    n = p.shape[0]
+    armx, army = kx - jx, ky - jy
+    for k in range(n):
+        lam = corner[j, c, k]
+        if lam == 0.0:
+            continue
+        k1 = k + 1 if k + 1 < n else 0
+        ax, ay = p[k, 0], p[k, 1]
+        dx, dy = p[k1, 0] - ax, p[k1, 1] - ay
+        t = _pymin(1.0, _pymax(0.0, ((kx - ax) * dx + (ky - ay) * dy) / (dx * dx + dy * dy)))
+        vx, vy = kx - (ax + t * dx), ky - (ay + t * dy)
+        dist = _hypot(vx, vy)
+        gap = dist - rho
+        ux, uy = (vx / dist, vy / dist) if dist > 0 else (0.0, 0.0)
+        acc[_ACC_FMIN] = _pymin(acc[_ACC_FMIN], lam)
+        acc[_ACC_GAP] = _pymax(acc[_ACC_GAP], abs(gap))
+        w0, w1 = (1 - t) * lam, t * lam
+        force[k, 0] -= w0 * ux
+        force[k, 1] -= w0 * uy
+        force[k1, 0] -= w1 * ux
+        force[k1, 1] -= w1 * uy
+        acc[_ACC_MOMENT + j] += armx * (lam * uy) - army * (lam * ux)
+        acc[_ACC_SCALE] = _pymax(acc[_ACC_SCALE], abs(lam) * _hypot(armx, army))
+
+
+@njit(**_FLAGS)
+def _finger(prm, p, theta, j, face, corner, stop, force, acc):
+    """All the terms of finger j: joint moments, face and corner contacts, stop, bar crossing."""
+    sign = 1.0 if j == 0 else -1.0  # closing is +z for the right finger, -z for the left
+    closing = prm[CK_TORQUE] - prm[CK_KF] * (prm[CK_TH0] - theta)
+    acc[_ACC_MOMENT + j] += sign * closing
+    acc[_ACC_MOMENT + j] -= sign * stop[j]
+    acc[_ACC_SCALE] = _pymax(acc[_ACC_SCALE], abs(closing))
+    _face_contacts(prm, p, face, j, theta, force, acc)
+    jx, jy, ex, ey, _, _ = _frame(prm, j, theta)
+    ln = prm[CK_LENGTH]
+    if _segment_crosses(p, jx, jy, jx + ln * ex, jy + ln * ey):
+        # the bar runs right through the disk: points and corners are all outside it
+        acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], prm[CK_HALF_WIDTH])
+    for c in range(4):
+        _corner_contacts(prm, p, corner, j, c, theta, force, acc)
+    if stop[j] != 0.0:
+        acc[_ACC_FMIN] = _pymin(acc[_ACC_FMIN], stop[j])
+        off = abs(theta - prm[CK_THMIN])
+        if off > GAP_TOL:
+            # a stop that pushes while the jaws are open: a loaded contact with a gap
+            acc[_ACC_GAP] = _pymax(acc[_ACC_GAP], off * prm[CK_RADIUS])
+
+
+@njit(**_FLAGS)
+def _verdict(prm, face, corner, force, spring_max, acc, out):
+    """Relative residuals, the accumulated extremes and the failure bits, into ``out``."""
+    r = prm[CK_RADIUS]
+    # floor: the spring force of a 1e-6 strain, so that an unloaded disk is judged absolutely
+    f_floor = 1e-6 * prm[CK_KEXT] * r
+    f_face = 0.0
+    for j in range(2):
+        for i in range(face.shape[1]):
+            f_face = _npmax(f_face, abs(face[j, i]))
+    f_corner = 0.0
+    for j in range(2):
+        for c in range(4):
+            for k in range(corner.shape[2]):
+                f_corner = _npmax(f_corner, abs(corner[j, c, k]))
+    f_ref = _pymax(_pymax(spring_max, f_face), f_floor)
+    f_ref = _pymax(f_ref, f_corner)
+    m_ref = _pymax(_pymax(acc[_ACC_SCALE], prm[CK_TORQUE]), f_floor * prm[CK_LENGTH])
+    f_max = 0.0
+    for i in range(force.shape[0]):
+        f_max = _npmax(_npmax(f_max, abs(force[i, 0])), abs(force[i, 1]))
+    m_max = _npmax(abs(acc[_ACC_MOMENT]), abs(acc[_ACC_MOMENT + 1]))
+    f_res, m_res = f_max / f_ref, m_max / m_ref
+    pen, gap = acc[_ACC_PEN], acc[_ACC_GAP]
+    fmin = 0.0 if acc[_ACC_FMIN] == math.inf else acc[_ACC_FMIN]
+    bits = 0
+    if not f_res <= FORCE_TOL:  # written so that NaN fails
+        bits |= FAIL_FORCE
+    if not m_res <= FORCE_TOL:
+        bits |= FAIL_MOMENT
+    if not pen <= GAP_TOL * r:
+        bits |= FAIL_PENETRATION
+    if not gap <= GAP_TOL * r:
+        bits |= FAIL_GAP
+    if fmin < 0:
+        bits |= FAIL_NEGATIVE
+    out[OUT_PASSED] = 1.0 if bits == 0 else 0.0
+    out[OUT_FORCE_RES] = f_res
+    out[OUT_MOMENT_RES] = m_res
+    out[OUT_PENETRATION] = pen
+    out[OUT_CONTACT_GAP] = gap
+    out[OUT_MIN_FORCE] = fmin
+    out[OUT_REASONS] = float(bits)
+
+
+# --------------------------------------------------------------------------------------------
+# entry points
+
+
+@njit(cache=True, error_model="numpy")
+def check_one(prm, points, angles, face, corner, stop, out):
+    """Check one grasp (compiled core of :func:`check_grasp`).
+
+    Parameters
+    ----------
+    prm : float64[N_CK]
+        Problem parameters, laid out by the ``CK_*`` offsets (:func:`check_params`).
+    points : float64[N, 2]
+        Contour points [m], counter-clockwise.
+    angles : float64[2]
+        Right and left finger angles [rad].
+    face : float64[2, N]
+        Normal force of each finger's body on each point [N].
+    corner : float64[2, 4, N]
+        Force of each finger's rounded corners (face tip, face root, back tip, back root) on
+        each contour edge ``(k, k+1)`` [N].
+    stop : float64[2]
+        Torques of the closed-jaw stops [N·m].
+    out : float64[N_OUT]
+        Out: the verdict, laid out by the ``OUT_*`` offsets.
+    """
+    n = points.shape[0]
+    if face.shape[1] != n or corner.shape[2] != n or corner.shape[1] != 4:
+        raise ValueError("check_one: face must be (2, N) and corner (2, 4, N)")
+    force = np.zeros((n, 2))  # net force on each contour point
+    acc = np.zeros(_N_ACC)
+    acc[_ACC_FMIN] = math.inf
+    spring_max = _spring_forces(prm, points, force)
+    for j in range(2):
+        _finger(prm, points, angles[j], j, face, corner, stop, force, acc)
+    _verdict(prm, face, corner, force, spring_max, acc, out)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def check_batch(prms, points, angles, face, corner, stop, out):
+    """:func:`check_one` over a batch (first axis of every argument), in parallel threads.
+
+    Shapes: ``prms`` (B, N_CK), ``points`` (B, N, 2), ``angles`` (B, 2), ``face`` (B, 2, N),
+    ``corner`` (B, 2, 4, N), ``stop`` (B, 2), ``out`` (B, N_OUT); all float64.
+    """
+    for b in prange(prms.shape[0]):
+        check_one(prms[b], points[b], angles[b], face[b], corner[b], stop[b], out[b])
+
+
+def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str) -> np.ndarray:
+    """Pack a problem into the parameter vector of :func:`check_one`.
+
+    Parameters
+    ----------
+    scene : envs.scene.Scene
+        Gripper and disk.
+    torque_nm
+        Actuation torque ``T_a`` [N·m].
+    n_triangles
+        Number of contour points ``N`` (sets the spring stiffnesses and the rest contour length).
+    stiffness_rule
+        Stiffness rule of the model (``"van_gelder"`` or ``"cst_fit"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64[N_CK].
+    """
+    g, d = scene.gripper, scene.disk
+    r = float(d.radius_m)
+    n = int(n_triangles)
+    k_unit = d.stiffness_scale * d.youngs_modulus_pa * d.thickness_m
+    unit = _unit_stiffness(n, r, stiffness_rule, float(d.poisson_ratio))
+    k_int, k_ext = (k * k_unit for k in unit)
+    k_ext *= getattr(d, "contour_stiffness_ratio", 1.0)
+    # filled as a list (cheaper than numpy item assignment: this runs once per check)
+    vals = [0.0] * N_CK
+    vals[CK_RADIUS] = r
+    vals[CK_CENTRE_X] = 0.0  # the centre sits on the symmetry axis at (0, d_1 + r)
+    vals[CK_CENTRE_Y] = d.distance_m + r
+    vals[CK_JOINT_OFFSET] = g.joint_offset_m
+    vals[CK_LENGTH] = g.finger_length_m
+    vals[CK_HALF_WIDTH] = g.finger_width_m / 2
+    vals[CK_RHO] = _rounding(g.finger_width_m, r)
+    vals[CK_KF] = g.torsion_stiffness_nm_per_rad
+    vals[CK_TH0] = g.rest_angle_rad
+    vals[CK_THMIN] = _closed_angle(g.joint_offset_m, g.finger_length_m, vals[CK_HALF_WIDTH])
+    vals[CK_TORQUE] = float(torque_nm)
+    vals[CK_KINT] = k_int
+    vals[CK_KEXT] = k_ext
+    vals[CK_REST_CONTOUR] = 2 * r * math.sin(math.pi / n)
+    return np.array(vals, dtype=np.float64)
+
+
+@functools.cache
+def _model_rules():
+    """The model's ``spring_stiffness`` and ``corner_radius`` functions.
+
+    They define the model being checked (the stiffness rule and the corner rounding), not how
+    it is solved, so the check takes them from the model as the reference check does. They live
+    in :mod:`envs.model` since the package's restructuring and in :mod:`envs.psm` before it.
+    """
+    try:
+        from .model.geometry import corner_radius
+        from .model.stiffness import spring_stiffness
+    except ImportError:
+        from .psm import corner_radius, spring_stiffness
+    return spring_stiffness, corner_radius
+
+
+@functools.lru_cache(maxsize=1024)
+def _unit_stiffness(n: int, r: float, rule: str, poisson_ratio: float) -> tuple[float, float]:
+    """The model's spring stiffnesses per unit ``s E t``, memoized (the rule validates its
+    inputs on every call, and the ``cst_fit`` rule solves a small least-squares problem)."""
+    return _model_rules()[0](n, r, rule, poisson_ratio)
+
+
+@functools.lru_cache(maxsize=1024)
+def _rounding(finger_width_m: float, radius_m: float) -> float:
+    """The model's rounding radius of the finger end corners [m], memoized."""
+    return float(_model_rules()[1](finger_width_m, radius_m))
+
+
+def _closed_angle(joint_offset_m: float, length_m: float, half_width_m: float) -> float:
+    """Finger angle at which the gripping-face tip reaches the symmetry axis [rad].
+
+    The joint stop of closed jaws: the root in (-pi/2, 0] of
+    ``d_3 + l sin(theta) - (w/2) cos(theta) = 0``. With ``l sin t - hw cos t = R sin(t - phi)``,
+    ``R = hypot(l, hw)`` and ``phi = atan2(hw, l)``.
+    """
+    rr = math.hypot(length_m, half_width_m)
+    return math.atan2(half_width_m, length_m) - math.asin(min(1.0, joint_offset_m / rr))
+
+
+_REASONS = (
+    (FAIL_FORCE, lambda o: f"force residual {o[OUT_FORCE_RES]:.2e} > {FORCE_TOL:g}"),
+    (FAIL_MOMENT, lambda o: f"moment residual {o[OUT_MOMENT_RES]:.2e} > {FORCE_TOL:g}"),
+    (FAIL_PENETRATION, lambda o: f"penetration {o[OUT_PENETRATION]:.2e} m > {GAP_TOL:g} r"),
+    (FAIL_GAP,
+     lambda o: f"loaded contact with gap {o[OUT_CONTACT_GAP]:.2e} m > {GAP_TOL:g} r"),
+    (FAIL_NEGATIVE, lambda o: f"negative contact force {o[OUT_MIN_FORCE]:.2e} N"),
+)
+
+
+def report_from_output(out: np.ndarray) -> KKTReport:
+    """Turn an output vector of :func:`check_one` into a :class:`KKTReport`."""
+    bits = int(out[OUT_REASONS])
+    reasons = [text(out) for bit, text in _REASONS if bits & bit]
+    return KKTReport(
+        passed=not reasons,
+        force_residual_rel=float(out[OUT_FORCE_RES]),
+        moment_residual_rel=float(out[OUT_MOMENT_RES]),
+        max_penetration_m=float(out[OUT_PENETRATION]),
+        max_contact_gap_m=float(out[OUT_CONTACT_GAP]),
+        min_contact_force_n=float(out[OUT_MIN_FORCE]),
+        reason="; ".join(reasons) if reasons else "ok",
+    )
+
+
+def _as_f64(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous float64 array of the given shape (ValueError otherwise)."""
+    arr = np.ascontiguousarray(value, dtype=np.float64)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    return arr
+
+
+def check_grasp(
+    scene,
+    torque_nm: float,
+    n_triangles: int,
+    stiffness_rule: str,
+    points_m: np.ndarray,
+    jaw_angles_rad: tuple[float, float],
+    face_forces_n: np.ndarray,
+    corner_forces_n: np.ndarray,
+    stop_torques_nm: np.ndarray,
+) -> KKTReport:
+    """Check equilibrium and contact conditions of a grasp (compiled :func:`envs.kkt.kkt_check`).
+
+    Parameters
+    ----------
+    scene, torque_nm, n_triangles, stiffness_rule
+        The problem that was solved. As in the reference, the number of points is taken from
+        ``points_m``; ``n_triangles`` is accepted for the same signature.
+    points_m
+        Contour points [m], shape (N, 2).
+    jaw_angles_rad
+        Right and left finger angles [rad].
+    face_forces_n
+        Normal force of each finger face on each point [N], shape (2, N).
+    corner_forces_n
+        Force of each finger's rounded corners (tip and root of the gripping face, tip and root
+        of the back of the bar) on each contour edge ``(k, k+1)`` [N], shape (2, 4, N).
+    stop_torques_nm
+        Torques of the closed-jaw stops [N·m], (2,).
+
+    Returns
+    -------
+    KKTReport
+        ``passed`` when the relative force and moment residuals are below :data:`FORCE_TOL`,
+        the gaps satisfy :data:`GAP_TOL` and all contact forces are non-negative.
+
+    Notes
+    -----
+    Every input of any float dtype is converted to float64 first, so float32 arrays or numpy
+    scalars give the same answer as the same values passed as Python floats.
+    """
+    points = np.ascontiguousarray(points_m, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2:
+        raise ValueError(f"points_m must have shape (N, 2), got {points.shape}")
+    n = points.shape[0]
+    corner = _as_f64("corner_forces_n", corner_forces_n, (2, 4, n))
+    face = _as_f64("face_forces_n", face_forces_n, (2, n))
+    angles = _as_f64("jaw_angles_rad", jaw_angles_rad, (2,))
+    stop = _as_f64("stop_torques_nm", stop_torques_nm, (2,))
+    prm = check_params(scene, float(torque_nm), n, stiffness_rule)
+    out = np.empty(N_OUT)
+    check_one(prm, points, angles, face, corner, stop, out)
+    return report_from_output(out)
