@@ -6,11 +6,13 @@ finger angles and contact forces only, the spring forces, the force balance at e
 point, the moment balance at each joint, the gaps to the finite fingers (bar with rounded
 corners) and their corners, the sign of every contact force and complementarity.
 
-It is independent of the solver on purpose: nothing here comes from :mod:`envs.kernels`,
-:mod:`envs.psm` or :mod:`envs.solver`; the finger frames, the rounded-bar distance, the corners
-and the polygon tests are written again from ``shared/CONVENTIONS.md``. Only the Python wrapper
-reads the scene and the spring stiffnesses (given by the stiffness rule of :mod:`envs.psm`,
-which defines the model being checked, not the solver).
+It is independent of the solver on purpose: nothing here comes from the solver's code; the
+finger frames, the rounded-bar distance, the corners, the closed-jaw angle and the polygon tests
+are written again from ``shared/CONVENTIONS.md``. Only the Python wrapper (:func:`check_params`)
+takes two things from the model, because they define the model being checked rather than how it
+is solved: the spring stiffness rule and the corner rounding radius (``spring_stiffness`` and
+``corner_radius`` of :mod:`envs.model`, formerly :mod:`envs.psm`). The compiled core gets plain
+numbers.
 
 The compiled core works on plain float64 arrays; the problem is packed in a parameter vector
 and the verdict comes back in an output vector, both laid out by the named offsets below:
@@ -152,9 +154,9 @@ class KKTReport(NamedTuple):
 
 
 # --------------------------------------------------------------------------------------------
-# scalar helpers. The reference check mixes Python's max/min (a NaN argument after the first
-# is dropped) with numpy's max/min over arrays (a NaN anywhere wins); both are kept so that even
-# a state with NaN gets the same verdict.
+# scalar helpers. The reference check mixes Python's max/min (``max(a, b)`` keeps ``a`` unless
+# ``b > a``, so a NaN ``b`` is dropped) with numpy's max/min over arrays (a NaN anywhere wins);
+# both are kept so that even a state with NaN gets the same verdict.
 
 
 @njit(inline="always", **_FLAGS)
@@ -267,9 +269,9 @@ def _hypot(x, y):
         return math.inf
     if x != x or y != y:
         return math.nan
+    if x == 0.0 or y == 0.0:
+        return x + y  # exact, as CPython's is: the common case of a point facing a flat side
     big = x if x > y else y
-    if big == 0.0:
-        return big
     biased = (_bits(big) >> 52) & 0x7FF  # big = 1.f * 2**(biased - 1023)
     if 0 < biased < 2045:
         # 2**-(biased - 1022): the power of two that takes big into [0.5, 1)
@@ -331,16 +333,15 @@ def _inside(p, x, y):
 def _dist_polygon(p, x, y):
     """Distance from ``(x, y)`` to the contour polygon's boundary [m]."""
     n = p.shape[0]
-    best = math.inf
+    best = math.inf  # smallest squared distance: the root is monotone, so taken once
     for i in range(n):
         i1 = i + 1 if i + 1 < n else 0
         ax, ay = p[i, 0], p[i, 1]
         dx, dy = p[i1, 0] - ax, p[i1, 1] - ay
-        t = ((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy)
-        t = _npclip(t, 0.0, 1.0)
+        t = _npclip(((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
         vx, vy = x - (ax + t * dx), y - (ay + t * dy)
-        best = _npmin(best, math.sqrt(vx * vx + vy * vy))
-    return best
+        best = _npmin(best, vx * vx + vy * vy)
+    return math.sqrt(best)
 
 
 @njit(inline="always", **_FLAGS)
@@ -391,10 +392,11 @@ def _spring_forces(prm, p, force):
         wx, wy = p[i1, 0] - p[i, 0], p[i1, 1] - p[i, 1]
         length = _hypot(wx, wy)
         f = k_ext * (length - h)
-        force[i, 0] += f * wx / length
-        force[i, 1] += f * wy / length
-        force[i1, 0] -= f * wx / length
-        force[i1, 1] -= f * wy / length
+        fx, fy = f * wx / length, f * wy / length
+        force[i, 0] += fx
+        force[i, 1] += fy
+        force[i1, 0] -= fx
+        force[i1, 1] -= fy
         biggest = _pymax(biggest, abs(f))
     return biggest
 
@@ -419,13 +421,13 @@ def _face_contacts(prm, p, face, j, theta, force, acc):
         dm = m - _npclip(m, -core, core)
         dist = _hypot(ds, dm)
         gap = dist - rho
-        if dist > 0:
-            ux, uy = (ds * ex + dm * nx) / dist, (ds * ey + dm * ny) / dist
-        else:
-            ux, uy = nx, ny  # inside the core: push along the face normal
         acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], -gap)
         lam = face[j, i]
         if lam != 0.0:
+            if dist > 0:
+                ux, uy = (ds * ex + dm * nx) / dist, (ds * ey + dm * ny) / dist
+            else:
+                ux, uy = nx, ny  # inside the core: push along the face normal
             acc[_ACC_FMIN] = _pymin(acc[_ACC_FMIN], lam)
             acc[_ACC_GAP] = _pymax(acc[_ACC_GAP], abs(gap))
             force[i, 0] += lam * ux
@@ -593,7 +595,15 @@ def check_batch(prms, points, angles, face, corner, stop, out):
     Shapes: ``prms`` (B, N_CK), ``points`` (B, N, 2), ``angles`` (B, 2), ``face`` (B, 2, N),
     ``corner`` (B, 2, 4, N), ``stop`` (B, 2), ``out`` (B, N_OUT); all float64.
     """
-    for b in prange(prms.shape[0]):
+    # checked before the parallel loop, where an exception would not come out as itself
+    nb, n = prms.shape[0], points.shape[1]
+    for size in (points.shape[0], angles.shape[0], face.shape[0], corner.shape[0],
+                 stop.shape[0], out.shape[0]):
+        if size != nb:
+            raise ValueError("check_batch: every argument needs the same batch size")
+    if face.shape[2] != n or corner.shape[3] != n or corner.shape[2] != 4:
+        raise ValueError("check_batch: face must be (B, 2, N) and corner (B, 2, 4, N)")
+    for b in prange(nb):
         check_one(prms[b], points[b], angles[b], face[b], corner[b], stop[b], out[b])
 
 

@@ -196,12 +196,16 @@ class Scene:
 
     def columns(self, torque_nm: float = 0.0) -> SceneColumns:
         """This scene at an actuation torque [N·m] as one row of :class:`SceneColumns`."""
+        return SceneColumns.from_rows(self.rows(torque_nm))
+
+    def rows(self, torque_nm: float = 0.0) -> np.ndarray:
+        """This scene at an actuation torque [N·m] as a (1, N_SCENE) scene matrix (layout
+        ``S_*`` of :mod:`envs.model.layout`)."""
         g, d = self.gripper, self.disk
-        values = (g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
-                  g.torsion_stiffness_nm_per_rad, d.radius_m, d.distance_m, d.youngs_modulus_pa,
-                  d.poisson_ratio, d.thickness_m, d.stiffness_scale, d.contour_stiffness_ratio,
-                  float(torque_nm))
-        return SceneColumns(*(np.array([v], dtype=np.float64) for v in values))
+        return np.array([[g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+                          g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
+                          d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
+                          d.stiffness_scale, d.contour_stiffness_ratio, float(torque_nm)]])
 
     @property
     def reachable(self) -> bool:

@@ -162,7 +162,8 @@ def train_policy(
     seed
         Seed of the model and of the environments.
     n_envs
-        Environments stepped together (``DummyVecEnv``), >= 1.
+        Environments stepped together, their designs evaluated in one batch
+        (:func:`envs.sb3_env.sb3_vec_env`), >= 1.
     probe_every
         Training steps between probes of the fixed object (default ``budget / 20``).
     net_arch
@@ -195,17 +196,20 @@ def train_policy(
     net = tuple(int(v) for v in net_arch)
     _import_sb3()
     import torch
-    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecMonitor
 
-    import envs
+    from envs.sb3_env import sb3_vec_env
 
-    env = make_vec_env(envs.ENV_ID, n_envs=n_envs, seed=seed, env_kwargs={
-        "bounds": problem.bounds,
-        "distribution": training_distribution(problem),
-        "weights": problem.weights,
-        "n_triangles": problem.n_triangles,
-        "torsion_stiffness_nm_per_rad": problem.torsion_stiffness_nm_per_rad,
-    })
+    # one batched evaluation per training step of n_envs designs (n_envs evaluations of the
+    # budget); VecMonitor keeps the episode statistics that make_vec_env's Monitor gave
+    env = VecMonitor(sb3_vec_env(
+        n_envs, seed=seed,
+        bounds=problem.bounds,
+        distribution=training_distribution(problem),
+        weights=problem.weights,
+        n_triangles=problem.n_triangles,
+        torsion_stiffness_nm_per_rad=problem.torsion_stiffness_nm_per_rad,
+    ))
     threads = torch.get_num_threads()
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))

@@ -1,14 +1,19 @@
 """Benchmark GripperDesign-v0: the plain step loop against batched ``evaluate_designs``.
 
-Prints a summary and writes ``out/bench_env.json``. Both paths draw designs uniformly from the
+Prints a summary and writes ``out/bench_env.json``. All paths draw designs uniformly from the
 default :class:`envs.DesignBounds` (so part of them are invalid at rest and are not solved, in
-both paths alike) on the paper-r070 disk, at N = 20. numba is warmed up before any timing.
+all paths alike) on the paper-r070 disk, at N = 20. numba is warmed up before any timing. The
+third path is what RL training sees: random actions stepped through the stable-baselines3
+``VecEnv`` of :func:`envs.sb3_env.sb3_vec_env` (one batched evaluation per step, every sub-env
+resetting itself with a new object drawn from a distribution holding only that disk); it is
+skipped if stable-baselines3 is not installed.
 
 Targets of the project's issue 3: batched >= 20,000 designs/s and >= 10x the step loop.
 
 Usage::
 
-    python scripts/bench_env.py [--steps 300] [--batch-sizes 1000 10000] [--out out]
+    python scripts/bench_env.py [--steps 300] [--batch-sizes 1000 10000] [--sb3-envs 256]
+                                [--sb3-steps 40] [--out out]
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from envs import DesignBounds, GripperDesignEnv, SoftDisk, evaluate_designs
+from envs import DesignBounds, GripperDesignEnv, ObjectDistribution, SoftDisk, evaluate_designs
 from envs.scene import PRESETS
 
 TARGET_DESIGNS_PER_S = 20_000
@@ -93,10 +98,56 @@ def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
     }
 
 
+def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict | None:
+    """``n_steps`` steps of random actions through ``sb3_vec_env(num_envs)``, after a warm step.
+
+    Returns None if stable-baselines3 is not installed.
+    """
+    try:
+        from envs.sb3_env import sb3_vec_env
+
+        env = sb3_vec_env(num_envs, seed=seed, n_triangles=n_triangles,
+                          distribution=paper_distribution())
+    except ImportError:
+        return None
+    actions = np.random.default_rng(seed).uniform(
+        -1.0, 1.0, size=(n_steps, num_envs, 6)).astype(np.float32)
+    env.reset()
+    env.step(actions[0])  # warm: first-call costs of the adapter, not timed
+    infos = []
+    t0 = time.perf_counter()
+    for a in actions:
+        infos.extend(env.step(a)[3])
+    elapsed = time.perf_counter() - t0
+    env.close()
+    valid = sum(info["valid_at_rest"] for info in infos)
+    converged = sum(info["converged"] for info in infos)
+    return {
+        "num_envs": num_envs,
+        "steps": n_steps,
+        "seconds": elapsed,
+        "designs_per_s": len(infos) / elapsed,
+        "valid_fraction": valid / len(infos),
+        "converged_fraction_of_valid": converged / max(valid, 1),
+    }
+
+
+def paper_distribution() -> ObjectDistribution:
+    """Objects identical to the paper-r070 disk (the strain limit does not change the solve)."""
+    d = paper_disk()
+    return ObjectDistribution(
+        radii_m=(d.radius_m,), youngs_modulus_range_pa=(d.youngs_modulus_pa,) * 2,
+        poisson_ratio=d.poisson_ratio, thickness_m=d.thickness_m,
+        stiffness_scale=d.stiffness_scale)
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=300, help="step-loop iterations")
     parser.add_argument("--batch-sizes", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--sb3-envs", type=int, default=256,
+                        help="sub-envs of the stable-baselines3 VecEnv")
+    parser.add_argument("--sb3-steps", type=int, default=40, help="its timed steps")
     parser.add_argument("--n-triangles", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("out"))
@@ -107,6 +158,7 @@ def main(argv: list[str] | None = None) -> dict:
     warm_s = time.perf_counter() - t0
     loop = bench_step_loop(args.steps, args.n_triangles, args.seed)
     batches = [bench_batch(b, args.n_triangles, args.seed) for b in args.batch_sizes]
+    sb3 = bench_sb3(args.sb3_envs, args.sb3_steps, args.n_triangles, args.seed)
     best = max(batches, key=lambda r: r["designs_per_s"])
     ratio = best["designs_per_s"] / loop["steps_per_s"]
     report = {
@@ -119,6 +171,7 @@ def main(argv: list[str] | None = None) -> dict:
         "step_loop": loop,
         "batched": batches,
         "batched_over_step_loop": ratio,
+        "sb3_vec_env": sb3,
         "targets": {
             "designs_per_s": TARGET_DESIGNS_PER_S,
             "ratio": TARGET_RATIO,
@@ -140,6 +193,13 @@ def main(argv: list[str] | None = None) -> dict:
               f"({r['solved_designs_per_s']:.1f} solved/s)   valid {r['valid_fraction']:.2f}, "
               f"converged {r['converged_fraction_of_valid']:.3f} of valid, "
               f"status {r['status_counts_of_valid']}")
+    if sb3 is None:
+        print("sb3_vec_env: skipped (stable-baselines3 is not installed)")
+    else:
+        print(f"sb3_vec_env n={sb3['num_envs']:>4}:  {sb3['designs_per_s']:9.1f} designs/s "
+              f"({sb3['designs_per_s'] / loop['steps_per_s']:.1f}x the step loop; "
+              f"random actions, {sb3['steps']} steps)   valid {sb3['valid_fraction']:.2f}, "
+              f"converged {sb3['converged_fraction_of_valid']:.3f} of valid")
     print(f"batched / step loop: {ratio:.2f}x "
           f"(target {TARGET_RATIO:g}x: {'met' if report['targets']['ratio_met'] else 'NOT met'}); "
           f"{best['designs_per_s']:.0f} designs/s (target {TARGET_DESIGNS_PER_S}: "

@@ -333,7 +333,7 @@ def test_a_checked_fold_is_reported_as_a_fold_whatever_the_solver_claimed():
     def result(claim, face, corner, stop):
         info = np.zeros((1, N_INFO))
         info[0, I_STATUS] = claim
-        sol = checked_solution(cols, n, prm, x.copy(), face, corner, stop, info, 0.0)
+        sol = checked_solution(cols.rows(), n, prm, x.copy(), face, corner, stop, info, 0.0)
         return grasp_result(sol, 0, 1.6)
 
     again = result(POLISH_FAIL, face, corner, stop)

@@ -86,6 +86,7 @@ def closed_angle_rad(gripper: Gripper) -> float:
                            gripper.finger_width_m)
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
 def closed_angle_of(length_m: float, joint_offset_m: float, width_m: float) -> float:
     """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m]."""
     hw = width_m / 2
@@ -118,8 +119,23 @@ def distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
 
 def rest_points(n_triangles: int, phase_rad: float = math.pi / 2) -> np.ndarray:
     """Unit contour points of the fan, counter-clockwise, the first at ``phase_rad``, (N, 2)."""
-    ang = phase_rad + 2 * math.pi * np.arange(n_triangles) / n_triangles
-    return np.column_stack([np.cos(ang), np.sin(ang)])
+    out = np.empty(2 * int(n_triangles))
+    rest_points_into(int(n_triangles), float(phase_rad), out)
+    return out.reshape(-1, 2)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def rest_point(i, n, phase):
+    """Unit rest position ``(x, y)`` of contour point ``i`` of ``n``, the first at ``phase``."""
+    ang = phase + 2 * math.pi * i / n
+    return math.cos(ang), math.sin(ang)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def rest_points_into(n, phase, out):
+    """Write the unit rest contour ``(x_0, y_0, x_1, ...)`` into ``out`` (2N)."""
+    for i in range(n):
+        out[2 * i], out[2 * i + 1] = rest_point(i, n, phase)
 
 
 def corner_radius(finger_width_m, radius_m):

@@ -38,6 +38,11 @@ P_GAUGE = 15  # solver copy only: gauge spring stiffness
 P_POLICY = 16  # solver copy only: contact policy of this attempt
 N_KERNEL_PARAMS = 17
 
+# scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
+(S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
+ S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_TORQUE) = range(13)
+N_SCENE = 13
+
 # solver options
 O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)
 N_OPTIONS = 6

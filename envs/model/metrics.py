@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import math
 
-from numba import njit, prange
+from numba import njit
 
 from .energy import fan_energy
+from .geometry import rest_point
 from .layout import P_H, P_PHASE
 
 __all__ = ["M_PEAK_STRAIN", "M_DISPLACEMENT", "M_ENERGY", "M_INVERTED", "N_METRICS",
-           "state_metrics", "state_metrics_batch"]
+           "state_metrics"]
 
 # metric vector layout
 M_PEAK_STRAIN = 0  # max |spring strain| [-]
@@ -31,15 +32,14 @@ def state_metrics(x, n, prm, out):
     peak = 0.0
     disp = 0.0
     inverted = 0
-    step = 2.0 * math.pi / n
     for i in range(n):
         i1 = i + 1 if i + 1 < n else 0
         qx, qy = x[2 * i], x[2 * i + 1]
         peak = max(peak, abs(math.sqrt(qx * qx + qy * qy) - 1.0))
         dx, dy = x[2 * i1] - qx, x[2 * i1 + 1] - qy
         peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / h - 1.0))
-        ang = prm[P_PHASE] + step * i
-        ux, uy = qx - math.cos(ang), qy - math.sin(ang)
+        cx, cy = rest_point(i, n, prm[P_PHASE])
+        ux, uy = qx - cx, qy - cy
         disp = max(disp, math.sqrt(ux * ux + uy * uy))
         if qx * x[2 * i1 + 1] - qy * x[2 * i1] <= 0.0:
             inverted += 1
@@ -47,10 +47,3 @@ def state_metrics(x, n, prm, out):
     out[M_DISPLACEMENT] = disp
     out[M_ENERGY] = fan_energy(x, n, prm)
     out[M_INVERTED] = inverted
-
-
-@njit(cache=True, error_model="numpy", parallel=True)
-def state_metrics_batch(xs, n, prms, outs):
-    """:func:`state_metrics` of every row."""
-    for b in prange(xs.shape[0]):
-        state_metrics(xs[b], n, prms[b], outs[b])

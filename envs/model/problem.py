@@ -14,11 +14,13 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-from .defaults import DEFAULT_PHASE_RAD
-from .geometry import bar_distance, corner_radius, rest_points
+from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
+from .geometry import bar_distance, closed_angle_of, rest_points_into
 from .layout import (
     N_PARAMS,
+    N_SCENE,
     P_C0X,
     P_C0Y,
     P_C1X,
@@ -34,6 +36,19 @@ from .layout import (
     P_TAU,
     P_TH0,
     P_THMIN,
+    S_CONTOUR_RATIO,
+    S_DISTANCE,
+    S_JOINT_OFFSET,
+    S_LENGTH,
+    S_POISSON,
+    S_RADIUS,
+    S_REST_ANGLE,
+    S_SCALE,
+    S_THICKNESS,
+    S_TORQUE,
+    S_TORSION,
+    S_WIDTH,
+    S_YOUNG,
 )
 from .stiffness import spring_stiffness
 
@@ -94,6 +109,18 @@ class SceneColumns(NamedTuple):
     def size(self) -> int:
         return int(self.radius_m.shape[0])
 
+    def rows(self) -> np.ndarray:
+        """The scenes as a (B, N_SCENE) float64 matrix (layout ``S_*``)."""
+        out = np.empty((self.size, N_SCENE))
+        for k, column in enumerate(self):
+            out[:, k] = column
+        return out
+
+    @classmethod
+    def from_rows(cls, rows: np.ndarray) -> SceneColumns:
+        """Columns (views) of a (B, N_SCENE) scene matrix."""
+        return cls(*np.asarray(rows, dtype=np.float64).T)
+
 
 def _clearance(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance of the disk centre in front of the right gripping face, and the rest
@@ -144,7 +171,7 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
     Parameters
     ----------
     cols
-        The scenes (valid at rest: see :func:`rest_codes`).
+        The scenes (valid at rest: see :func:`rest_codes`), columns or a (B, N_SCENE) matrix.
     n_triangles
         Number of fan triangles ``N`` of every row.
     stiffness_rule
@@ -153,43 +180,65 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
     phase_rad
         Angle of the first contour point [rad].
     """
-    r, _, torque_unit = units(cols)
-    prm = np.zeros((cols.size, N_PARAMS))
+    return pack_rows(cols.rows() if isinstance(cols, SceneColumns) else cols, n_triangles,
+                     stiffness_rule, phase_rad)
+
+
+def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_gelder",
+              phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+    """:func:`pack_params` of a (B, N_SCENE) scene matrix."""
+    n = int(n_triangles)
     if stiffness_rule == "van_gelder":
-        k_int, k_ext = spring_stiffness(n_triangles, 1.0, stiffness_rule)
-        prm[:, P_KR], prm[:, P_KC] = k_int, k_ext * cols.contour_stiffness_ratio
+        k_int, k_ext = spring_stiffness(n, 1.0, stiffness_rule)
+        k_int_rows, k_ext_rows = np.full(scene.shape[0], k_int), np.full(scene.shape[0], k_ext)
     else:
-        for i, nu in enumerate(cols.poisson_ratio.tolist()):
-            k_int, k_ext = spring_stiffness(n_triangles, 1.0, stiffness_rule, nu)
-            prm[i, P_KR], prm[i, P_KC] = k_int, k_ext * cols.contour_stiffness_ratio[i]
-    prm[:, P_H] = 2 * math.sin(math.pi / n_triangles)
-    yc = (cols.distance_m + r) / r
-    prm[:, P_C0X], prm[:, P_C0Y] = (0.0 - cols.joint_offset_m) / r, yc
-    prm[:, P_C1X], prm[:, P_C1Y] = (0.0 + cols.joint_offset_m) / r, yc
-    prm[:, P_HW] = cols.finger_width_m / (2 * r)
-    prm[:, P_LMAX] = cols.finger_length_m / r
-    prm[:, P_TAU] = cols.torque_nm / torque_unit
-    prm[:, P_KAPPA] = cols.torsion_stiffness_nm_per_rad / torque_unit
-    prm[:, P_TH0] = cols.rest_angle_rad
-    hw = cols.finger_width_m / 2
-    # closed-jaw stop: the face tip reaches the symmetry axis, see geometry.closed_angle_of
-    prm[:, P_THMIN] = np.arctan2(hw, cols.finger_length_m) - np.arcsin(
-        np.minimum(1.0, cols.joint_offset_m / np.hypot(cols.finger_length_m, hw)))
-    prm[:, P_PHASE] = phase_rad
-    prm[:, P_RHO] = corner_radius(cols.finger_width_m, r) / r
+        pairs = [spring_stiffness(n, 1.0, stiffness_rule, nu) for nu in scene[:, S_POISSON]]
+        k_int_rows, k_ext_rows = (np.array(v, dtype=np.float64) for v in zip(*pairs, strict=True))
+    prm = np.empty((scene.shape[0], N_PARAMS))
+    _pack_rows(scene, n, k_int_rows, k_ext_rows, float(phase_rad), prm)
     return prm
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _pack_rows(scene, n, k_int, k_ext, phase, prm):
+    for b in range(scene.shape[0]):
+        _pack_row(scene[b], n, k_int[b], k_ext[b], phase, prm[b])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _pack_row(s, n, k_int, k_ext, phase, p):
+    r = s[S_RADIUS]
+    torque_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * r * r
+    p[P_KR] = k_int
+    p[P_KC] = k_ext * s[S_CONTOUR_RATIO]
+    p[P_H] = 2 * math.sin(math.pi / n)
+    yc = (s[S_DISTANCE] + r) / r
+    p[P_C0X], p[P_C0Y] = (0.0 - s[S_JOINT_OFFSET]) / r, yc
+    p[P_C1X], p[P_C1Y] = (0.0 + s[S_JOINT_OFFSET]) / r, yc
+    p[P_HW] = s[S_WIDTH] / (2 * r)
+    p[P_LMAX] = s[S_LENGTH] / r
+    p[P_TAU] = s[S_TORQUE] / torque_unit
+    p[P_KAPPA] = s[S_TORSION] / torque_unit
+    p[P_TH0] = s[S_REST_ANGLE]
+    p[P_THMIN] = closed_angle_of(s[S_LENGTH], s[S_JOINT_OFFSET], s[S_WIDTH])
+    p[P_PHASE] = phase
+    p[P_RHO] = min(CORNER_ROUNDING * r, 0.05 * s[S_WIDTH]) / r
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
     """Scaled start states of parameter rows: undeformed contour, fingers at rest, (B, 2N+2)."""
     params = np.atleast_2d(params)
-    n = int(n_triangles)
-    x = np.empty((params.shape[0], 2 * n + 2))
-    for b in range(params.shape[0]):
-        x[b, : 2 * n] = rest_points(n, params[b, P_PHASE]).ravel()
-    x[:, 2 * n] = params[:, P_TH0]
-    x[:, 2 * n + 1] = params[:, P_TH0]
+    x = np.empty((params.shape[0], 2 * int(n_triangles) + 2))
+    _rest_rows(params, int(n_triangles), x)
     return x
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _rest_rows(params, n, x):
+    for b in range(params.shape[0]):
+        rest_points_into(n, params[b, P_PHASE], x[b])
+        x[b, 2 * n] = params[b, P_TH0]
+        x[b, 2 * n + 1] = params[b, P_TH0]
 
 
 def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:

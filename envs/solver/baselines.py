@@ -248,7 +248,7 @@ def solve(scene: Scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     info = np.zeros((1, N_INFO))
     info[0, I_STATUS] = OK if ok else ITER_LIMIT
     info[0, I_ITERATIONS] = nit
-    sol = checked_solution(cols, n, prm, x[None, :], lam_face[None],
+    sol = checked_solution(cols.rows(), n, prm, x[None, :], lam_face[None],
                            np.zeros((1, 2, N_CORNERS, n)), lam_stop[None], info, elapsed)
     # the baseline's own reason where it gave up; otherwise the pipeline's (check, fold)
     message = None if (ok or sol.folded[0]) else msg

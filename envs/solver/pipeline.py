@@ -6,9 +6,9 @@ optimizers, rendering and charts) all solve through :func:`solve_columns`:
 1. pack the scenes (:func:`envs.model.problem.pack_params`);
 2. solve every row with the compiled interior point (:func:`envs.solver.driver.solve_batch`,
    rows in parallel threads; one row without the thread pool);
-3. measure each state (:func:`envs.model.metrics.state_metrics_batch`);
-4. check each answer independently (:func:`envs.check.check_batch`), in SI units;
-5. give each row one public status: ``converged`` means the solver claimed an equilibrium, the
+3. measure each state (:func:`envs.model.metrics.state_metrics`) and check it independently
+   (:func:`envs.check.check_one`), in SI units, compiled and row-parallel like the solve;
+4. give each row one public status: ``converged`` means the solver claimed an equilibrium, the
    check confirmed it and no fan triangle is turned over.
 """
 
@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from numba import njit, prange
 
 from envs import check
 from envs.model.layout import (
@@ -28,9 +29,22 @@ from envs.model.layout import (
     I_STATUS,
     N_CORNERS,
     N_INFO,
+    P_H,
     P_KC,
     P_KR,
     P_RHO,
+    P_THMIN,
+    S_DISTANCE,
+    S_JOINT_OFFSET,
+    S_LENGTH,
+    S_RADIUS,
+    S_REST_ANGLE,
+    S_SCALE,
+    S_THICKNESS,
+    S_TORQUE,
+    S_TORSION,
+    S_WIDTH,
+    S_YOUNG,
     default_options,
 )
 from envs.model.metrics import (
@@ -40,9 +54,8 @@ from envs.model.metrics import (
     M_PEAK_STRAIN,
     N_METRICS,
     state_metrics,
-    state_metrics_batch,
 )
-from envs.model.problem import SceneColumns, pack_params, rest_state, units
+from envs.model.problem import SceneColumns, pack_params, rest_state
 
 from . import driver
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
@@ -96,61 +109,81 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     return infos, lam_corner, lam_stop
 
 
-def _metrics(n: int, prm: np.ndarray, xs: np.ndarray) -> np.ndarray:
-    out = np.zeros((prm.shape[0], N_METRICS))
-    if prm.shape[0] == 1:
-        state_metrics(xs[0], n, prm[0], out[0])
-    else:
-        state_metrics_batch(xs, n, prm, out)
-    return out
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _check_row(s, prm, n, ck):
+    """Parameters of the independent check for one scene row (SI units)."""
+    r = s[S_RADIUS]
+    k_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS]
+    ck[check.CK_RADIUS] = r
+    ck[check.CK_CENTRE_X] = 0.0
+    ck[check.CK_CENTRE_Y] = s[S_DISTANCE] + r
+    ck[check.CK_JOINT_OFFSET] = s[S_JOINT_OFFSET]
+    ck[check.CK_LENGTH] = s[S_LENGTH]
+    ck[check.CK_HALF_WIDTH] = s[S_WIDTH] / 2
+    ck[check.CK_RHO] = prm[P_RHO] * r
+    ck[check.CK_KF] = s[S_TORSION]
+    ck[check.CK_TH0] = s[S_REST_ANGLE]
+    ck[check.CK_THMIN] = prm[P_THMIN]
+    ck[check.CK_TORQUE] = s[S_TORQUE]
+    ck[check.CK_KINT] = prm[P_KR] * k_unit
+    ck[check.CK_KEXT] = prm[P_KC] * k_unit
+    ck[check.CK_REST_CONTOUR] = prm[P_H] * r
 
 
-def _check_rows(cols: SceneColumns, prm: np.ndarray, n: int, force_unit: np.ndarray
-                ) -> np.ndarray:
-    """Parameter rows of the independent check (its own closed-jaw angle)."""
-    r = cols.radius_m
-    k_unit = force_unit / r
-    ck = np.zeros((cols.size, check.N_CK))
-    ck[:, check.CK_RADIUS] = r
-    ck[:, check.CK_CENTRE_Y] = cols.distance_m + r
-    ck[:, check.CK_JOINT_OFFSET] = cols.joint_offset_m
-    ck[:, check.CK_LENGTH] = cols.finger_length_m
-    ck[:, check.CK_HALF_WIDTH] = cols.finger_width_m / 2
-    ck[:, check.CK_RHO] = prm[:, P_RHO] * r
-    ck[:, check.CK_KF] = cols.torsion_stiffness_nm_per_rad
-    ck[:, check.CK_TH0] = cols.rest_angle_rad
-    ck[:, check.CK_THMIN] = [
-        check._closed_angle(d3, ln, hw) for d3, ln, hw in zip(
-            cols.joint_offset_m.tolist(), cols.finger_length_m.tolist(),
-            (cols.finger_width_m / 2).tolist(), strict=True)]
-    ck[:, check.CK_TORQUE] = cols.torque_nm
-    ck[:, check.CK_KINT] = prm[:, P_KR] * k_unit
-    ck[:, check.CK_KEXT] = prm[:, P_KC] * k_unit
-    ck[:, check.CK_REST_CONTOUR] = 2 * r * np.sin(np.pi / n)
-    return ck
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop):
+    """Points [m] and forces [N, N·m] of one scaled answer."""
+    r = s[S_RADIUS]
+    force_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * r
+    yc = s[S_DISTANCE] + r
+    for i in range(n):
+        points[i, 0] = x[2 * i] * r
+        points[i, 1] = x[2 * i + 1] * r + yc
+    for j in range(2):
+        stop[j] = lam_stop[j] * force_unit * r
+        for i in range(n):
+            face[j, i] = lam_face[j, i] * force_unit
+            for c in range(N_CORNERS):
+                corner[j, c, i] = lam_corner[j, c, i] * force_unit
 
 
-def _run_check(ck, points, angles, face, corner, stop) -> np.ndarray:
-    out = np.zeros((ck.shape[0], check.N_OUT))
-    if ck.shape[0] == 1:
-        check.check_one(ck[0], points[0], angles[0], face[0], corner[0], stop[0], out[0])
-    else:
-        check.check_batch(ck, points, angles, face, corner, stop, out)
-    return out
+@njit(cache=True, error_model="numpy")
+def _public_status(raw, passed, inverted):
+    """One public status: the check and the fold count have the final say."""
+    claimed = raw == OK or raw == INVERTED
+    if inverted > 0 and passed:
+        # a fold the check confirms is reported as such, even where the solver stopped short
+        # of its own (tighter) tolerance
+        return INVERTED
+    if claimed and passed:
+        return OK
+    if claimed:
+        return CHECK_FAILED
+    return LINESEARCH_FAIL if raw == BLOCKED else raw
 
 
-def _public_status(raw: np.ndarray, passed: np.ndarray, inverted: np.ndarray) -> np.ndarray:
-    """One public status per row: the check and the fold count have the final say."""
-    status = np.where(raw == BLOCKED, LINESEARCH_FAIL, raw)
-    claimed = (raw == OK) | (raw == INVERTED)
-    status = np.where(claimed & ~passed, CHECK_FAILED, status)
-    # a fold the check confirms is reported as such, even where the solver stopped short of
-    # its own (tighter) tolerance
-    status = np.where((inverted > 0) & passed, INVERTED, status)
-    return np.where(claimed & passed & (inverted == 0), OK, status)
+@njit(cache=True, error_model="numpy")
+def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face, corner, stop,
+                metrics, ck, verdict):
+    state_metrics(x, n, prm, metrics)
+    _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
+    _check_row(s, prm, n, ck)
+    check.check_one(ck, points, x[2 * n :], face, corner, stop, verdict)
+    return _public_status(int(info[I_STATUS]), verdict[check.OUT_PASSED] > 0.0,
+                          int(metrics[M_INVERTED]))
 
 
-def solve_columns(cols: SceneColumns, n_triangles: int, *, stiffness_rule: str = "van_gelder",
+@njit(cache=True, error_model="numpy", parallel=True)
+def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
+                 stop, metrics, ck, verdict, status):
+    for b in prange(scene.shape[0]):
+        status[b] = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b],
+                                lam_stop[b], infos[b], points[b], face[b], corner[b], stop[b],
+                                metrics[b], ck[b], verdict[b])
+
+
+def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
+                  stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
                   lam0: np.ndarray | None = None) -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
@@ -158,7 +191,8 @@ def solve_columns(cols: SceneColumns, n_triangles: int, *, stiffness_rule: str =
     Parameters
     ----------
     cols
-        The scenes and torques (valid at rest, see :func:`envs.model.problem.rest_codes`).
+        The scenes and torques (valid at rest, see :func:`envs.model.problem.rest_codes`), as
+        columns or a (B, N_SCENE) scene matrix.
     n_triangles
         Number of fan triangles ``N``.
     stiffness_rule, phase_rad
@@ -168,25 +202,26 @@ def solve_columns(cols: SceneColumns, n_triangles: int, *, stiffness_rule: str =
         (default: rest, no multipliers). The start must be strictly feasible.
     """
     n = int(n_triangles)
-    prm = pack_params(cols, n, stiffness_rule, phase_rad)
+    scene = cols.rows() if isinstance(cols, SceneColumns) else cols
+    prm = pack_params(scene, n, stiffness_rule, phase_rad)
     xs = rest_state(prm, n) if x0 is None else np.array(x0, dtype=np.float64, ndmin=2)
-    lam_face = (np.zeros((cols.size, 2, n)) if lam0 is None
+    lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3))
     t0 = time.perf_counter()
     infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
     elapsed = time.perf_counter() - t0
-    return checked_solution(cols, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed)
+    return checked_solution(scene, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed)
 
 
-def checked_solution(cols: SceneColumns, n: int, prm: np.ndarray, xs: np.ndarray,
+def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
                      lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
                      infos: np.ndarray, elapsed: float) -> BatchSolution:
     """Measure, convert to SI, check and give a public status to solver answers.
 
     Parameters
     ----------
-    cols, n, prm
-        The scenes, N and their packed parameters.
+    scene, n, prm
+        The (B, N_SCENE) scene matrix, N and the packed parameters.
     xs, lam_face, lam_corner, lam_stop
         Scaled states (B, 2N + 2) and multipliers: face (B, 2, N), corner (B, 2, 4, N), joint
         stop (B, 2).
@@ -195,25 +230,31 @@ def checked_solution(cols: SceneColumns, n: int, prm: np.ndarray, xs: np.ndarray
     elapsed
         Solver time of the batch [s].
     """
-    metrics = _metrics(n, prm, xs)
-    r, force_unit, torque_unit = units(cols)
-    points = xs[:, : 2 * n].reshape(-1, n, 2) * r[:, None, None]
-    points[:, :, 1] += (cols.distance_m + r)[:, None]
-    face = lam_face * force_unit[:, None, None]
-    corner = lam_corner * force_unit[:, None, None, None]
-    stop = lam_stop * torque_unit[:, None]
-    angles = xs[:, 2 * n :].copy()
-    verdict = _run_check(_check_rows(cols, prm, n, force_unit), points, angles, face, corner,
-                         stop)
-    passed = verdict[:, check.OUT_PASSED] > 0.0
+    b = prm.shape[0]
+    points = np.empty((b, n, 2))
+    face = np.empty((b, 2, n))
+    corner = np.empty((b, 2, N_CORNERS, n))
+    stop = np.empty((b, 2))
+    metrics = np.empty((b, N_METRICS))
+    ck = np.zeros((b, check.N_CK))
+    verdict = np.zeros((b, check.N_OUT))
+    status = np.empty(b, dtype=np.int64)
+    args = (scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
+            stop, metrics, ck, verdict)
+    if b == 1:
+        status[0] = _finish_one(*(a[0] if isinstance(a, np.ndarray) else a for a in args))
+    else:
+        _finish_rows(*args, status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
-    status = _public_status(infos[:, I_STATUS].astype(np.int64), passed, inverted)
+    passed = verdict[:, check.OUT_PASSED] > 0.0
+    torque_unit = scene[:, S_SCALE] * scene[:, S_YOUNG] * scene[:, S_THICKNESS] \
+        * scene[:, S_RADIUS] ** 2
     return BatchSolution(
         status=status, converged=status == OK, folded=(inverted > 0) & passed,
         iterations=infos[:, I_ITERATIONS].astype(np.int64),
         rounds=infos[:, I_ROUNDS].astype(np.int64), stable=infos[:, I_STABLE] != 0.0,
-        jaw_angles_rad=angles, points_m=points, face_forces_n=face, corner_forces_n=corner,
-        stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
+        jaw_angles_rad=xs[:, 2 * n :].copy(), points_m=points, face_forces_n=face,
+        corner_forces_n=corner, stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY] * torque_unit, inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,

@@ -75,7 +75,7 @@ class _Problem:
     def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float):
         self.scene, self.torque_nm, self.n, self.rule, self.phase = (
             scene, float(torque_nm), int(n), rule, float(phase_rad))
-        self.cols = scene.columns(self.torque_nm)
+        self.rows = scene.rows(self.torque_nm)
 
     def at(self, torque_nm: float, n: int | None = None) -> _Problem:
         return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
@@ -83,7 +83,7 @@ class _Problem:
 
     def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
               ) -> tuple[GraspResult, BatchSolution]:
-        sol = solve_columns(self.cols, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
+        sol = solve_columns(self.rows, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
                             x0=x0, lam0=lam0)
         return grasp_result(sol, 0, self.torque_nm, "newton", self.rule), sol
 
@@ -95,8 +95,8 @@ def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarr
     x = np.empty(2 * n + 2)
     x[: 2 * n] = ((prev.points_m - prob.scene.disk.center_m) / r).ravel()
     x[2 * n :] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
-    force_unit = float(prob.cols.stiffness_scale[0] * prob.cols.youngs_modulus_pa[0]
-                       * prob.cols.thickness_m[0]) * r
+    d = prob.scene.disk
+    force_unit = d.stiffness_scale * d.youngs_modulus_pa * d.thickness_m * r
     return x, prev.contact_forces_n / force_unit
 
 
@@ -148,6 +148,8 @@ def _solve_newton(prob: _Problem) -> GraspResult:
         extra += failed.iterations
         if not res.converged:
             res = replace(res, message=f"{failed.message}; continuation: {res.message}")
+    if spent == 0.0 and extra == 0:
+        return res  # the usual case: one solve from rest (a replace costs tens of us)
     return replace(res, solve_time_s=spent + res.solve_time_s, iterations=res.iterations + extra)
 
 
