@@ -42,7 +42,7 @@ from .model.problem import REST_OK, SceneColumns, rest_codes
 from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .solver.pipeline import BatchSolution, solve_columns
 from .solver.status import CHECK_FAILED, NOT_SOLVED
-from .validation import check_range
+from .validation import check_integer, check_range
 
 __all__ = [
     "DESIGN_FIELDS",
@@ -228,16 +228,18 @@ def _disk_table(disks, batch: int) -> np.ndarray:
 
 def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
              integer: bool = False) -> np.ndarray:
-    arr = np.asarray(value)
+    """A scalar or one value per row, each validated (the message names the row)."""
+    arr = np.asarray(value, dtype=object if integer else None)
     if arr.ndim == 0:
-        arr = np.full(batch, arr.item())
+        one = (check_integer(name, arr.item(), int(low), int(high)) if integer
+               else check_range(name, arr.item(), low, high, low_open=low_open))
+        return np.full(batch, one, dtype=np.int64 if integer else np.float64)
     if arr.shape != (batch,):
         raise ValueError(f"{name} must be a scalar or have shape ({batch},), got {arr.shape}")
     out = np.empty(batch, dtype=np.int64 if integer else np.float64)
     for i, v in enumerate(arr.tolist()):
-        if integer and (isinstance(v, bool) or int(v) != v):
-            raise ValueError(f"{name}[{i}] must be an integer, got {v!r}")
-        out[i] = check_range(f"{name}[{i}]", v, low, high, low_open=low_open)
+        out[i] = (check_integer(f"{name}[{i}]", v, int(low), int(high)) if integer
+                  else check_range(f"{name}[{i}]", v, low, high, low_open=low_open))
     return out
 
 
@@ -261,7 +263,7 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
     """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
     what happened)."""
     n_contacts = np.count_nonzero(sol.face_forces_n > 0.0, axis=2).astype(np.int64)
-    corner = sol.corner_forces_n.sum(axis=(2, 3))
+    corner = sol.corner_totals_n.sum(axis=2)
     metrics = {
         "jaw_angles_rad": sol.jaw_angles_rad,
         "n_contacts": n_contacts,

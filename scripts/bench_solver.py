@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from envs.scene import Scene
-from envs.solver import simulate
+from envs.solver import simulate, simulate_ramp
 
 ALL_N = [4, 8, 12, 20, 40, 60, 100, 200, 500, 1000, 2000]
 
@@ -34,6 +34,63 @@ def _time(scene, torque, n, method, repeats, limit):
     return statistics.median(times), last
 
 
+def _median_ms(fn, repeats: int) -> tuple[float, object]:
+    times, last = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        last = fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times), last
+
+
+def user_speed(scene, repeats: int) -> dict:
+    """Wall time as a user sees it beside the compiled solve, measured interleaved in one run.
+
+    ``simulate`` at N = 20 (target: wall <= 2x its compiled solve), ``simulate_ramp`` of 10
+    torques (wall <= 2x the sum of its solves) and one ``GripperDesign-v0`` reset + step of the
+    same design (<= 2x a ``simulate``).
+    """
+    import envs
+
+    env = envs.GripperDesignEnv(n_triangles=20)
+    design = np.array([scene.gripper.finger_length_m, scene.gripper.rest_angle_rad,
+                       scene.gripper.joint_offset_m, scene.gripper.finger_width_m, 0.2,
+                       scene.disk.distance_m])
+    action = env.bounds.unscale(design)
+    torques = np.linspace(0.05, 0.5, 10)
+
+    def env_step():
+        env.reset(seed=0)
+        return env.step(action)
+
+    for _ in range(3):  # warm: compiled, caches filled
+        simulate(scene, 0.2, 20), simulate_ramp(scene, torques, 20), env_step()
+    sim, sim_c, ramp, ramp_c, step = [], [], [], [], []
+    for _ in range(repeats):  # interleaved, so that machine noise hits all alike
+        ms, res = _median_ms(lambda: simulate(scene, 0.2, 20), 1)
+        sim.append(ms)
+        sim_c.append(1e3 * res.solve_time_s)
+        ms, rs = _median_ms(lambda: simulate_ramp(scene, torques, 20), 1)
+        ramp.append(ms)
+        ramp_c.append(1e3 * sum(r.solve_time_s for r in rs))
+        step.append(_median_ms(env_step, 1)[0])
+    med = statistics.median
+    out = {
+        "simulate_wall_ms": med(sim), "simulate_compiled_ms": med(sim_c),
+        "simulate_ratio": med(sim) / med(sim_c),
+        "ramp10_wall_ms": med(ramp), "ramp10_compiled_ms": med(ramp_c),
+        "ramp10_ratio": med(ramp) / med(ramp_c),
+        "env_reset_step_ms": med(step), "env_step_over_simulate": med(step) / med(sim),
+    }
+    print(f"simulate N=20: wall {out['simulate_wall_ms']:.3f} ms, compiled "
+          f"{out['simulate_compiled_ms']:.3f} ms -> {out['simulate_ratio']:.2f}x (target <= 2)")
+    print(f"simulate_ramp 10 torques: wall {out['ramp10_wall_ms']:.2f} ms, compiled "
+          f"{out['ramp10_compiled_ms']:.2f} ms -> {out['ramp10_ratio']:.2f}x (target <= 2)")
+    print(f"env reset+step: {out['env_reset_step_ms']:.3f} ms -> "
+          f"{out['env_step_over_simulate']:.2f}x a simulate (target <= 2)")
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="N <= 200 and a small strain sweep")
@@ -44,6 +101,7 @@ def main() -> None:
     ns = [n for n in ALL_N if not args.quick or n <= 200]
     scene = Scene.preset("paper-r070")
     simulate(scene, 0.2, 20)  # compile
+    speed = user_speed(scene, 41 if not args.quick else 11)
     rows = []
     give_up = {"slsqp": False, "nelder-mead": False}
     for n in ns:
@@ -112,7 +170,8 @@ def main() -> None:
             print(f"  failed: {r['scene']} N={r['n']} T={r['torque_nm']:.3g}: {r['message'][:80]}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"rows": rows, "ratios": ratios, "sweep": sweep,
+    out.write_text(json.dumps({"user_speed": speed, "rows": rows, "ratios": ratios,
+                               "sweep": sweep,
                                "converged_fraction": ok / len(sweep),
                                "failed": len(sweep) - ok - len(folded),
                                "folded": len(folded)}, indent=1))

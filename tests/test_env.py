@@ -382,3 +382,26 @@ def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
     assert cache["result"].converged
     np.testing.assert_allclose(cache["result"].jaw_angles_rad, out["jaw_angles_rad"][0],
                                rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("value,match", [
+    (np.nan, r"n_triangles must be an integer in \[4, 20000\], got nan"),
+    (20.7, r"n_triangles must be an integer in \[4, 20000\], got 20.7"),
+    (0, r"n_triangles = 0 is outside the allowed range \[4, 20000\]"),
+    ([20, "a"], r"n_triangles\[1\] must be an integer"),
+])
+def test_evaluate_names_a_bad_mesh_size(value, match):
+    designs = np.array([[0.2, 0.785, 0.025, 0.01, 0.2, 0.013]] * 2)
+    with pytest.raises(ValueError, match=match):
+        evaluate_designs(designs, DISK, n_triangles=value)
+
+
+def test_a_nan_row_is_reported_and_the_others_answered():
+    good = [0.2, 0.785, 0.025, 0.01, 0.2, 0.013]
+    designs = np.array([good, [np.nan, *good[1:]], good])
+    out = evaluate_designs(designs, DISK)
+    np.testing.assert_array_equal(out["valid_at_rest"], [True, False, True])
+    np.testing.assert_array_equal(out["converged"], [True, False, True])
+    assert out["status"][1] == -1 and out["reward"][1] == -3.0
+    assert out["reward"][0] == out["reward"][2] > 0
+    assert all(np.isfinite(v).all() for v in out.values() if v.dtype.kind == "f")

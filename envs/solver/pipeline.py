@@ -76,6 +76,8 @@ class BatchSolution(NamedTuple):
     points_m: np.ndarray  # (B, N, 2)
     face_forces_n: np.ndarray  # (B, 2, N)
     corner_forces_n: np.ndarray  # (B, 2, 4, N)
+    corner_totals_n: np.ndarray  # (B, 2, 4): total force of each corner
+    corner_edges: np.ndarray  # (B, 2, 4): edge carrying most of each corner's force, -1: none
     stop_torques_nm: np.ndarray  # (B, 2)
     peak_strain: np.ndarray  # (B,)
     max_displacement_ratio: np.ndarray  # (B,)
@@ -147,6 +149,21 @@ def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop):
                 corner[j, c, i] = lam_corner[j, c, i] * force_unit
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _corner_summary(corner, totals, edges):
+    """Total force of each corner and the edge carrying most of it (-1 for none)."""
+    for j in range(2):
+        for c in range(N_CORNERS):
+            total = 0.0
+            best = -1
+            for k in range(corner.shape[2]):
+                total += corner[j, c, k]
+                if corner[j, c, k] > 0.0 and (best < 0 or corner[j, c, k] > corner[j, c, best]):
+                    best = k
+            totals[j, c] = total
+            edges[j, c] = best if total > 0.0 else -1
+
+
 @njit(cache=True, error_model="numpy")
 def _public_status(raw, passed, inverted):
     """One public status: the check and the fold count have the final say."""
@@ -164,9 +181,10 @@ def _public_status(raw, passed, inverted):
 
 @njit(cache=True, error_model="numpy")
 def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face, corner, stop,
-                metrics, ck, verdict):
+                totals, edges, metrics, ck, verdict):
     state_metrics(x, n, prm, metrics)
     _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
+    _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)
     check.check_one(ck, points, x[2 * n :], face, corner, stop, verdict)
     return _public_status(int(info[I_STATUS]), verdict[check.OUT_PASSED] > 0.0,
@@ -175,11 +193,11 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
-                 stop, metrics, ck, verdict, status):
+                 stop, totals, edges, metrics, ck, verdict, status):
     for b in prange(scene.shape[0]):
         status[b] = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b],
                                 lam_stop[b], infos[b], points[b], face[b], corner[b], stop[b],
-                                metrics[b], ck[b], verdict[b])
+                                totals[b], edges[b], metrics[b], ck[b], verdict[b])
 
 
 def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
@@ -235,12 +253,14 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     face = np.empty((b, 2, n))
     corner = np.empty((b, 2, N_CORNERS, n))
     stop = np.empty((b, 2))
+    totals = np.empty((b, 2, N_CORNERS))
+    edges = np.empty((b, 2, N_CORNERS), dtype=np.int64)
     metrics = np.empty((b, N_METRICS))
     ck = np.zeros((b, check.N_CK))
     verdict = np.zeros((b, check.N_OUT))
     status = np.empty(b, dtype=np.int64)
     args = (scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
-            stop, metrics, ck, verdict)
+            stop, totals, edges, metrics, ck, verdict)
     if b == 1:
         status[0] = _finish_one(*(a[0] if isinstance(a, np.ndarray) else a for a in args))
     else:
@@ -254,7 +274,8 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         iterations=infos[:, I_ITERATIONS].astype(np.int64),
         rounds=infos[:, I_ROUNDS].astype(np.int64), stable=infos[:, I_STABLE] != 0.0,
         jaw_angles_rad=xs[:, 2 * n :].copy(), points_m=points, face_forces_n=face,
-        corner_forces_n=corner, stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
+        corner_forces_n=corner, corner_totals_n=totals, corner_edges=edges,
+        stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY] * torque_unit, inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,

@@ -38,9 +38,6 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
                  iterations: int | None = None, solve_time_s: float | None = None
                  ) -> GraspResult:
     """Row ``i`` of a batch solution as a :class:`GraspResult`."""
-    corner = sol.corner_forces_n[i]
-    corner_total = corner.sum(axis=2)
-    edges = np.where(corner_total > 0.0, np.argmax(corner, axis=2), -1)
     face = sol.face_forces_n[i]
     return GraspResult(
         converged=bool(sol.converged[i]),
@@ -56,9 +53,9 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         n_triangles=int(sol.points_m.shape[1]),
         method=method,
         stiffness_rule=stiffness_rule,
-        corner_forces_n=corner_total,
-        corner_edges=edges,
-        corner_edge_forces_n=corner,
+        corner_forces_n=sol.corner_totals_n[i],
+        corner_edges=sol.corner_edges[i],
+        corner_edge_forces_n=sol.corner_forces_n[i],
         stop_torques_nm=sol.stop_torques_nm[i],
         energy_j=float(sol.energy_j[i]),
         max_displacement_ratio=float(sol.max_displacement_ratio[i]),
