@@ -1,8 +1,8 @@
 """Compiled independent equilibrium check of a grasp (KKT conditions in physical units).
 
-The numba version of :func:`envs.kkt.kkt_check`, with the same semantics (same tolerances, same
-residual definitions, same reason strings). It recomputes, from the returned contour points,
-finger angles and contact forces only, the spring forces, the force balance at every contour
+The compiled version of the numpy reference check kept in ``tests/kkt_reference.py``, with the
+same semantics (same tolerances, same residual definitions, same reason strings). It
+recomputes, from the returned contour points, finger angles and contact forces only, the spring forces, the force balance at every contour
 point, the moment balance at each joint, the gaps to the finite fingers (bar with rounded
 corners) and their corners, the sign of every contact force and complementarity.
 
@@ -11,8 +11,8 @@ finger frames, the rounded-bar distance, the corners, the closed-jaw angle and t
 are written again from ``shared/CONVENTIONS.md``. Only the Python wrapper (:func:`check_params`)
 takes two things from the model, because they define the model being checked rather than how it
 is solved: the spring stiffness rule and the corner rounding radius (``spring_stiffness`` and
-``corner_radius`` of :mod:`envs.model`, formerly :mod:`envs.psm`). The compiled core gets plain
-numbers.
+``corner_radius`` of :mod:`envs.model`). The compiled core gets plain numbers; the batch
+pipeline (:mod:`envs.solver.pipeline`) fills the same vector from the packed model parameters.
 
 The compiled core works on plain float64 arrays; the problem is packed in a parameter vector
 and the verdict comes back in an output vector, both laid out by the named offsets below:
@@ -658,13 +658,11 @@ def _model_rules():
 
     They define the model being checked (the stiffness rule and the corner rounding), not how
     it is solved, so the check takes them from the model as the reference check does. They live
-    in :mod:`envs.model` since the package's restructuring and in :mod:`envs.psm` before it.
+    in :mod:`envs.model`.
     """
-    try:
-        from .model.geometry import corner_radius
-        from .model.stiffness import spring_stiffness
-    except ImportError:
-        from .psm import corner_radius, spring_stiffness
+    from .model.geometry import corner_radius
+    from .model.stiffness import spring_stiffness
+
     return spring_stiffness, corner_radius
 
 
@@ -736,7 +734,7 @@ def check_grasp(
     corner_forces_n: np.ndarray,
     stop_torques_nm: np.ndarray,
 ) -> KKTReport:
-    """Check equilibrium and contact conditions of a grasp (compiled :func:`envs.kkt.kkt_check`).
+    """Check equilibrium and contact conditions of a grasp (compiled reference check).
 
     Parameters
     ----------

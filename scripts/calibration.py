@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
 
     kkt_ok = kkt_accepts_ratio()
     if not kkt_ok:
-        print("WARNING: the KKT check rejects contour_stiffness_ratio != 1 (envs/kkt.py does not "
+        print("WARNING: the KKT check rejects contour_stiffness_ratio != 1 (envs/check.py does not "
               "apply it yet): two-parameter fits will see failed solves")
 
     disks = {}

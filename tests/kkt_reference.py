@@ -1,4 +1,7 @@
-"""Independent equilibrium check of a grasp (KKT conditions in physical units).
+"""Reference equilibrium check in plain numpy (the former envs/kkt.py), kept for the tests.
+
+The compiled check of :mod:`envs.check` must reach its verdicts; this file is slow (~2 ms a
+grasp) and shares nothing with the solver.
 
 Recomputes, from the returned positions, angles and contact forces only, and with plain numpy
 code that shares nothing with the compiled solver: the spring forces, the force balance at every
@@ -13,9 +16,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .model.geometry import closed_angle_rad, corner_radius, finger_frame
-from .model.stiffness import spring_stiffness
-from .scene import Scene
+from envs.model.geometry import closed_angle_rad, corner_radius, finger_frame
+from envs.model.stiffness import spring_stiffness
+from envs.scene import Scene
 
 __all__ = ["KKTReport", "kkt_check", "FORCE_TOL", "GAP_TOL"]
 
