@@ -2,9 +2,10 @@
 
 The compiled version of the numpy reference check kept in ``tests/kkt_reference.py``, with the
 same semantics (same tolerances, same residual definitions, same reason strings). It
-recomputes, from the returned contour points, finger angles and contact forces only, the spring forces, the force balance at every contour
-point, the moment balance at each joint, the gaps to the finite fingers (bar with rounded
-corners) and their corners, the sign of every contact force and complementarity.
+recomputes, from the returned contour points, finger angles and contact forces only, the spring
+forces, the force balance at every contour point, the moment balance at each joint, the gaps to
+the finite fingers (bar with rounded corners) and their corners, the sign of every contact
+force and complementarity.
 
 It is independent of the solver on purpose: nothing here comes from the solver's code; the
 finger frames, the rounded-bar distance, the corners, the closed-jaw angle and the polygon tests
