@@ -3,7 +3,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -25,5 +25,10 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_solver.py
 	$(BIN)/python scripts/bench_env.py
 
-clean:
+# numba's on-disk cache does not notice a change in a compiled callee defined in another file:
+# after editing a kernel, clear it (a fresh clone, as CI uses, has none)
+clean-cache:
+	find envs -name '*.nbi' -delete -o -name '*.nbc' -delete
+
+clean: clean-cache
 	rm -rf $(VENV) out .pytest_cache

@@ -104,18 +104,18 @@ def test_vectorised_assembly_matches_skfem_asm():
 def test_contact_tangent_matches_finite_differences_of_gradient():
     """Exact derivatives of the coupled (u, theta) system, faces and tip corners included."""
     captured = {}
-    original = fem._newton
+    original = fem.newton._newton
 
     def spy(system, x, load):
         out = original(system, x, load)
         captured.update(system=system, x=out[0], load=load)
         return out
 
-    fem._newton = spy
+    fem.newton._newton = spy
     try:
         fem.fem_grasp(Scene.preset("forceps-b"), [0.0004], mesh_size_m=2e-3 / 6, cache=False)
     finally:
-        fem._newton = original
+        fem.newton._newton = original
     system, x, load = captured["system"], captured["x"], captured["load"]
     _, tip = system.contact_forces(x, load)
     assert np.all(tip > 0)  # tip-corner contact is active at this state
@@ -281,8 +281,8 @@ def test_unreachable_disk_closes_on_the_joint_stop():
 
 
 def test_failed_solve_is_reported_not_hidden(monkeypatch):
-    monkeypatch.setattr(fem, "_MAX_NEWTON", 0)
-    monkeypatch.setattr(fem, "_MAX_BISECTIONS", 2)
+    monkeypatch.setattr(fem.newton, "_MAX_NEWTON", 0)
+    monkeypatch.setattr(fem.newton, "_MAX_BISECTIONS", 2)
     results = fem.fem_grasp(R070, [0.1, 0.2], mesh_size_m=COARSE, cache=False)
     for res in results:
         assert not res.converged

@@ -5,6 +5,7 @@ inertia correction and a backtracking line search on the barrier merit.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -42,6 +43,44 @@ from .status import (
 )
 
 
+class IpmWork(NamedTuple):
+    """Work arrays of the interior point (allocated once per call of :func:`_ipm`).
+
+    Natural-order vectors (2N + 2): ``grad`` (merit gradient), ``step``, ``xt`` (trial state),
+    ``res`` (stationarity residual), ``gb`` (gradient scratch). Band-ordered Newton matrix:
+    ``ab`` (band, 2N x (BW + 1)), its factor ``lb``, the border ``bb`` (2N x 2) and corner
+    ``dd`` (2 x 2), the solve's ``ybuf``, right-hand sides ``rb``/``rt`` and solutions
+    ``ob``/``ot``. Per constraint: gaps ``g``/``gt`` (current, trial), ``sig`` (multiplier over
+    gap), ``dlam`` (multiplier step), cached gradients ``cg``, their dofs ``cd`` and curvature
+    ``ch``. One constraint's scratch: ``grad5``, ``hess5``, ``dofs``.
+    """
+
+    grad: np.ndarray
+    step: np.ndarray
+    xt: np.ndarray
+    res: np.ndarray
+    ab: np.ndarray
+    lb: np.ndarray
+    bb: np.ndarray
+    dd: np.ndarray
+    ybuf: np.ndarray
+    rb: np.ndarray
+    ob: np.ndarray
+    rt: np.ndarray
+    ot: np.ndarray
+    g: np.ndarray
+    gt: np.ndarray
+    sig: np.ndarray
+    dlam: np.ndarray
+    grad5: np.ndarray
+    hess5: np.ndarray
+    dofs: np.ndarray
+    gb: np.ndarray
+    cg: np.ndarray
+    cd: np.ndarray
+    ch: np.ndarray
+
+
 @njit(cache=True, error_model="numpy")
 def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it):
     """Primal-dual interior point on a fixed constraint set. Returns (status, iterations).
@@ -75,15 +114,16 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
     ch = np.zeros((mcount, CH_BLOCK + 1))
+    work = IpmWork(grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
+                   grad5, hess5, dofs, gb, cg, cd, ch)
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
-                     grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig,
-                     dlam, grad5, hess5, dofs, gb, cg, cd, ch)
+                     work)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
-              grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
-              grad5, hess5, dofs, gb, cg, cd, ch):
+def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it, work):
+    (grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam, grad5, hess5,
+     dofs, gb, cg, cd, ch) = work
     nb = 2 * n
     nx = nb + 2
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))

@@ -1,0 +1,54 @@
+"""Held-out FEM cases of a calibration on one paper disk (:func:`paper_heldout_cases`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..scene import Scene
+from .paper import HELDOUT_TORQUES_NM, PAPER_SCENES, PAPER_TORQUES_NM
+from .reference import ReferenceCurve, fem_reference
+
+
+def paper_heldout_cases(
+    fitted_preset: str = "paper-r070",
+    *,
+    torques_nm: Sequence[float] = PAPER_TORQUES_NM,
+    heldout_torques_nm: Sequence[float] = HELDOUT_TORQUES_NM,
+    rings: int | None = None,
+) -> dict[str, tuple[Scene, ReferenceCurve]]:
+    """Held-out FEM cases of a calibration on one paper disk (for ``calibrate(heldout=...)``).
+
+    Parameters
+    ----------
+    fitted_preset
+        The paper preset the calibration is fitted on (one of :data:`PAPER_SCENES`).
+    torques_nm
+        Torque ramp of the other disks [N·m] (default: the fitting ramp
+        :data:`PAPER_TORQUES_NM`, so that their FEM curves are shared with their own fits).
+    heldout_torques_nm
+        Torques of the fitted disk not used in the fit [N·m].
+    rings
+        FEM element size ``r / rings``; default :func:`envs.fem.default_mesh_size_m`.
+
+    Returns
+    -------
+    dict
+        ``"<preset> held-out torques"``: the fitted disk at ``heldout_torques_nm``, and
+        ``"<other preset>"``: each other paper disk at ``torques_nm`` (FEM, disk-cached).
+    """
+    if fitted_preset not in PAPER_SCENES:
+        raise ValueError(f"fitted_preset must be one of {PAPER_SCENES}, got {fitted_preset!r}")
+    if rings is not None and (isinstance(rings, bool) or int(rings) != rings or rings < 2):
+        raise ValueError(f"rings must be an integer >= 2, got {rings!r}")
+
+    def ref(sc: Scene, torques) -> ReferenceCurve:
+        h = None if rings is None else sc.disk.radius_m / int(rings)
+        return fem_reference(sc, torques, mesh_size_m=h)
+
+    own = Scene.preset(fitted_preset)
+    cases = {f"{fitted_preset} held-out torques": (own, ref(own, heldout_torques_nm))}
+    for name in PAPER_SCENES:
+        if name != fitted_preset:
+            other = Scene.preset(name)
+            cases[name] = (other, ref(other, torques_nm))
+    return cases

@@ -1,0 +1,288 @@
+"""The torque-controlled grasp: :func:`fem_grasp` (validation, cache) and its solve.
+
+Builds the grasp mesh with its rigid hub, the two jaw faces and tip corners, the torsion-spring
+potential of the fingers with the closed-jaw stop, and walks the torque ramp, one
+:class:`~envs.fem.result.FemResult` per torque.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import fields, replace
+
+import numpy as np
+
+from envs.model.geometry import closed_angle_rad
+from envs.scene import Scene
+from envs.validation import check_range
+
+from .body import _Body
+from .cache import FEM_VERSION, _cache_dir, _cache_key, _load_cache, _store_cache
+from .contact import _PENALTY_FACTOR, _JawFace, _JawTip, _Rim
+from .material import _check_plane, _log_strain_magnitude
+from .mesh import (
+    _arc_facets,
+    _check_mesh_size,
+    _grasp_mesh,
+    _quadratic_mesh,
+    default_mesh_size_m,
+)
+from .newton import _ramp
+from .result import FemResult
+from .system import _System
+
+_STOP_STIFFNESS_FACTOR = 1e4  # joint-stop penalty stiffness, in units of k_f
+
+
+def fem_grasp(
+    scene: Scene,
+    torques_nm: Sequence[float],
+    mesh_size_m: float | None = None,
+    plane: str = "strain",
+    hub_radius_m: float | None = None,
+    cache: bool = True,
+    *,
+    penalty_pa_per_m: float | None = None,
+    al_iterations: int = 0,
+) -> list[FemResult]:
+    """Finite-element grasp of the scene's disk at a sequence of actuation torques.
+
+    The torques are the load ramp: they are solved in the given order, each one warm-started from
+    the previous converged state (starting from the open gripper at zero torque). A step that
+    fails (Newton or line-search failure, inverted element) is bisected; a torque that cannot be
+    reached gives ``converged=False`` with the reason and NaN fields, and the ramp continues from
+    the last converged state.
+
+    Parameters
+    ----------
+    scene
+        Gripper and disk. ``disk.stiffness_scale`` is ignored (the FEM uses the physical ``E``).
+    torques_nm
+        Actuation torques ``T_a >= 0`` [N·m], finite.
+    mesh_size_m
+        Element size ``h`` in (0, r); the disk is meshed with ``n = ceil(r / h)`` rings, i.e.
+        ``6 n^2`` quadratic triangles (mirror symmetric about the y axis): ``k_h`` rings fill the
+        hub and ``n - k_h`` evenly spaced rings the annulus outside it. Default ``r / 12``
+        (864 elements).
+    plane
+        ``"strain"`` (default) or ``"stress"``.
+    hub_radius_m
+        Radius of the rigid hub holding the centre, in ``(0, 0.5 r]``, default ``0.1 r``. The
+        mesh has a ring of nodes exactly on the hub's edge (curved P2 edges on the circle), and
+        all nodes on or inside it are fixed, so the hub is the same circle on every mesh. The
+        peak strain is measured outside the hub (see :class:`FemResult`).
+    cache
+        Read/write results under ``$PSM_GRASP_CACHE/fem`` (default ``out/cache/fem`` relative to
+        the working directory), keyed by a hash of all inputs.
+    penalty_pa_per_m
+        Contact penalty ``eps`` [Pa/m]; default ``100 E / h``.
+    al_iterations
+        Augmented-Lagrangian multiplier updates per torque (0 = pure penalty).
+
+    Returns
+    -------
+    list of FemResult
+        One result per torque, in order.
+
+    Raises
+    ------
+    ValueError
+        For an invalid parameter (the message names it and gives the allowed range).
+    """
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a Scene, got {type(scene).__name__}")
+    disk, grip = scene.disk, scene.gripper
+    r = disk.radius_m
+    try:
+        torques = [float(v) for v in np.asarray(torques_nm, dtype=float).ravel()]
+    except (TypeError, ValueError):
+        raise ValueError("torques_nm must be a sequence of finite numbers >= 0") from None
+    if not torques:
+        raise ValueError("torques_nm must contain at least one torque")
+    for i, tq in enumerate(torques):
+        check_range(f"torques_nm[{i}]", tq, 0.0, math.inf)
+    _check_plane(plane)
+    h = default_mesh_size_m(r) if mesh_size_m is None else _check_mesh_size(mesh_size_m, r)
+    if hub_radius_m is not None:
+        check_range("hub_radius_m", hub_radius_m, 0.0, 0.5 * r, low_open=True)
+    if penalty_pa_per_m is not None:
+        check_range("penalty_pa_per_m", penalty_pa_per_m, 0.0, math.inf, low_open=True)
+    if not isinstance(al_iterations, int | np.integer) or not 0 <= al_iterations <= 50:
+        raise ValueError(f"al_iterations must be an integer in [0, 50], got {al_iterations!r}")
+    rings = max(2, math.ceil(r / h - 1e-9))
+    h_eff = r / rings
+    hub = 0.1 * r if hub_radius_m is None else float(hub_radius_m)
+    eps = (
+        _PENALTY_FACTOR * disk.youngs_modulus_pa / h_eff
+        if penalty_pa_per_m is None
+        else float(penalty_pa_per_m)
+    )
+
+    inputs = {
+        "version": FEM_VERSION,
+        "gripper": {f.name: getattr(grip, f.name) for f in fields(grip)},
+        "disk": {
+            f.name: getattr(disk, f.name) for f in fields(disk)
+            if f.name not in ("stiffness_scale", "contour_stiffness_ratio")
+        },
+        "torques_nm": torques,
+        "rings": rings,
+        "plane": plane,
+        "hub_radius_m": hub,
+        "penalty_pa_per_m": eps,
+        "al_iterations": int(al_iterations),
+    }
+    path = _cache_dir() / f"{_cache_key(inputs)}.json"
+    if cache:
+        hit = _load_cache(path, inputs)
+        if hit is not None:
+            return hit
+
+    results = _solve_grasp(scene, torques, rings, plane, hub, eps, int(al_iterations))
+    if cache:
+        _store_cache(path, inputs, results)
+    return results
+
+
+def _solve_grasp(
+    scene: Scene,
+    torques: list[float],
+    rings: int,
+    plane: str,
+    hub: float,
+    eps: float,
+    al_iterations: int,
+) -> list[FemResult]:
+    disk, grip = scene.disk, scene.gripper
+    r, t = disk.radius_m, disk.thickness_m
+    centre = disk.center_m
+    base, _ = _grasp_mesh(r, rings, hub)
+    arcs = _arc_facets(base, r)
+    hub_edge = _arc_facets(base, hub, boundary=False)
+    base = replace(base, doflocs=base.p + centre[:, None])
+    mesh = _quadratic_mesh(base, r, arcs, centre, extra_circles=[(hub, hub_edge)])
+    body = _Body(mesh, disk.youngs_modulus_pa, disk.poisson_ratio, t, plane)
+    rim = _Rim.build(body, arcs, centre, t)
+
+    # the rigid hub: every node on or inside the (curved) hub ring
+    dist = np.linalg.norm(body.basis.doflocs - centre[:, None], axis=0)
+    fixed = np.nonzero(dist <= hub * (1 + 1e-9))[0]
+    kf, th0 = grip.torsion_stiffness_nm_per_rad, grip.rest_angle_rad
+    th_stop = closed_angle_rad(grip)
+    k_stop = _STOP_STIFFNESS_FACTOR * kf
+
+    def q_potential(q: np.ndarray, torque: float):
+        e = float(np.sum(torque * q + 0.5 * kf * (q - th0) ** 2))
+        g = torque + kf * (q - th0)
+        hdiag = np.full(2, kf)
+        below = q < th_stop
+        e += float(np.sum(np.where(below, 0.5 * k_stop * (q - th_stop) ** 2, 0.0)))
+        g = g + np.where(below, k_stop * (q - th_stop), 0.0)
+        hdiag = hdiag + np.where(below, k_stop, 0.0)
+        return e, g, np.diag(hdiag)
+
+    force_tol = 1e-10 * disk.youngs_modulus_pa * t * r
+    # rim nodes counter-clockwise from the top (contour output and tip-corner polygon)
+    angle = np.arctan2(rim.ref_m[:, 1] - centre[1], rim.ref_m[:, 0] - centre[0])
+    order = np.argsort(np.mod(angle - math.pi / 2, 2 * math.pi), kind="stable")
+    system = _System(
+        body,
+        rim,
+        fixed,
+        [_JawFace(scene, 0, 0), _JawFace(scene, 1, 1)],
+        2,
+        q_potential,
+        eps,
+        q_scale=np.array([r, r]),
+        force_tol_n=force_tol,
+        length_scale_m=r,
+        corners=[_JawTip(scene, 0, 0), _JawTip(scene, 1, 1)],
+        rim_order=order,
+    )
+    n = body.n
+    # strain regions (see FemResult.peak_strain)
+    rho = np.linalg.norm(body.qp_xy - centre[:, None, None], axis=0)
+    outside_hub = rho > 2 * hub
+    hub_layer = (rho > hub) & ~outside_hub
+
+    def accept(x: np.ndarray) -> str | None:
+        if body.min_jacobian(x[:n]) <= 0:
+            return "inverted element (det F <= 0 at a node or quadrature point)"
+        return None
+
+    x = np.zeros(n + 2)
+    x[n:] = grip.rest_angle_rad
+    load = 0.0
+    previous: tuple[np.ndarray, float] | None = None
+    n_free = system.free.size
+    results = []
+    for torque in torques:
+        t0 = time.perf_counter()
+        x_new, load_new, rep, previous = _ramp(
+            system, x, load, torque, al_iterations, accept, previous
+        )
+        elapsed = time.perf_counter() - t0
+        x, load = x_new, load_new
+        common = dict(
+            torque_nm=torque,
+            n_elements=int(mesh.t.shape[1]),
+            n_dofs=int(n_free),
+            mesh_size_m=r / rings,
+            solve_time_s=elapsed,
+            newton_iterations=int(rep.iterations),
+            plane=plane,
+            hub_radius_m=hub,
+        )
+        if not rep.converged:
+            results.append(
+                FemResult(
+                    jaw_angles_rad=(math.nan, math.nan),
+                    converged=False,
+                    message=f"failed at T_a = {torque:g} N·m (last converged "
+                    f"{load:g} N·m): {rep.message}",
+                    contour_m=np.full((rim.ref_m.shape[0], 2), math.nan),
+                    contact_forces_n=(math.nan, math.nan),
+                    tip_forces_n=(math.nan, math.nan),
+                    peak_strain=math.nan,
+                    **common,
+                )
+            )
+            continue
+        forces, tip = system.contact_forces(x, load)
+        gaps = system.gaps(x)
+        pen = 0.0
+        for (g, valid), f in zip(gaps, forces, strict=True):
+            act = valid & (f > 0)
+            if np.any(act):
+                pen = max(pen, float(np.max(-g[act])))
+        tip_pen = (tip - system.corner_multipliers) / system.k_corner
+        pen = max(pen, float(np.max(np.where(tip > 0, tip_pen, 0.0))))
+        fmat = body.deformation_gradient(x[:n])
+        strain = _log_strain_magnitude(fmat)
+        disp = np.linalg.norm(x[rim.dofs], axis=1)
+        at_stop = bool(np.any(x[n:] < th_stop))
+        results.append(
+            FemResult(
+                jaw_angles_rad=(float(x[n]), float(x[n + 1])),
+                converged=True,
+                message="converged (jaws on the closed stop)" if at_stop else "converged",
+                contour_m=system.rim_positions(x)[order],
+                contact_forces_n=(
+                    float(np.sum(forces[0]) + tip[0]),
+                    float(np.sum(forces[1]) + tip[1]),
+                ),
+                tip_forces_n=(float(tip[0]), float(tip[1])),
+                peak_strain=float(np.max(strain[outside_hub])),
+                hub_edge_peak_strain=float(np.max(strain[hub_layer], initial=0.0)),
+                max_penetration_m=max(pen, 0.0),
+                max_displacement_m=float(np.max(disp)),
+                contact_node_counts=(
+                    int(np.count_nonzero(forces[0] > 0)),
+                    int(np.count_nonzero(forces[1] > 0)),
+                ),
+                **common,
+            )
+        )
+    return results

@@ -1,0 +1,264 @@
+"""The discrete system: total potential of body, contact and scalar unknowns (:class:`_System`).
+
+Energy, gradient and tangent of the coupled displacement/angle unknowns, contact forces and
+augmented-Lagrangian multipliers, penetration guards, the sparse linear solve and the
+convergence test used by :mod:`.newton`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .body import _Body
+from .contact import (
+    _corner_feature,
+    _JawTip,
+    _Obstacle,
+    _Rim,
+    _segment_gap_gradient,
+    _vertex_distance_gradient,
+    _with_hessian,
+)
+
+
+class _System:
+    """Total potential of body + contact + scalar unknowns, with free-dof bookkeeping."""
+
+    def __init__(
+        self,
+        body: _Body,
+        rim: _Rim,
+        fixed_dofs: np.ndarray,
+        obstacles: Sequence[_Obstacle],
+        nq: int,
+        q_potential: Callable[[np.ndarray, float], tuple[float, np.ndarray, np.ndarray]],
+        penalty_pa_per_m: float,
+        q_scale: np.ndarray,
+        force_tol_n: float,
+        length_scale_m: float,
+        corners: Sequence[_JawTip] = (),
+        rim_order: np.ndarray | None = None,
+    ) -> None:
+        self.body = body
+        self.rim = rim
+        self.obstacles = list(obstacles)
+        self.nq = nq
+        self.q_potential = q_potential
+        self.n = body.n
+        self.ntot = body.n + nq
+        free = np.ones(self.ntot, dtype=bool)
+        free[fixed_dofs] = False
+        self.free = np.nonzero(free)[0]
+        self.k_node = penalty_pa_per_m * rim.weight_m2  # (m,) [N/m]
+        self.multipliers = [np.zeros(rim.dofs.shape[0]) for _ in self.obstacles]
+        self.q_scale = q_scale
+        self.force_tol_n = force_tol_n
+        self.length_scale_m = length_scale_m
+        self._order: np.ndarray | None = None
+        # tip corners against the deformed rim polygon (rim nodes in counter-clockwise order)
+        self.corners = list(corners)
+        self.rim_order = rim_order
+        if self.corners:
+            poly = rim.ref_m[rim_order]
+            seg = np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)
+            thickness = float(rim.weight_m2.sum() / seg.sum())
+            self.k_corner = penalty_pa_per_m * thickness * float(np.mean(seg))
+        self.corner_multipliers = np.zeros(len(self.corners))
+        # penetration cap of trial points: a quarter of the shortest rim segment
+        ref = rim.ref_m[rim_order] if rim_order is not None else rim.ref_m
+        seg_len = np.linalg.norm(np.diff(ref, axis=0), axis=1)
+        self.pen_cap_m = 0.25 * float(np.min(seg_len))
+
+    # positions of the rim nodes
+    def rim_positions(self, x: np.ndarray) -> np.ndarray:
+        return self.rim.ref_m + x[self.rim.dofs]
+
+    def _contact(self, x: np.ndarray, load: float, want_tangent: bool):
+        p = self.rim_positions(x)
+        energy = 0.0
+        grad = np.zeros(self.ntot)
+        rows: list[np.ndarray] = []
+        cols: list[np.ndarray] = []
+        vals: list[np.ndarray] = []
+        forces = []
+        for ob, lam in zip(self.obstacles, self.multipliers, strict=True):
+            q = x[self.n + ob.qi]
+            g, valid, dgdp, dgdq, d2q, d2pq = ob.evaluate(p, q)
+            k = self.k_node
+            trial = lam - k * g
+            act = valid & (trial > 0)
+            f = np.where(act, trial, 0.0)  # contact force on each node [N]
+            forces.append(f)
+            energy += float(np.sum(np.where(act, trial**2, 0.0) / (2 * k) - lam**2 / (2 * k)))
+            if not np.any(act):
+                continue
+            ia = np.nonzero(act)[0]
+            fa, ka = f[ia], k[ia]
+            dp = dgdp[ia]
+            dofs = self.rim.dofs[ia]
+            qd = self.n + ob.qi
+            np.add.at(grad, dofs[:, 0], -fa * dp[:, 0])
+            np.add.at(grad, dofs[:, 1], -fa * dp[:, 1])
+            grad[qd] += float(np.sum(-fa * dgdq[ia]))
+            if want_tangent:
+                # Hessian of psi(g(x)): k dg dg^T - f d2g
+                for a in range(2):
+                    for b in range(2):
+                        rows.append(dofs[:, a])
+                        cols.append(dofs[:, b])
+                        vals.append(ka * dp[:, a] * dp[:, b])
+                    kpq = ka * dp[:, a] * dgdq[ia] - fa * d2pq[ia, a]
+                    rows += [dofs[:, a], np.full(ia.size, qd)]
+                    cols += [np.full(ia.size, qd), dofs[:, a]]
+                    vals += [kpq, kpq]
+                rows.append(np.array([qd]))
+                cols.append(np.array([qd]))
+                vals.append(np.array([np.sum(ka * dgdq[ia] ** 2 - fa * d2q[ia])]))
+        corner_forces = np.zeros(len(self.corners))
+        if self.corners:
+            poly_idx = self.rim_order
+            poly = p[poly_idx]
+            k = self.k_corner
+            for ci, corner in enumerate(self.corners):
+                qd = self.n + corner.qi
+                c, dc, d2c = corner.evaluate(float(x[qd]))
+                lam_c = self.corner_multipliers[ci]
+                gap, kind, idx = _corner_feature(poly, c)
+                trial = lam_c - k * gap
+                if trial <= 0:
+                    energy -= lam_c**2 / (2 * k)
+                    continue
+                corner_forces[ci] = trial
+                energy += (trial**2 - lam_c**2) / (2 * k)
+                if kind == "segment":
+                    nodes = [poly_idx[idx], poly_idx[(idx + 1) % poly_idx.size]]
+                    z = np.concatenate((poly[idx], poly[(idx + 1) % poly_idx.size], c))
+                    _, gz, hz = _with_hessian(_segment_gap_gradient, z)
+                else:
+                    nodes = [poly_idx[idx]]
+                    z = np.concatenate((poly[idx], c))
+                    _, gz, hz = _with_hessian(_vertex_distance_gradient, z, math.copysign(1, gap))
+                # chain rule from (rim nodes, corner position) to (rim dofs, q)
+                nv = 2 * len(nodes)
+                dg = np.concatenate((gz[:nv], [gz[nv:] @ dc]))
+                dofs = np.concatenate([self.rim.dofs[i] for i in nodes] + [np.array([qd])])
+                np.add.at(grad, dofs, -trial * dg)
+                if want_tangent:
+                    d2g = np.empty((nv + 1, nv + 1))
+                    d2g[:nv, :nv] = hz[:nv, :nv]
+                    d2g[:nv, nv] = d2g[nv, :nv] = hz[:nv, nv:] @ dc
+                    d2g[nv, nv] = dc @ hz[nv:, nv:] @ dc + gz[nv:] @ d2c
+                    local = k * np.outer(dg, dg) - trial * d2g
+                    rows.append(np.repeat(dofs, nv + 1))
+                    cols.append(np.tile(dofs, nv + 1))
+                    vals.append(local.ravel())
+        return energy, grad, (rows, cols, vals), forces, corner_forces
+
+    def energy(self, x: np.ndarray, load: float) -> float:
+        e_el = self.body.energy(x[: self.n])
+        if not math.isfinite(e_el):
+            return math.inf
+        e_c = self._contact(x, load, False)[0]
+        e_q, _, _ = self.q_potential(x[self.n :], load)
+        return e_el + e_c + e_q
+
+    def energy_gradient(self, x: np.ndarray, load: float) -> tuple[float, np.ndarray | None]:
+        e_el, g_el = self.body.energy_gradient(x[: self.n])
+        if g_el is None:
+            return math.inf, None
+        e_c, g, _, _, _ = self._contact(x, load, False)
+        e_q, g_q, _ = self.q_potential(x[self.n :], load)
+        g[: self.n] += g_el
+        g[self.n :] += g_q
+        return e_el + e_c + e_q, g
+
+    def evaluate(self, x: np.ndarray, load: float):
+        out = self.body.evaluate(x[: self.n])
+        if out is None:
+            return None
+        e_el, g_el, k_el = out
+        e_c, g_c, (rows, cols, vals), _, _ = self._contact(x, load, True)
+        e_q, g_q, h_q = self.q_potential(x[self.n :], load)
+        g = g_c
+        g[: self.n] += g_el
+        g[self.n :] += g_q
+        nt = self.ntot
+        qidx = np.arange(self.n, nt)
+        rr = np.concatenate(rows + [np.repeat(qidx, self.nq)]) if rows else np.repeat(qidx, self.nq)
+        cc = np.concatenate(cols + [np.tile(qidx, self.nq)]) if cols else np.tile(qidx, self.nq)
+        vv = np.concatenate(vals + [h_q.ravel()]) if vals else h_q.ravel()
+        kc = sp.csr_matrix((vv, (rr, cc)), shape=(nt, nt))
+        indptr = np.concatenate((k_el.indptr, np.full(self.nq, k_el.indptr[-1])))
+        k_full = sp.csr_matrix((k_el.data, k_el.indices, indptr), shape=(nt, nt)) + kc
+        return e_el + e_c + e_q, g, k_full
+
+    def contact_forces(self, x: np.ndarray, load: float) -> tuple[list[np.ndarray], np.ndarray]:
+        """Per-obstacle node forces and per-corner forces [N]."""
+        out = self._contact(x, load, False)
+        return out[3], out[4]
+
+    def gaps(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        p = self.rim_positions(x)
+        out = []
+        for ob in self.obstacles:
+            g, valid, *_ = ob.evaluate(p, x[self.n + ob.qi])
+            out.append((g, valid))
+        return out
+
+    def update_multipliers(self, x: np.ndarray, load: float) -> None:
+        nodes, corners = self.contact_forces(x, load)
+        self.multipliers = [f.copy() for f in nodes]
+        self.corner_multipliers = corners.copy()
+
+    def solve(self, kff: sp.csr_matrix, rhs: np.ndarray) -> np.ndarray:
+        """Sparse LU solve (SuperLU, symmetric mode).
+
+        The fill-reducing ordering (minimum degree on ``A^T + A``) is computed at the first
+        factorisation and reused afterwards (the sparsity pattern only changes by the few
+        contact couplings), which saves the ordering time of every Newton step.
+        """
+        opts = {"SymmetricMode": True}
+        if self._order is None or self._order.size != kff.shape[0]:
+            lu = spla.splu(kff.tocsc(), permc_spec="MMD_AT_PLUS_A", options=opts)
+            self._order = np.argsort(lu.perm_c)
+            return lu.solve(rhs)
+        o = self._order
+        lu = spla.splu(kff[o][:, o].tocsc(), permc_spec="NATURAL", options=opts)
+        out = np.empty_like(rhs)
+        out[o] = lu.solve(rhs[o])
+        return out
+
+    def penetration(self, x: np.ndarray) -> float:
+        """Largest penetration [m] of a rim node into a face or of a tip corner into the rim."""
+        p = self.rim_positions(x)
+        worst = 0.0
+        for ob in self.obstacles:
+            g, valid, *_ = ob.evaluate(p, x[self.n + ob.qi])
+            if np.any(valid):
+                worst = max(worst, float(np.max(-g[valid])))
+        if self.corners:
+            poly = p[self.rim_order]
+            for corner in self.corners:
+                c = corner.evaluate(float(x[self.n + corner.qi]))[0]
+                worst = max(worst, -_corner_feature(poly, c)[0])
+        return worst
+
+    def penetration_cap(self, x: np.ndarray) -> float:
+        """Largest penetration a line-search trial point may have (anti-tunnelling guard)."""
+        return max(self.pen_cap_m, 2.0 * self.penetration(x))
+
+    def residual_ratio(self, g: np.ndarray) -> float:
+        """Largest free residual (forces; generalised forces / ``q_scale``) over the tolerance."""
+        gf = g[self.free]
+        nu = self.free.size - self.nq
+        r_u = float(np.max(np.abs(gf[:nu]), initial=0.0))
+        r_q = float(np.max(np.abs(gf[nu:]) / self.q_scale, initial=0.0))
+        return max(r_u, r_q) / self.force_tol_n
+
+    def converged(self, g: np.ndarray) -> bool:
+        return self.residual_ratio(g) <= 1.0
