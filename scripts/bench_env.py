@@ -93,6 +93,8 @@ def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
                                                                             return_counts=True),
                                                                   strict=True)},
         "mean_iterations_of_valid": float(out["iterations"][valid].mean()) if solved else 0.0,
+        "median_iterations_of_valid": (float(np.median(out["iterations"][valid])) if solved
+                                       else 0.0),
         "finite": bool(all(np.all(np.isfinite(np.asarray(v, dtype=float)))
                            for v in out.values())),
     }
@@ -132,6 +134,32 @@ def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict 
     }
 
 
+def bench_make_vec(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict:
+    """``n_steps`` steps of ``gymnasium.make_vec(ENV_ID, num_envs, "vector_entry_point",
+    autoreset_mode=SAME_STEP)``: every step evaluates every sub-env's design."""
+    import gymnasium as gym
+    from gymnasium.vector import AutoresetMode
+
+    import envs
+
+    vec = gym.make_vec(envs.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point",
+                       autoreset_mode=AutoresetMode.SAME_STEP, n_triangles=n_triangles,
+                       distribution=paper_distribution())
+    actions = np.random.default_rng(seed).uniform(
+        -1.0, 1.0, size=(n_steps, num_envs, 6)).astype(np.float32)
+    vec.reset(seed=seed)
+    vec.step(actions[0])  # warm
+    evaluated = 0
+    t0 = time.perf_counter()
+    for a in actions:
+        _, _, terminated, _, _ = vec.step(a)
+        evaluated += int(np.count_nonzero(terminated))
+    elapsed = time.perf_counter() - t0
+    vec.close()
+    return {"num_envs": num_envs, "steps": n_steps, "seconds": elapsed,
+            "designs_per_s": evaluated / elapsed}
+
+
 def paper_distribution() -> ObjectDistribution:
     """Objects identical to the paper-r070 disk (the strain limit does not change the solve)."""
     d = paper_disk()
@@ -159,6 +187,7 @@ def main(argv: list[str] | None = None) -> dict:
     loop = bench_step_loop(args.steps, args.n_triangles, args.seed)
     batches = [bench_batch(b, args.n_triangles, args.seed) for b in args.batch_sizes]
     sb3 = bench_sb3(args.sb3_envs, args.sb3_steps, args.n_triangles, args.seed)
+    mvec = bench_make_vec(args.sb3_envs, args.sb3_steps, args.n_triangles, args.seed)
     best = max(batches, key=lambda r: r["designs_per_s"])
     ratio = best["designs_per_s"] / loop["steps_per_s"]
     report = {
@@ -172,6 +201,7 @@ def main(argv: list[str] | None = None) -> dict:
         "batched": batches,
         "batched_over_step_loop": ratio,
         "sb3_vec_env": sb3,
+        "make_vec_same_step": mvec,
         "targets": {
             "designs_per_s": TARGET_DESIGNS_PER_S,
             "ratio": TARGET_RATIO,
@@ -192,7 +222,9 @@ def main(argv: list[str] | None = None) -> dict:
         print(f"batched B={r['batch']:>6}:      {r['designs_per_s']:9.1f} designs/s "
               f"({r['solved_designs_per_s']:.1f} solved/s)   valid {r['valid_fraction']:.2f}, "
               f"converged {r['converged_fraction_of_valid']:.3f} of valid, "
-              f"status {r['status_counts_of_valid']}")
+              f"iterations median {r['median_iterations_of_valid']:.0f} / mean "
+              f"{r['mean_iterations_of_valid']:.1f}, status {r['status_counts_of_valid']}")
+    print(f"make_vec SAME_STEP n={mvec['num_envs']:>4}: {mvec['designs_per_s']:9.1f} designs/s")
     if sb3 is None:
         print("sb3_vec_env: skipped (stable-baselines3 is not installed)")
     else:
