@@ -36,6 +36,8 @@ offset              meaning                                                     
 ``CK_KINT``         radial spring stiffness                                      N/m
 ``CK_KEXT``         contour spring stiffness                                     N/m
 ``CK_REST_CONTOUR`` rest length ``h = 2 r sin(pi/N)`` of the contour springs     m
+``CK_AREA_STIFF``   area stiffness ``kappa t`` of the area energy (0: none)      N/m
+``CK_REST_AREA``    rest area ``A0`` of a fan triangle                           m^2
 ==================  ===========================================================  =====
 
 Output vector (``N_OUT`` floats): ``OUT_PASSED`` (1.0 or 0.0), ``OUT_FORCE_RES`` and
@@ -73,6 +75,8 @@ __all__ = [
     "CK_KINT",
     "CK_KEXT",
     "CK_REST_CONTOUR",
+    "CK_AREA_STIFF",
+    "CK_REST_AREA",
     "N_CK",
     "OUT_PASSED",
     "OUT_FORCE_RES",
@@ -112,7 +116,9 @@ CK_TORQUE = 10
 CK_KINT = 11
 CK_KEXT = 12
 CK_REST_CONTOUR = 13
-N_CK = 14
+CK_AREA_STIFF = 14
+CK_REST_AREA = 15
+N_CK = 16
 
 # output vector layout
 OUT_PASSED = 0
@@ -372,6 +378,33 @@ def _segment_crosses(p, ax, ay, bx, by):
 
 
 @njit(**_FLAGS)
+def _area_forces(prm, p, force):
+    """Add the forces of the area energy ``E = kappa t A0 / 2 (ln(A / A0))^2`` of every fan
+    triangle (centre, p_i, p_i+1) to ``force``; return the largest |force| on a point [N].
+
+    A folded triangle (``A <= 0``) lies outside the model: its force is NaN, so the verdict
+    fails.
+    """
+    n = p.shape[0]
+    cx, cy = prm[CK_CENTRE_X], prm[CK_CENTRE_Y]
+    kt, a0 = prm[CK_AREA_STIFF], prm[CK_REST_AREA]
+    biggest = 0.0
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        ax, ay = p[i, 0] - cx, p[i, 1] - cy
+        bx, by = p[i1, 0] - cx, p[i1, 1] - cy
+        area = 0.5 * (ax * by - ay * bx)
+        slope = kt * a0 * math.log(area / a0) / area  # NaN for a folded triangle
+        # dA/dp_i = (by, -bx) / 2, dA/dp_i+1 = (-ay, ax) / 2
+        force[i, 0] -= 0.5 * slope * by
+        force[i, 1] += 0.5 * slope * bx
+        force[i1, 0] += 0.5 * slope * ay
+        force[i1, 1] -= 0.5 * slope * ax
+        biggest = _npmax(biggest, 0.5 * abs(slope) * _npmax(_hypot(ax, ay), _hypot(bx, by)))
+    return biggest
+
+
+@njit(**_FLAGS)
 def _spring_forces(prm, p, force):
     """Add the radial and contour spring forces to ``force``; return the largest |force| [N].
 
@@ -584,6 +617,8 @@ def check_one(prm, points, angles, face, corner, stop, out):
     acc = np.zeros(_N_ACC)
     acc[_ACC_FMIN] = math.inf
     spring_max = _spring_forces(prm, points, force)
+    if prm[CK_AREA_STIFF] > 0.0:
+        spring_max = _npmax(spring_max, _area_forces(prm, points, force))
     for j in range(2):
         _finger(prm, points, angles[j], j, face, corner, stop, force, acc)
     _verdict(prm, face, corner, force, spring_max, acc, out)
@@ -650,6 +685,11 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str)
     vals[CK_KINT] = k_int
     vals[CK_KEXT] = k_ext
     vals[CK_REST_CONTOUR] = 2 * r * math.sin(math.pi / n)
+    # area energy (CONVENTIONS.md): kappa = c_A K, K the plane-strain bulk modulus lambda + mu
+    nu = float(d.poisson_ratio)
+    bulk = d.youngs_modulus_pa / (2 * (1 + nu) * (1 - 2 * nu))
+    vals[CK_AREA_STIFF] = getattr(d, "area_stiffness_scale", 0.0) * bulk * d.thickness_m
+    vals[CK_REST_AREA] = 0.5 * r * r * math.sin(2 * math.pi / n)
     return np.array(vals, dtype=np.float64)
 
 

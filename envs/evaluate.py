@@ -72,6 +72,7 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
     "total_force_n": (np.float64, (2,)),
     "contact_score": (np.float64, ()),
     "peak_strain": (np.float64, ()),
+    "peak_log_strain": (np.float64, ()),
     "max_displacement_ratio": (np.float64, ()),
     "strain_limit": (np.float64, ()),
     "reward_contact": (np.float64, ()),
@@ -212,7 +213,7 @@ def _design_table(designs) -> np.ndarray:
 
 def _disk_table(disks, batch: int) -> np.ndarray:
     """Columns: radius, Young's modulus, Poisson ratio, thickness, stiffness scale, contour
-    stiffness ratio."""
+    stiffness ratio, area stiffness scale."""
     if isinstance(disks, SoftDisk):
         disks = [disks] * batch
     elif not isinstance(disks, Sequence) or len(disks) != batch:
@@ -222,8 +223,8 @@ def _disk_table(disks, batch: int) -> np.ndarray:
         if not isinstance(d, SoftDisk):
             raise ValueError(f"disks[{i}] must be a SoftDisk, got {type(d).__name__}")
         rows.append((d.radius_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
-                     d.stiffness_scale, d.contour_stiffness_ratio))
-    return np.array(rows, dtype=np.float64).reshape(batch, 6)
+                     d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale))
+    return np.array(rows, dtype=np.float64).reshape(batch, 7)
 
 
 def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
@@ -251,8 +252,9 @@ def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
     """Scene columns of design rows (the one Design -> Scene mapping, see
     :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's."""
     ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des.T)
-    radius, young, nu, thick, scale, ratio = (np.ascontiguousarray(c) for c in disk.T)
-    return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, torque)
+    radius, young, nu, thick, scale, ratio, area = (np.ascontiguousarray(c) for c in disk.T)
+    return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, area,
+                        torque)
 
 
 def _empty_output(batch: int) -> dict[str, np.ndarray]:
@@ -271,6 +273,7 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
         "total_force_n": sol.face_forces_n.sum(axis=2) + corner,
         "contact_score": n_contacts.sum(axis=1) / n,
         "peak_strain": sol.peak_strain,
+        "peak_log_strain": sol.peak_log_strain,
         "max_displacement_ratio": sol.max_displacement_ratio,
     }
     finite = np.ones(rows.size, dtype=bool)
@@ -392,6 +395,8 @@ def evaluate_designs(
           contour in contact (each point stands for an arc ``2 pi r / N``), so it barely
           depends on N.
         - ``peak_strain``: max ``|L - L0| / L0`` over radial and contour springs [-].
+        - ``peak_log_strain``: largest principal logarithmic strain ``max |ln lambda|`` over
+          the fan triangles [-], the FEM reference's measure.
         - ``max_displacement_ratio``: max contour-point displacement / r [-].
         - ``strain_limit``: the limit used [-].
         - ``reward_contact``, ``reward_deform``, ``penalty_miss``, ``penalty_invalid``,

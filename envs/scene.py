@@ -14,12 +14,15 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from .model.defaults import (
+    DEFAULT_AREA_STIFFNESS_SCALE,
+    DEFAULT_CONTOUR_STIFFNESS_RATIO,
     DEFAULT_POISSON_RATIO,
     DEFAULT_STIFFNESS_SCALE,
     DEFAULT_THICKNESS_M,
     DEFAULT_YOUNGS_MODULUS_PA,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
 from .model.problem import (
     REST_MESSAGES,
@@ -119,6 +122,12 @@ class SoftDisk:
         Second calibration factor ``rho_c`` multiplying only the contour (external) springs,
         on top of ``stiffness_scale`` [-], in (0, 1e3]: ``k_ext = rho_c s E t A / h^2`` while
         ``k_int = 2 s E t A / r^2`` (van Gelder rule). Default 1 (the plain stiffness rule).
+    area_stiffness_scale
+        Scale ``c_A`` of the area energy of the model family [-], in [0, 1e3]: every fan
+        triangle resists area change with ``E_A = 1/2 kappa t A0 (ln(A / A0))^2``, ``kappa =
+        c_A K`` and ``K`` the plane-strain bulk modulus ``lambda + mu`` of E and nu
+        (:attr:`bulk_modulus_pa`). Any ``c_A > 0`` keeps every triangle's area positive: the fan
+        cannot fold. Default 0: springs only, the paper's model.
     """
 
     radius_m: float
@@ -127,7 +136,8 @@ class SoftDisk:
     poisson_ratio: float = DEFAULT_POISSON_RATIO
     thickness_m: float = DEFAULT_THICKNESS_M
     stiffness_scale: float = DEFAULT_STIFFNESS_SCALE
-    contour_stiffness_ratio: float = 1.0
+    contour_stiffness_ratio: float = DEFAULT_CONTOUR_STIFFNESS_RATIO
+    area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -139,8 +149,15 @@ class SoftDisk:
         check_range(
             "contour_stiffness_ratio", self.contour_stiffness_ratio, 0.0, 1e3, low_open=True
         )
+        check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
+
+    @property
+    def bulk_modulus_pa(self) -> float:
+        """Plane-strain 2-D bulk modulus ``K = lambda + mu = E / (2 (1 + nu) (1 - 2 nu))`` [Pa]
+        (the plane of the FEM reference)."""
+        return bulk_modulus_2d(self.youngs_modulus_pa, self.poisson_ratio)
 
     @property
     def center_m(self) -> np.ndarray:
@@ -205,7 +222,8 @@ class Scene:
         return np.array([[g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
-                          d.stiffness_scale, d.contour_stiffness_ratio, float(torque_nm)]])
+                          d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
+                          float(torque_nm)]])
 
     @property
     def reachable(self) -> bool:

@@ -2,12 +2,12 @@
 
 from types import SimpleNamespace
 
-from envs.model import energy, geometry, layout
+from envs.model import energy, geometry, layout, metrics
 from envs.solver import assembly, banded, candidates, contact, driver, ipm, polish, status
 
 K = SimpleNamespace()
-for _module in (layout, geometry, energy, status, banded, contact, candidates, assembly, ipm,
-                polish, driver):
+for _module in (layout, geometry, energy, metrics, status, banded, contact, candidates, assembly,
+                ipm, polish, driver):
     for _name, _value in vars(_module).items():
         if not _name.startswith("__"):
             setattr(K, _name, _value)

@@ -164,10 +164,12 @@ def test_corner_constraint_derivatives(c, k):
     _fd_check(fun, z, g5, h5)
 
 
-def test_energy_gradient_and_banded_hessian():
+@pytest.mark.parametrize("k_area", [0.0, 0.5])
+def test_energy_gradient_and_banded_hessian(k_area):
     prob, x = _state(n=10)
     n = prob.n
     prm = np.append(prob.params, 0.3)  # with a gauge spring
+    prm[K.P_KA] = k_area  # and the area energy of the model family
 
     def grad_of(z):
         gr = np.zeros(2 * n + 2)
@@ -296,12 +298,15 @@ def test_crossed_through_shortcut_agrees_with_the_full_tests():
     assert verdicts == {True, False}
 
 
-def test_convexified_fallback_from_the_exact_matrix_matches_a_fresh_assembly():
-    # the interior point's fallback (negative spring stiffness and constraint curvature
-    # dropped) is made from the exact matrix in place: the same as assembling it afresh
+@pytest.mark.parametrize("k_area", [0.0, 0.5])
+def test_convexified_fallback_from_the_exact_matrix_matches_a_fresh_assembly(k_area):
+    # the interior point's fallback (negative spring stiffness, the area energy's indefinite
+    # part and constraint curvature dropped) is made from the exact matrix in place: the same
+    # as assembling it afresh
     prob, x = _state(n=12, seed=3)
     n, nb = prob.n, 2 * prob.n
     prm = np.append(prob.params, 0.0)
+    prm[K.P_KA] = k_area
     face = np.ones((2, n), dtype=np.bool_)
     corner = np.zeros((2, 4, n), dtype=np.bool_)
     corner[:, :, ::3] = True
@@ -334,3 +339,38 @@ def test_convexified_fallback_from_the_exact_matrix_matches_a_fresh_assembly():
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
     # the state has compressed springs and curved constraints: the two matrices differ
     assert max(np.abs(w - e).max() for w, e in zip(fresh, exact, strict=True)) > 1e-3
+
+
+def test_area_energy_is_zero_at_rest_and_infinite_when_folded():
+    prob, x = _state(n=12)
+    prm = prob.params.copy()
+    prm[K.P_KA] = 1.0
+    n = prob.n
+    rest = np.concatenate([rest_points(n).ravel(), x[2 * n :]])
+    no_area = prm.copy()
+    no_area[K.P_KA] = 0.0
+    assert K.fan_energy(rest, n, prm) == pytest.approx(K.fan_energy(rest, n, no_area), abs=1e-15)
+    folded = rest.copy()
+    folded[2:4] = -0.1 * folded[2:4]  # point 1 through the centre: two triangles turn over
+    assert K.fan_energy(folded, n, prm) == math.inf
+    assert math.isfinite(K.fan_energy(folded, n, no_area))
+
+
+def test_triangle_log_strain_is_the_fem_measure():
+    # against the FEM reference's Hencky strain of the same deformation gradient, and the
+    # analytic limits: a rotation is strain-free, a uniform stretch lambda gives |ln lambda|
+    from envs.fem import material
+
+    rng = np.random.default_rng(5)
+    a, b = np.array([1.0, 0.0]), np.array([math.cos(0.4), math.sin(0.4)])
+    for _ in range(50):
+        f = np.eye(2) + 0.3 * rng.standard_normal((2, 2))
+        if np.linalg.det(f) <= 0:
+            continue
+        p, q = f @ a, f @ b
+        got = K.triangle_log_strain(*a, *b, *p, *q)
+        assert got == pytest.approx(float(material._log_strain_magnitude(f)), rel=1e-12)
+    rot = np.array([[math.cos(1.1), -math.sin(1.1)], [math.sin(1.1), math.cos(1.1)]])
+    assert K.triangle_log_strain(*a, *b, *(rot @ a), *(rot @ b)) == pytest.approx(0, abs=1e-14)
+    assert K.triangle_log_strain(*a, *b, *(0.8 * a), *(0.8 * b)) == pytest.approx(-math.log(0.8))
+    assert K.triangle_log_strain(*a, *b, *b, *a) == math.inf  # folded

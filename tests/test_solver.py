@@ -343,3 +343,34 @@ def test_a_checked_fold_is_reported_as_a_fold_whatever_the_solver_claimed():
     bad = result(OK, 0.0 * face, np.zeros((1, 2, N_CORNERS, n)), 0.0 * stop)
     assert not bad.folded and not bad.converged
     assert "independent KKT check failed" in bad.message
+
+
+def test_the_area_energy_keeps_the_fan_from_folding():
+    # the springs-only fan folds under this ramp (N = 40 near 20 % strain); with the area
+    # energy of the model family every step converges, checked, past 40 % strain, and every
+    # triangle keeps a positive area
+    torques = np.geomspace(0.05, 5.0, 24)
+    plain = simulate_ramp(R070, torques, 40)
+    assert any(r.folded for r in plain)
+    guarded = simulate_ramp(R070.with_changes(area_stiffness_scale=0.01), torques, 40)
+    assert all(r.converged for r in guarded), [r.message for r in guarded if not r.converged]
+    assert max(r.peak_strain for r in guarded) > 0.4
+    for r in guarded:
+        q = r.points_m - R070.disk.center_m
+        area = 0.5 * (q[:, 0] * np.roll(q[:, 1], -1) - q[:, 1] * np.roll(q[:, 0], -1))
+        assert area.min() > 0.1 * 0.5 * R070.disk.radius_m**2 * math.sin(2 * math.pi / 40)
+        assert r.inverted_triangles == 0 and r.kkt.passed
+
+
+def test_area_energy_changes_the_answer_and_the_check_sees_its_forces():
+    # the check includes the area forces: the guarded answer passes it, and the same state
+    # judged as the springs-only model (no area forces) does not
+    scene = R070.with_changes(area_stiffness_scale=1.0)
+    res = simulate(scene, 1.0, 20)
+    plain = simulate(R070, 1.0, 20)
+    assert res.converged and plain.converged
+    assert abs(res.jaw_angles_rad[0] - plain.jaw_angles_rad[0]) > 1e-3
+    args = (1.0, 20, "van_gelder", res.points_m, res.jaw_angles_rad, res.contact_forces_n,
+            res.corner_edge_forces_n, res.stop_torques_nm)
+    assert kkt_check(scene, *args).passed
+    assert not kkt_check(R070, *args).passed

@@ -23,6 +23,9 @@ DEFAULT_POISSON_RATIO = 0.45
 DEFAULT_THICKNESS_M = 0.01
 DEFAULT_STIFFNESS_SCALE = 1.0
 DEFAULT_CONTOUR_STIFFNESS_RATIO = 1.0  # the plain stiffness rule
+# c_A of the area energy: 0 keeps the paper's springs-only fan the default until the
+# calibrated members of the model family (interior rings) ship
+DEFAULT_AREA_STIFFNESS_SCALE = 0.0
 
 # --- contact geometry ----------------------------------------------------------------------
 # Finger end corners are rounded with this radius (fraction of the disk radius, at most a

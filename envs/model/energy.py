@@ -10,7 +10,11 @@ Terms
 * spring (radial: centre to ``q_i``, rest length 1; contour: ``q_i`` to ``q_i+1``, rest ``h``):
   ``k/2 (L - L0)^2``, geometrically exact;
 * joint (each finger): actuation ``tau theta`` plus torsion spring ``kappa/2 (theta - theta0)^2``
-  (``tau`` closes the finger: the energy falls as ``theta`` falls).
+  (``tau`` closes the finger: the energy falls as ``theta`` falls);
+* area (each fan triangle centre, ``q_i``, ``q_i+1``, when ``k_A > 0``): ``k_A A0 / 2
+  (ln(A / A0))^2`` with ``A`` the signed area (counter-clockwise positive) and ``A0`` its rest
+  value; infinite for ``A <= 0``, so a solver that keeps the energy finite keeps every triangle
+  unfolded (CONVENTIONS.md, model family).
 """
 
 from __future__ import annotations
@@ -20,9 +24,14 @@ import math
 import numpy as np
 from numba import njit
 
-from .layout import P_H, P_KAPPA, P_KC, P_KR, P_TAU, P_TH0
+from .layout import P_A0, P_H, P_KA, P_KAPPA, P_KC, P_KR, P_TAU, P_TH0
 
 __all__ = [
+    "bulk_modulus_2d",
+    "area_energy",
+    "area_slope",
+    "area_curvature",
+    "fan_area",
     "spring_energy",
     "spring_force",
     "spring_hessian",
@@ -63,6 +72,40 @@ def spring_hessian(dx, dy, k, rest, psd):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def bulk_modulus_2d(youngs_modulus, poisson_ratio):
+    """Plane-strain 2-D bulk modulus ``lambda + mu = E / (2 (1 + nu) (1 - 2 nu))`` [Pa]."""
+    return youngs_modulus / (2.0 * (1.0 + poisson_ratio) * (1.0 - 2.0 * poisson_ratio))
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def fan_area(xi, yi, xj, yj):
+    """Signed area of the fan triangle (centre, q_i, q_j) (counter-clockwise positive); its
+    gradient is ``(yj, -xj, -yi, xi) / 2`` over ``(xi, yi, xj, yj)``."""
+    return 0.5 * (xi * yj - yi * xj)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def area_energy(area, k_area, rest_area):
+    """``k_A A0 / 2 (ln(A / A0))^2``; infinite for a folded (``A <= 0``) triangle."""
+    if not area > 0.0:
+        return math.inf
+    log_ratio = math.log(area / rest_area)
+    return 0.5 * k_area * rest_area * log_ratio * log_ratio
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def area_slope(area, k_area, rest_area):
+    """``dE/dA = k_A A0 ln(A / A0) / A`` of :func:`area_energy`."""
+    return k_area * rest_area * math.log(area / rest_area) / area
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def area_curvature(area, k_area, rest_area):
+    """``d2E/dA2 = k_A A0 (1 - ln(A / A0)) / A^2`` of :func:`area_energy`."""
+    return k_area * rest_area * (1.0 - math.log(area / rest_area)) / (area * area)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def joint_energy(theta, tau, kappa, theta0):
     """Actuation and torsion-spring energy of one finger; its Hessian is ``kappa``."""
     return tau * theta + 0.5 * kappa * (theta - theta0) ** 2
@@ -86,6 +129,11 @@ def fan_energy(x, n, prm):
         e += spring_energy(x[2 * i1] - qx, x[2 * i1 + 1] - qy, kc, h)
     for j in range(2):
         e += joint_energy(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
+    if prm[P_KA] > 0.0:
+        for i in range(n):
+            i1 = i + 1 if i + 1 < n else 0
+            e += area_energy(fan_area(x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]),
+                             prm[P_KA], prm[P_A0])
     return e
 
 
@@ -108,6 +156,15 @@ def fan_gradient(x, n, prm, grad):
         grad[2 * i1 + 1] += f * dy
     for j in range(2):
         grad[2 * n + j] += joint_gradient(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
+    if prm[P_KA] > 0.0:
+        for i in range(n):
+            i1 = i + 1 if i + 1 < n else 0
+            xi, yi, xj, yj = x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]
+            f = 0.5 * area_slope(fan_area(xi, yi, xj, yj), prm[P_KA], prm[P_A0])
+            grad[2 * i] += f * yj
+            grad[2 * i + 1] -= f * xj
+            grad[2 * i1] -= f * yi
+            grad[2 * i1 + 1] += f * xi
 
 
 def energy_scaled(x: np.ndarray, params: np.ndarray, n: int) -> float:

@@ -20,6 +20,8 @@ P_TH0     rest angle of the fingers [rad]
 P_THMIN   closed-jaw angle (joint stop) [rad]
 P_PHASE   angle of the first contour point [rad]
 P_RHO     rounding radius of the finger corners
+P_KA      area stiffness ``c_A K / (s E)`` of the area energy (0: springs only, the paper's fan)
+P_A0      rest area of a fan triangle ``sin(2 pi / N) / 2``
 ========  ==================================================================================
 
 The solver keeps a longer private copy with two more slots: P_GAUGE (stiffness of the rotation
@@ -32,16 +34,16 @@ import numpy as np
 
 # parameter vector
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
-P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO = range(9, 15)
-N_PARAMS = 15
-P_GAUGE = 15  # solver copy only: gauge spring stiffness
-P_POLICY = 16  # solver copy only: contact policy of this attempt
-N_KERNEL_PARAMS = 17
+P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0 = range(9, 17)
+N_PARAMS = 17
+P_GAUGE = 17  # solver copy only: gauge spring stiffness
+P_POLICY = 18  # solver copy only: contact policy of this attempt
+N_KERNEL_PARAMS = 19
 
 # scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
- S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_TORQUE) = range(13)
-N_SCENE = 13
+ S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_AREA_SCALE, S_TORQUE) = range(14)
+N_SCENE = 14
 
 # solver options
 O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)

@@ -17,16 +17,19 @@ import numpy as np
 from numba import njit
 
 from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
+from .energy import bulk_modulus_2d
 from .geometry import bar_distance, closed_angle_of, rest_points_into
 from .layout import (
     N_PARAMS,
     N_SCENE,
+    P_A0,
     P_C0X,
     P_C0Y,
     P_C1X,
     P_C1Y,
     P_H,
     P_HW,
+    P_KA,
     P_KAPPA,
     P_KC,
     P_KR,
@@ -36,6 +39,7 @@ from .layout import (
     P_TAU,
     P_TH0,
     P_THMIN,
+    S_AREA_SCALE,
     S_CONTOUR_RATIO,
     S_DISTANCE,
     S_JOINT_OFFSET,
@@ -99,6 +103,7 @@ class SceneColumns(NamedTuple):
     thickness_m: np.ndarray
     stiffness_scale: np.ndarray
     contour_stiffness_ratio: np.ndarray
+    area_stiffness_scale: np.ndarray
     torque_nm: np.ndarray
 
     def take(self, rows) -> SceneColumns:
@@ -223,6 +228,10 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_THMIN] = closed_angle_of(s[S_LENGTH], s[S_JOINT_OFFSET], s[S_WIDTH])
     p[P_PHASE] = phase
     p[P_RHO] = min(CORNER_ROUNDING * r, 0.05 * s[S_WIDTH]) / r
+    # area energy: kappa t A0 ln^2 / 2 with kappa = c_A K, in units of s E t r^2
+    p[P_KA] = s[S_AREA_SCALE] * bulk_modulus_2d(s[S_YOUNG], s[S_POISSON]) / (
+        s[S_SCALE] * s[S_YOUNG])
+    p[P_A0] = 0.5 * math.sin(2 * math.pi / n)
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:

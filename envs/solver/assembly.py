@@ -8,10 +8,19 @@ import math
 
 from numba import njit
 
-from ..model.energy import fan_energy, fan_gradient, spring_hessian
+from ..model.energy import (
+    area_curvature,
+    area_slope,
+    fan_area,
+    fan_energy,
+    fan_gradient,
+    spring_hessian,
+)
 from ..model.layout import (
+    P_A0,
     P_GAUGE,
     P_H,
+    P_KA,
     P_KAPPA,
     P_KC,
     P_KR,
@@ -84,6 +93,38 @@ def _gauge_stretch(x, prm):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
+    """Hessian (band order) of the area energy of every fan triangle.
+
+    ``H = E'' g g^T + E' d2A`` with ``g = dA/dq`` and ``d2A`` the constant bilinear coupling
+    of the two points (``+1/2`` between ``x_i`` and ``y_j``, ``-1/2`` between ``y_i`` and
+    ``x_j``). ``psd`` keeps only a non-negative ``E'' g g^T`` (the indefinite coupling and a
+    negative curvature dropped) for the interior point's convexified fallback. ``sign = -1``
+    takes a Hessian out again.
+    """
+    nb = 2 * n
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        xi, yi, xj, yj = x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]
+        area = fan_area(xi, yi, xj, yj)
+        curv = area_curvature(area, prm[P_KA], prm[P_A0])
+        slope = area_slope(area, prm[P_KA], prm[P_A0])
+        if psd:
+            curv = max(curv, 0.0)
+            slope = 0.0
+        curv *= sign
+        slope *= sign
+        gxi, gyi, gxj, gyj = 0.5 * yj, -0.5 * xj, -0.5 * yi, 0.5 * xi
+        pa, pb = bidx[i], bidx[i1]
+        _add_point(ab, pa, curv * gxi * gxi, curv * gyi * gyi, curv * gxi * gyi)
+        _add_point(ab, pb, curv * gxj * gxj, curv * gyj * gyj, curv * gxj * gyj)
+        _add(ab, bb, dd, nb, pa, pb, curv * gxi * gxj)
+        _add(ab, bb, dd, nb, pa, pb + 1, curv * gxi * gyj + 0.5 * slope)
+        _add(ab, bb, dd, nb, pa + 1, pb, curv * gyi * gxj - 0.5 * slope)
+        _add(ab, bb, dd, nb, pa + 1, pb + 1, curv * gyi * gyj)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Energy gradient (natural order) and Hessian (band order) of the model's terms and the
     gauge spring."""
@@ -101,6 +142,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
             _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], kxx, kyy, kxy)
         for j in range(2):
             dd[j, j] += prm[P_KAPPA]
+        if prm[P_KA] > 0.0:
+            _area_hessian(x, n, prm, bidx, ab, bb, dd, psd)
     kg = prm[P_GAUGE]
     if kg > 0.0:
         # gauge: a stiff tangential spring on point 0 removes the free rotation of the contour
@@ -163,6 +206,10 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
             ux, uy = dx / lc, dy / lc
             _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], -tt * (1.0 - ux * ux),
                         -tt * (1.0 - uy * uy), tt * ux * uy)
+    if prm[P_KA] > 0.0:
+        # the area energy: its exact Hessian out, its convexified one in
+        _area_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
+        _area_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
     for m in range(mcount):
         if ch[m, CH_BLOCK] == 0.0:
             continue

@@ -29,7 +29,9 @@ from envs.model.layout import (
     I_STATUS,
     N_CORNERS,
     N_INFO,
+    P_A0,
     P_H,
+    P_KA,
     P_KC,
     P_KR,
     P_RHO,
@@ -51,6 +53,7 @@ from envs.model.metrics import (
     M_DISPLACEMENT,
     M_ENERGY,
     M_INVERTED,
+    M_PEAK_LOG_STRAIN,
     M_PEAK_STRAIN,
     N_METRICS,
     state_metrics,
@@ -79,7 +82,8 @@ class BatchSolution(NamedTuple):
     corner_totals_n: np.ndarray  # (B, 2, 4): total force of each corner
     corner_edges: np.ndarray  # (B, 2, 4): edge carrying most of each corner's force, -1: none
     stop_torques_nm: np.ndarray  # (B, 2)
-    peak_strain: np.ndarray  # (B,)
+    peak_strain: np.ndarray  # (B,) max |spring strain|
+    peak_log_strain: np.ndarray  # (B,) max over triangles of the largest principal |ln lambda|
     max_displacement_ratio: np.ndarray  # (B,)
     energy_j: np.ndarray  # (B,)
     inverted: np.ndarray  # (B,) int
@@ -130,6 +134,8 @@ def _check_row(s, prm, n, ck):
     ck[check.CK_KINT] = prm[P_KR] * k_unit
     ck[check.CK_KEXT] = prm[P_KC] * k_unit
     ck[check.CK_REST_CONTOUR] = prm[P_H] * r
+    ck[check.CK_AREA_STIFF] = prm[P_KA] * k_unit
+    ck[check.CK_REST_AREA] = prm[P_A0] * r * r
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -276,6 +282,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         jaw_angles_rad=xs[:, 2 * n :].copy(), points_m=points, face_forces_n=face,
         corner_forces_n=corner, corner_totals_n=totals, corner_edges=edges,
         stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
+        peak_log_strain=metrics[:, M_PEAK_LOG_STRAIN],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY] * torque_unit, inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,

@@ -66,6 +66,10 @@ class GraspResult:
         The independent equilibrium check.
     rounds : int
         Outer rounds updating the contact candidate set.
+    peak_log_strain : float
+        Largest principal logarithmic (Hencky) strain ``max |ln lambda|`` over the fan
+        triangles [-]: the FEM reference's measure (CONVENTIONS.md); infinite where a triangle
+        has folded.
     inverted_triangles : int
         Fan triangles (centre, point i, point i+1) turned over in the returned state. The
         springs allow such a fold at finite energy; a result with any is reported as not
@@ -96,6 +100,7 @@ class GraspResult:
     kkt: KKTReport | None = None
     rounds: int = 1
     inverted_triangles: int = 0
+    peak_log_strain: float = math.nan
 
     @property
     def folded(self) -> bool:
@@ -142,6 +147,7 @@ class GraspResult:
             "n_triangles": self.n_triangles,
             "jaw_angles_rad": list(self.jaw_angles_rad),
             "peak_strain": self.peak_strain,
+            "peak_log_strain": self.peak_log_strain,
             "max_displacement_ratio": self.max_displacement_ratio,
             "n_contacts": list(self.n_contacts),
             "total_force_n": list(self.total_force_n),

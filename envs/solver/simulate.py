@@ -63,6 +63,7 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         kkt=check.report_from_output(sol.check[i]),
         rounds=int(sol.rounds[i]),
         inverted_triangles=int(sol.inverted[i]),
+        peak_log_strain=float(sol.peak_log_strain[i]),
     )
 
 
