@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "finger_axes",
+    "finger_axes_array",
     "finger_frame",
     "closed_angle_rad",
     "distance_to_finger_bar",
@@ -65,13 +66,14 @@ def finger_frame(gripper: Gripper, side: int, angle_rad):
         gripping face.
     """
     ex, ey, nx, ny = finger_axes(0 if side == 0 else 1, np.sin(angle_rad), np.cos(angle_rad)) \
-        if np.ndim(angle_rad) == 0 else _finger_axes_array(side, np.asarray(angle_rad))
+        if np.ndim(angle_rad) == 0 else finger_axes_array(side, np.asarray(angle_rad))
     joint = np.array([gripper.joint_offset_m if side == 0 else -gripper.joint_offset_m, 0.0])
     return joint, np.array([ex, ey]), np.array([nx, ny])
 
 
-def _finger_axes_array(side: int, angles: np.ndarray):
-    # finger_axes is written for scalars; the same signs, elementwise
+def finger_axes_array(side: int, angles: np.ndarray):
+    """:func:`finger_axes` elementwise on an array of angles [rad] (the same signs), for numpy
+    callers that evaluate many angles (a compiled call per angle costs microseconds)."""
     s, c = np.sin(angles), np.cos(angles)
     return (s, c, -c, s) if side == 0 else (-s, c, c, s)
 

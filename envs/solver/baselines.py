@@ -14,7 +14,6 @@ status), so a baseline that stops short is reported as not converged.
 
 from __future__ import annotations
 
-import math
 import time
 from typing import NamedTuple
 
@@ -22,7 +21,7 @@ import numpy as np
 from scipy.optimize import minimize, nnls
 
 from envs.model.energy import energy_scaled, gradient_scaled
-from envs.model.geometry import finger_axes, rest_points
+from envs.model.geometry import finger_axes_array, rest_points
 from envs.model.layout import (
     I_ITERATIONS,
     I_STATUS,
@@ -59,7 +58,8 @@ class _Timeout(Exception):
 
 
 def _frames(theta: np.ndarray):
-    axes = [finger_axes(j, math.sin(theta[j]), math.cos(theta[j])) for j in range(2)]
+    """Axes ``e`` and inward normals ``n`` of both fingers, rows right then left."""
+    axes = [finger_axes_array(j, theta[j]) for j in range(2)]
     e = np.array([[a[0], a[1]] for a in axes])
     nrm = np.array([[a[2], a[3]] for a in axes])
     return e, nrm
