@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from envs.model.defaults import DEFAULT_STRAIN_LIMIT
 from optim import DesignProblem, OptimResult, get_optimizer
 from optim.charts import METHOD_COLOURS
 from optim.cli import paper_reference
@@ -223,7 +224,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--regret-objects", type=int, default=3,
                         help="with --rl: random objects for the policy regret")
     parser.add_argument("--scene", default="paper-r070")
-    parser.add_argument("--strain-limit", type=float, default=0.15)
+    parser.add_argument("--strain-limit", type=float, default=DEFAULT_STRAIN_LIMIT)
     parser.add_argument("--dask", metavar="ADDRESS|local")
     parser.add_argument("--workers", type=int)
     parser.add_argument("--out", default="out")
