@@ -10,6 +10,7 @@ torques in units of ``s E t r^2``, so that tolerances do not depend on the physi
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -194,7 +195,7 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     """:func:`pack_params` of a (B, N_SCENE) scene matrix."""
     n = int(n_triangles)
     if stiffness_rule == "van_gelder":
-        k_int, k_ext = spring_stiffness(n, 1.0, stiffness_rule)
+        k_int, k_ext = _unit_stiffness(n)
         k_int_rows, k_ext_rows = np.full(scene.shape[0], k_int), np.full(scene.shape[0], k_ext)
     else:
         pairs = [spring_stiffness(n, 1.0, stiffness_rule, nu) for nu in scene[:, S_POISSON]]
@@ -202,6 +203,12 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     prm = np.empty((scene.shape[0], N_PARAMS))
     _pack_rows(scene, n, k_int_rows, k_ext_rows, float(phase_rad), prm)
     return prm
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_stiffness(n: int) -> tuple[float, float]:
+    # the area rule validates its inputs on every call: tens of us on the simulate path
+    return spring_stiffness(n, 1.0, "van_gelder")
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -93,6 +93,9 @@ class BatchSolution(NamedTuple):
     solve_time_s: float  # compiled solve time of the whole batch
 
 
+_OPTIONS = default_options()  # shared by every solve: the kernels only read it
+
+
 def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     """Run the compiled solver in place; returns the info rows and the corner/stop forces."""
     b = prm.shape[0]
@@ -101,7 +104,7 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     corner_cand = np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_)
     face_cand = np.zeros((b, 2, n), dtype=np.bool_)
     infos = np.zeros((b, N_INFO))
-    opts = default_options()
+    opts = _OPTIONS
     if b == 1:
         # one row needs no thread pool (and stays fork-safe in process-based vector envs)
         driver.solve_one(n, prm[0], opts, xs[0], lam_face[0], lam_corner[0], lam_stop[0],
