@@ -374,3 +374,25 @@ def test_area_energy_changes_the_answer_and_the_check_sees_its_forces():
             res.corner_edge_forces_n, res.stop_torques_nm)
     assert kkt_check(scene, *args).passed
     assert not kkt_check(R070, *args).passed
+
+
+@pytest.mark.parametrize("area_scale", [0.0, 0.5])
+def test_energy_of_a_result_is_the_model_energy_in_joules(area_scale):
+    from envs.model.stiffness import disk_spring_stiffness
+
+    scene = R070.with_changes(area_stiffness_scale=area_scale)
+    res = simulate(scene, 0.3, 20)
+    d, g = scene.disk, scene.gripper
+    k_int, k_ext = disk_spring_stiffness(d, 20)
+    q = res.points_m - d.center_m
+    radial = np.linalg.norm(q, axis=1) - d.radius_m
+    contour = np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1) - 2 * d.radius_m * math.sin(
+        math.pi / 20)
+    th = np.array(res.jaw_angles_rad)
+    e = 0.5 * k_int * radial @ radial + 0.5 * k_ext * contour @ contour
+    e += np.sum(0.3 * th + 0.5 * g.torsion_stiffness_nm_per_rad * (th - g.rest_angle_rad) ** 2)
+    area = 0.5 * (q[:, 0] * np.roll(q[:, 1], -1) - q[:, 1] * np.roll(q[:, 0], -1))
+    a0 = 0.5 * d.radius_m**2 * math.sin(2 * math.pi / 20)
+    e += 0.5 * area_scale * d.bulk_modulus_pa * d.thickness_m * a0 * np.sum(np.log(area / a0) ** 2)
+    assert res.converged
+    assert res.energy_j == pytest.approx(e, rel=1e-10)

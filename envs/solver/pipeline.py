@@ -85,7 +85,7 @@ class BatchSolution(NamedTuple):
     peak_strain: np.ndarray  # (B,) max |spring strain|
     peak_log_strain: np.ndarray  # (B,) max over triangles of the largest principal |ln lambda|
     max_displacement_ratio: np.ndarray  # (B,)
-    energy_j: np.ndarray  # (B,)
+    energy_j: np.ndarray  # (B,) total potential energy [J]
     inverted: np.ndarray  # (B,) int
     check: np.ndarray  # (B, check.N_OUT): the independent check's verdict
     state_scaled: np.ndarray  # (B, 2N + 2) solver state (warm starts)
@@ -192,6 +192,8 @@ def _public_status(raw, passed, inverted):
 def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face, corner, stop,
                 totals, edges, metrics, ck, verdict):
     state_metrics(x, n, prm, metrics)
+    # energy in J: the scaled energy is in units of s E t r^2
+    metrics[M_ENERGY] *= s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * s[S_RADIUS] ** 2
     _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
     _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)
@@ -268,16 +270,15 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     ck = np.zeros((b, check.N_CK))
     verdict = np.zeros((b, check.N_OUT))
     status = np.empty(b, dtype=np.int64)
-    args = (scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
-            stop, totals, edges, metrics, ck, verdict)
     if b == 1:
-        status[0] = _finish_one(*(a[0] if isinstance(a, np.ndarray) else a for a in args))
+        status[0] = _finish_one(scene[0], prm[0], n, xs[0], lam_face[0], lam_corner[0],
+                                lam_stop[0], infos[0], points[0], face[0], corner[0], stop[0],
+                                totals[0], edges[0], metrics[0], ck[0], verdict[0])
     else:
-        _finish_rows(*args, status)
+        _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face,
+                     corner, stop, totals, edges, metrics, ck, verdict, status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
     passed = verdict[:, check.OUT_PASSED] > 0.0
-    torque_unit = scene[:, S_SCALE] * scene[:, S_YOUNG] * scene[:, S_THICKNESS] \
-        * scene[:, S_RADIUS] ** 2
     return BatchSolution(
         status=status, converged=status == OK, folded=(inverted > 0) & passed,
         iterations=infos[:, I_ITERATIONS].astype(np.int64),
@@ -287,7 +288,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         peak_log_strain=metrics[:, M_PEAK_LOG_STRAIN],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
-        energy_j=metrics[:, M_ENERGY] * torque_unit, inverted=inverted, check=verdict,
+        energy_j=metrics[:, M_ENERGY], inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,
     )
 
