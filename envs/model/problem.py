@@ -68,7 +68,7 @@ __all__ = [
     "REST_MESSAGES",
     "rest_codes",
     "pack_params",
-    "units",
+    "stiffness_unit",
     "rest_state",
     "spring_strains",
     "scaled_params",
@@ -163,11 +163,11 @@ def rest_codes(cols: SceneColumns) -> np.ndarray:
     return codes
 
 
-def units(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scaling units of each row: length r [m], force ``s E t r`` [N], torque ``s E t r^2``
-    [N·m]."""
-    k_unit = cols.stiffness_scale * cols.youngs_modulus_pa * cols.thickness_m  # N/m
-    return cols.radius_m, k_unit * cols.radius_m, k_unit * cols.radius_m**2
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def stiffness_unit(s):
+    """``s E t`` [N/m] of a scene row: the unit of the scaled spring stiffnesses (forces are in
+    units of ``s E t r``, torques and energies of ``s E t r^2``)."""
+    return s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS]
 
 
 def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van_gelder",
@@ -220,7 +220,7 @@ def _pack_rows(scene, n, k_int, k_ext, phase, prm):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _pack_row(s, n, k_int, k_ext, phase, p):
     r = s[S_RADIUS]
-    torque_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * r * r
+    torque_unit = stiffness_unit(s) * r * r
     p[P_KR] = k_int
     p[P_KC] = k_ext * s[S_CONTOUR_RATIO]
     p[P_H] = 2 * math.sin(math.pi / n)
@@ -236,8 +236,8 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_PHASE] = phase
     p[P_RHO] = min(CORNER_ROUNDING * r, 0.05 * s[S_WIDTH]) / r
     # area energy: kappa t A0 ln^2 / 2 with kappa = c_A K, in units of s E t r^2
-    p[P_KA] = s[S_AREA_SCALE] * bulk_modulus_2d(s[S_YOUNG], s[S_POISSON]) / (
-        s[S_SCALE] * s[S_YOUNG])
+    p[P_KA] = s[S_AREA_SCALE] * bulk_modulus_2d(s[S_YOUNG], s[S_POISSON]) * s[S_THICKNESS] / (
+        stiffness_unit(s))
     p[P_A0] = 0.5 * math.sin(2 * math.pi / n)
 
 

@@ -41,12 +41,9 @@ from envs.model.layout import (
     S_LENGTH,
     S_RADIUS,
     S_REST_ANGLE,
-    S_SCALE,
-    S_THICKNESS,
     S_TORQUE,
     S_TORSION,
     S_WIDTH,
-    S_YOUNG,
     default_options,
 )
 from envs.model.metrics import (
@@ -58,7 +55,7 @@ from envs.model.metrics import (
     N_METRICS,
     state_metrics,
 )
-from envs.model.problem import SceneColumns, pack_params, rest_state
+from envs.model.problem import SceneColumns, pack_params, rest_state, stiffness_unit
 
 from . import driver
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
@@ -122,7 +119,7 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
 def _check_row(s, prm, n, ck):
     """Parameters of the independent check for one scene row (SI units)."""
     r = s[S_RADIUS]
-    k_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS]
+    k_unit = stiffness_unit(s)
     ck[check.CK_RADIUS] = r
     ck[check.CK_CENTRE_X] = 0.0
     ck[check.CK_CENTRE_Y] = s[S_DISTANCE] + r
@@ -145,7 +142,7 @@ def _check_row(s, prm, n, ck):
 def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop):
     """Points [m] and forces [N, N·m] of one scaled answer."""
     r = s[S_RADIUS]
-    force_unit = s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * r
+    force_unit = stiffness_unit(s) * r
     yc = s[S_DISTANCE] + r
     for i in range(n):
         points[i, 0] = x[2 * i] * r
@@ -193,7 +190,7 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face
                 totals, edges, metrics, ck, verdict):
     state_metrics(x, n, prm, metrics)
     # energy in J: the scaled energy is in units of s E t r^2
-    metrics[M_ENERGY] *= s[S_SCALE] * s[S_YOUNG] * s[S_THICKNESS] * s[S_RADIUS] ** 2
+    metrics[M_ENERGY] *= stiffness_unit(s) * s[S_RADIUS] ** 2
     _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
     _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)

@@ -18,6 +18,7 @@ import numpy as np
 
 from envs import check
 from envs.model.defaults import DEFAULT_N_TRIANGLES, DEFAULT_PHASE_RAD, STIFFNESS_RULES
+from envs.model.problem import stiffness_unit
 from envs.scene import Scene
 from envs.validation import check_choice, check_n_triangles, check_range
 
@@ -93,9 +94,7 @@ def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarr
     x = np.empty(2 * n + 2)
     x[: 2 * n] = ((prev.points_m - prob.scene.disk.center_m) / r).ravel()
     x[2 * n :] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
-    d = prob.scene.disk
-    force_unit = d.stiffness_scale * d.youngs_modulus_pa * d.thickness_m * r
-    return x, prev.contact_forces_n / force_unit
+    return x, prev.contact_forces_n / (stiffness_unit(prob.rows[0]) * r)
 
 
 def _prolong(prob: _Problem, coarse: GraspResult) -> tuple[np.ndarray, np.ndarray]:
