@@ -94,6 +94,7 @@ __all__ = [
     "check_params",
     "check_one",
     "check_batch",
+    "check_mesh_one",
     "report_from_output",
     "check_grasp",
 ]
@@ -118,7 +119,11 @@ CK_KEXT = 12
 CK_REST_CONTOUR = 13
 CK_AREA_STIFF = 14
 CK_REST_AREA = 15
-N_CK = 16
+CK_RINGS = 16  # rings M of the point mesh (1: the fan; the fields below serve M >= 2)
+CK_HUB = 17  # hub radius of a ring mesh [m]
+CK_UNIT = 18  # s E t [N/m]: the area rule's stiffness unit
+CK_CRATIO = 19  # contour stiffness ratio (the contour ring's springs)
+N_CK = 20
 
 # output vector layout
 OUT_PASSED = 0
@@ -624,6 +629,140 @@ def check_one(prm, points, angles, face, corner, stop, out):
     _verdict(prm, face, corner, force, spring_max, acc, out)
 
 
+@njit(**_FLAGS)
+def _ring_radius(prm, k):
+    """Rest radius of ring k of a ring mesh [m]: geometric from the hub (k = 0) to the rim."""
+    m = prm[CK_RINGS]
+    r, hub = prm[CK_RADIUS], prm[CK_HUB]
+    return r * (hub / r) ** ((m - k) / m)
+
+
+@njit(**_FLAGS)
+def _ring_corner(prm, points, interior, k, i, rest):
+    """Point ``(k, i)`` of a ring mesh (N points a ring, ring M the contour, ring 0 the fixed
+    hub): its rest or current position [m], and its row in the force array (-1: fixed)."""
+    n = points.shape[0]
+    m = int(prm[CK_RINGS])
+    i %= n
+    ang = math.pi / 2 + 2 * math.pi * i / n
+    rho = _ring_radius(prm, k)
+    if rest or k == 0:
+        return (prm[CK_CENTRE_X] + rho * math.cos(ang), prm[CK_CENTRE_Y] + rho * math.sin(ang),
+                -1 if k == 0 else (i if k == m else n + (k - 1) * n + i))
+    if k == m:
+        return points[i, 0], points[i, 1], i
+    row = (k - 1) * n + i
+    return interior[row, 0], interior[row, 1], n + row
+
+
+@njit(**_FLAGS)
+def _edge_force(prm, force, ax, ay, bx, by, ra, rb, stiff, rest):
+    """Spring of stiffness ``stiff`` and rest length ``rest`` between a (row ra) and b (row
+    rb); returns |force|."""
+    wx, wy = bx - ax, by - ay
+    length = _hypot(wx, wy)
+    f = stiff * (length - rest)
+    fx, fy = f * wx / length, f * wy / length
+    if ra >= 0:
+        force[ra, 0] += fx
+        force[ra, 1] += fy
+    if rb >= 0:
+        force[rb, 0] -= fx
+        force[rb, 1] -= fy
+    return abs(f)
+
+
+@njit(**_FLAGS)
+def _triangle_edge(prm, force, m, ka, kb, q, p, ra, rb, a0):
+    """Triangle's share ``s E t A0 / L0^2`` of the spring on its edge a -> b (the area rule,
+    summed over the triangles sharing an edge, is this sum); ``q``/``p``: rest/current ends."""
+    rest = _hypot(q[2] - q[0], q[3] - q[1])
+    stiff = prm[CK_UNIT] * a0 / (rest * rest)
+    if ka == m and kb == m:
+        stiff *= prm[CK_CRATIO]
+    return _edge_force(prm, force, p[0], p[1], p[2], p[3], ra, rb, stiff, rest)
+
+
+@njit(**_FLAGS)
+def _area_push(force, row, slope, gx, gy):
+    """Force ``-E'(A) dA/dp`` of the area energy on a corner (row < 0: fixed); its size."""
+    if row >= 0:
+        force[row, 0] -= slope * gx
+        force[row, 1] -= slope * gy
+    return abs(slope) * _hypot(gx, gy)
+
+
+@njit(**_FLAGS)
+def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
+    """Forces of one triangle (corners (ring, index) counter-clockwise) of a ring mesh: its
+    share of its three edges' springs and its area energy. Returns the largest force [N]."""
+    m = int(prm[CK_RINGS])
+    qax, qay, _ = _ring_corner(prm, points, interior, ka, ia, True)
+    qbx, qby, _ = _ring_corner(prm, points, interior, kb, ib, True)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, kc, ic, True)
+    pax, pay, ra = _ring_corner(prm, points, interior, ka, ia, False)
+    pbx, pby, rb = _ring_corner(prm, points, interior, kb, ib, False)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, kc, ic, False)
+    a0 = 0.5 * ((qbx - qax) * (qcy - qay) - (qcx - qax) * (qby - qay))
+    big = _triangle_edge(prm, force, m, ka, kb, (qax, qay, qbx, qby), (pax, pay, pbx, pby),
+                         ra, rb, a0)
+    big = _npmax(big, _triangle_edge(prm, force, m, kb, kc, (qbx, qby, qcx, qcy),
+                                     (pbx, pby, pcx, pcy), rb, rc, a0))
+    big = _npmax(big, _triangle_edge(prm, force, m, kc, ka, (qcx, qcy, qax, qay),
+                                     (pcx, pcy, pax, pay), rc, ra, a0))
+    if prm[CK_AREA_STIFF] > 0.0:
+        area = 0.5 * ((pbx - pax) * (pcy - pay) - (pcx - pax) * (pby - pay))
+        slope = prm[CK_AREA_STIFF] * a0 * math.log(area / a0) / area  # NaN when folded
+        # dA/dp_a = (y_b - y_c, x_c - x_b) / 2, cyclically
+        big = _npmax(big, _area_push(force, ra, slope, 0.5 * (pby - pcy), 0.5 * (pcx - pbx)))
+        big = _npmax(big, _area_push(force, rb, slope, 0.5 * (pcy - pay), 0.5 * (pax - pcx)))
+        big = _npmax(big, _area_push(force, rc, slope, 0.5 * (pay - pby), 0.5 * (pbx - pax)))
+    return big
+
+
+@njit(**_FLAGS)
+def _ring_forces(prm, points, interior, force):
+    """Spring and area forces of a ring mesh: between rings k - 1 and k each quad (i, i + 1)
+    is cut by the diagonal (k - 1, i) - (k, i + 1) for even i and (k - 1, i + 1) - (k, i) for
+    odd i. Returns the largest force on a point [N]."""
+    n = points.shape[0]
+    m = int(prm[CK_RINGS])
+    big = 0.0
+    for k in range(1, m + 1):
+        for i in range(n):
+            if i % 2 == 0:
+                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i, k, i + 1,
+                                                 force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i + 1,
+                                                 k - 1, i + 1, force))
+            else:
+                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i,
+                                                 k - 1, i + 1, force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, k, i, k, i + 1,
+                                                 k - 1, i + 1, force))
+    return big
+
+
+@njit(cache=True, error_model="numpy")
+def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
+    """:func:`check_one` for a ring mesh (``prm[CK_RINGS] >= 2``): equilibrium of every free
+    point, the contour's contacts as for the fan. ``interior``: the interior points [m],
+    ``((M - 1) N, 2)``, ring by ring from the hub out."""
+    n = points.shape[0]
+    if face.shape[1] != n or corner.shape[2] != n or corner.shape[1] != 4:
+        raise ValueError("check_mesh_one: face must be (2, N) and corner (2, 4, N)")
+    if interior.shape[0] != (int(prm[CK_RINGS]) - 1) * n:
+        raise ValueError("check_mesh_one: interior must hold (M - 1) N points")
+    force = np.zeros((n + interior.shape[0], 2))
+    acc = np.zeros(_N_ACC)
+    acc[_ACC_FMIN] = math.inf
+    spring_max = _ring_forces(prm, points, interior, force)
+    contour = force[:n]
+    for j in range(2):
+        _finger(prm, points, angles[j], j, face, corner, stop, contour, acc)
+    _verdict(prm, face, corner, force, spring_max, acc, out)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def check_batch(prms, points, angles, face, corner, stop, out):
     """:func:`check_one` over a batch (first axis of every argument), in parallel threads.
@@ -643,7 +782,8 @@ def check_batch(prms, points, angles, face, corner, stop, out):
         check_one(prms[b], points[b], angles[b], face[b], corner[b], stop[b], out[b])
 
 
-def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str) -> np.ndarray:
+def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
+                 n_rings: int = 1) -> np.ndarray:
     """Pack a problem into the parameter vector of :func:`check_one`.
 
     Parameters
@@ -656,6 +796,9 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str)
         Number of contour points ``N`` (sets the spring stiffnesses and the rest contour length).
     stiffness_rule
         Stiffness rule of the model (``"van_gelder"`` or ``"cst_fit"``).
+    n_rings
+        Rings of the point mesh (1: the fan; ring meshes are checked by
+        :func:`check_mesh_one`).
 
     Returns
     -------
@@ -690,6 +833,10 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str)
     bulk = d.youngs_modulus_pa / (2 * (1 + nu) * (1 - 2 * nu))
     vals[CK_AREA_STIFF] = getattr(d, "area_stiffness_scale", 0.0) * bulk * d.thickness_m
     vals[CK_REST_AREA] = 0.5 * r * r * math.sin(2 * math.pi / n)
+    vals[CK_RINGS] = float(n_rings)
+    vals[CK_HUB] = 0.1 * r  # the ring meshes' rigid hub (envs.model.rings.HUB_RADIUS)
+    vals[CK_UNIT] = k_unit
+    vals[CK_CRATIO] = getattr(d, "contour_stiffness_ratio", 1.0)
     return np.array(vals, dtype=np.float64)
 
 

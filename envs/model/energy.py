@@ -24,7 +24,19 @@ import math
 import numpy as np
 from numba import njit
 
-from .layout import P_A0, P_H, P_KA, P_KAPPA, P_KC, P_KR, P_TAU, P_TH0
+from .layout import P_KA, P_KAPPA, P_RINGS, P_TAU, P_TH0
+from .rings import (
+    edge_constants,
+    edge_ends,
+    kernel_params,
+    n_edge_types,
+    n_state,
+    n_tri_types,
+    point_dof,
+    point_xy,
+    tri_corners,
+    tri_rest_area,
+)
 
 __all__ = [
     "bulk_modulus_2d",
@@ -37,6 +49,10 @@ __all__ = [
     "spring_hessian",
     "joint_energy",
     "joint_gradient",
+    "tri_area",
+    "mesh_energy",
+    "mesh_gradient",
+    "folded_triangles",
     "fan_energy",
     "fan_gradient",
 ]
@@ -117,65 +133,110 @@ def joint_gradient(theta, tau, kappa, theta0):
     return tau + kappa * (theta - theta0)
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def tri_area(xa, ya, xb, yb, xc, yc):
+    """Signed area of the triangle (a, b, c) (counter-clockwise positive). Its gradient over
+    corner a is ``((yb - yc), (xc - xb)) / 2`` (cyclically for b, c) and its second derivative
+    ``d2A / dx_u dy_v = +1/2`` when v follows u (a -> b -> c -> a), ``-1/2`` when it precedes."""
+    return 0.5 * ((xb - xa) * (yc - ya) - (xc - xa) * (yb - ya))
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def fan_energy(x, n, prm):
-    """Total energy of the fan and the two finger joints [scaled]."""
+def mesh_energy(x, n, prm):
+    """Total energy of the disk's point mesh (springs, area energy) and the two finger joints
+    [scaled]; ``prm`` is the kernels' copy with the ring table (:mod:`envs.model.rings`)."""
+    m = int(prm[P_RINGS])
     e = 0.0
-    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
+    ne = n_edge_types(m)
     for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        qx, qy = x[2 * i], x[2 * i + 1]
-        e += spring_energy(qx, qy, kr, 1.0)
-        e += spring_energy(x[2 * i1] - qx, x[2 * i1 + 1] - qy, kc, h)
+        for t in range(ne):
+            ka, ia, kb, ib = edge_ends(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            k, rest = edge_constants(prm, t, i, n, m)
+            e += spring_energy(xb - xa, yb - ya, k, rest)
     for j in range(2):
         e += joint_energy(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
     if prm[P_KA] > 0.0:
-        for i in range(n):
-            i1 = i + 1 if i + 1 < n else 0
-            e += area_energy(fan_area(x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]),
-                             prm[P_KA], prm[P_A0])
+        for t in range(n_tri_types(m)):
+            for i in range(n):
+                ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+                xa, ya = point_xy(x, n, m, prm, ka, ia)
+                xb, yb = point_xy(x, n, m, prm, kb, ib)
+                xc, yc = point_xy(x, n, m, prm, kc, ic)
+                e += area_energy(tri_area(xa, ya, xb, yb, xc, yc), prm[P_KA],
+                                 tri_rest_area(prm, t, i, m))
     return e
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _add2(grad, d, gx, gy):
+    """Add ``(gx, gy)`` to the gradient of the point whose x row is ``d`` (fixed: d < 0)."""
+    if d >= 0:
+        grad[d] += gx
+        grad[d + 1] += gy
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def fan_gradient(x, n, prm, grad):
-    """Add the gradient of :func:`fan_energy` to ``grad`` (natural order)."""
-    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
-    for i in range(n):
-        qx, qy = x[2 * i], x[2 * i + 1]
-        f = spring_force(qx, qy, kr, 1.0)
-        grad[2 * i] += f * qx
-        grad[2 * i + 1] += f * qy
-    for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
-        f = spring_force(dx, dy, kc, h)
-        grad[2 * i] -= f * dx
-        grad[2 * i + 1] -= f * dy
-        grad[2 * i1] += f * dx
-        grad[2 * i1 + 1] += f * dy
+def mesh_gradient(x, n, prm, grad):
+    """Add the gradient of :func:`mesh_energy` to ``grad`` (state order)."""
+    m = int(prm[P_RINGS])
+    for t in range(n_edge_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib = edge_ends(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            k, rest = edge_constants(prm, t, i, n, m)
+            dx, dy = xb - xa, yb - ya
+            f = spring_force(dx, dy, k, rest)
+            _add2(grad, point_dof(n, m, ka, ia), -(f * dx), -(f * dy))
+            _add2(grad, point_dof(n, m, kb, ib), f * dx, f * dy)
     for j in range(2):
         grad[2 * n + j] += joint_gradient(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
     if prm[P_KA] > 0.0:
+        for t in range(n_tri_types(m)):
+            for i in range(n):
+                ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+                xa, ya = point_xy(x, n, m, prm, ka, ia)
+                xb, yb = point_xy(x, n, m, prm, kb, ib)
+                xc, yc = point_xy(x, n, m, prm, kc, ic)
+                f = 0.5 * area_slope(tri_area(xa, ya, xb, yb, xc, yc), prm[P_KA],
+                                     tri_rest_area(prm, t, i, m))
+                _add2(grad, point_dof(n, m, ka, ia), f * (yb - yc), f * (xc - xb))
+                _add2(grad, point_dof(n, m, kb, ib), f * (yc - ya), f * (xa - xc))
+                _add2(grad, point_dof(n, m, kc, ic), f * (ya - yb), f * (xb - xa))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def folded_triangles(x, n, prm):
+    """Number of mesh triangles turned over (signed area <= 0) in state ``x``."""
+    m = int(prm[P_RINGS])
+    count = 0
+    for t in range(n_tri_types(m)):
         for i in range(n):
-            i1 = i + 1 if i + 1 < n else 0
-            xi, yi, xj, yj = x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]
-            f = 0.5 * area_slope(fan_area(xi, yi, xj, yj), prm[P_KA], prm[P_A0])
-            grad[2 * i] += f * yj
-            grad[2 * i + 1] -= f * xj
-            grad[2 * i1] -= f * yi
-            grad[2 * i1 + 1] += f * xi
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xc, yc = point_xy(x, n, m, prm, kc, ic)
+            if tri_area(xa, ya, xb, yb, xc, yc) <= 0.0:
+                count += 1
+    return count
+
+
+# the paper's fan is the one-ring member of the mesh family: one implementation serves both
+fan_energy = mesh_energy
+fan_gradient = mesh_gradient
 
 
 def energy_scaled(x: np.ndarray, params: np.ndarray, n: int) -> float:
-    """:func:`fan_energy` of a state, from Python (float64 copies)."""
-    return float(fan_energy(np.ascontiguousarray(x, dtype=np.float64), int(n),
-                            np.ascontiguousarray(params, dtype=np.float64)))
+    """:func:`mesh_energy` of a state, from Python (float64 copies; ``params`` a packed row)."""
+    return float(mesh_energy(np.ascontiguousarray(x, dtype=np.float64), int(n),
+                             kernel_params(params, int(n))))
 
 
 def gradient_scaled(x: np.ndarray, params: np.ndarray, n: int) -> np.ndarray:
     """Gradient of :func:`energy_scaled`, a new array."""
-    grad = np.zeros(2 * int(n) + 2)
-    fan_gradient(np.ascontiguousarray(x, dtype=np.float64), int(n),
-                 np.ascontiguousarray(params, dtype=np.float64), grad)
+    prm = kernel_params(params, int(n))
+    grad = np.zeros(n_state(int(n), int(prm[P_RINGS])))
+    mesh_gradient(np.ascontiguousarray(x, dtype=np.float64), int(n), prm, grad)
     return grad

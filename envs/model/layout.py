@@ -22,10 +22,12 @@ P_PHASE   angle of the first contour point [rad]
 P_RHO     rounding radius of the finger corners
 P_KA      area stiffness ``c_A K / (s E)`` of the area energy (0: springs only, the paper's fan)
 P_A0      rest area of a fan triangle ``sin(2 pi / N) / 2``
+P_RINGS   rings M of the disk's point mesh (1: the paper's fan; :mod:`envs.model.rings`)
 ========  ==================================================================================
 
-The solver keeps a longer private copy with two more slots: P_GAUGE (stiffness of the rotation
-gauge spring) and P_POLICY (contact policy of the attempt).
+The kernels keep a longer private copy: two solver slots, P_GAUGE (stiffness of the rotation
+gauge spring) and P_POLICY (contact policy of the attempt), then from N_KERNEL_PARAMS on the
+ring table of the mesh (:func:`envs.model.rings.fill_ring_table`).
 """
 
 from __future__ import annotations
@@ -34,11 +36,11 @@ import numpy as np
 
 # parameter vector
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
-P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0 = range(9, 17)
-N_PARAMS = 17
-P_GAUGE = 17  # solver copy only: gauge spring stiffness
-P_POLICY = 18  # solver copy only: contact policy of this attempt
-N_KERNEL_PARAMS = 19
+P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0, P_RINGS = range(9, 18)
+N_PARAMS = 18
+P_GAUGE = 18  # solver copy only: gauge spring stiffness
+P_POLICY = 19  # solver copy only: contact policy of this attempt
+N_KERNEL_PARAMS = 20  # the ring table follows
 
 # scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,

@@ -12,9 +12,19 @@ import math
 
 from numba import njit
 
-from .energy import fan_energy
-from .geometry import rest_point
-from .layout import P_H, P_PHASE
+from .energy import folded_triangles, mesh_energy
+from .layout import P_RINGS
+from .rings import (
+    HUB_RADIUS,
+    edge_constants,
+    edge_ends,
+    n_edge_types,
+    n_tri_types,
+    point_xy,
+    rest_xy,
+    ring_radius,
+    tri_corners,
+)
 
 __all__ = ["M_PEAK_STRAIN", "M_DISPLACEMENT", "M_ENERGY", "M_INVERTED", "M_PEAK_LOG_STRAIN",
            "N_METRICS", "state_metrics", "triangle_log_strain"]
@@ -23,7 +33,7 @@ __all__ = ["M_PEAK_STRAIN", "M_DISPLACEMENT", "M_ENERGY", "M_INVERTED", "M_PEAK_
 M_PEAK_STRAIN = 0  # max |spring strain| [-]
 M_DISPLACEMENT = 1  # max contour-point displacement / r [-]
 M_ENERGY = 2  # total energy [scaled: s E t r^2]
-M_INVERTED = 3  # fan triangles (centre, q_i, q_i+1) turned over
+M_INVERTED = 3  # mesh triangles turned over
 M_PEAK_LOG_STRAIN = 4  # max over triangles of the largest principal |ln lambda| [-]
 N_METRICS = 5
 
@@ -34,7 +44,8 @@ def triangle_log_strain(ax, ay, bx, by, px, py, qx, qy):
 
     The deformation gradient ``F = [p q] [a b]^-1`` is constant on the triangle; the principal
     stretches are the square roots of the eigenvalues of ``C = F^T F``. A folded triangle
-    (``det F <= 0``) has no logarithmic strain: infinite.
+    (``det F <= 0``) has no logarithmic strain: infinite. A triangle (a0, a, b) is measured
+    with its edges from a0 (the fan's centre is at the origin).
     """
     det = ax * by - ay * bx
     # [a b]^-1 = [[by, -bx], [-ay, ax]] / det
@@ -54,29 +65,49 @@ def triangle_log_strain(ax, ay, bx, by, px, py, qx, qy):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def state_metrics(x, n, prm, out):
-    """Fill ``out`` (layout ``M_*``) for the scaled state ``x`` of one grasp."""
-    h = prm[P_H]
+def _mesh_log_strain(x, n, m, prm):
+    """Largest principal log strain over the mesh's triangles; on a ring mesh outside twice the
+    hub radius, where the FEM reference measures it too (the rigid hub concentrates strain
+    next to it)."""
     peak = 0.0
+    for t in range(n_tri_types(m)):
+        if m > 1 and ring_radius(t // 2, m) < 2.0 * HUB_RADIUS:
+            continue
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            ra = rest_xy(prm, n, m, ka, ia)
+            rb = rest_xy(prm, n, m, kb, ib)
+            rc = rest_xy(prm, n, m, kc, ic)
+            pa = point_xy(x, n, m, prm, ka, ia)
+            pb = point_xy(x, n, m, prm, kb, ib)
+            pc = point_xy(x, n, m, prm, kc, ic)
+            peak = max(peak, triangle_log_strain(
+                rb[0] - ra[0], rb[1] - ra[1], rc[0] - ra[0], rc[1] - ra[1],
+                pb[0] - pa[0], pb[1] - pa[1], pc[0] - pa[0], pc[1] - pa[1]))
+    return peak
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def state_metrics(x, n, prm, out):
+    """Fill ``out`` (layout ``M_*``) for the scaled state ``x`` of one grasp (``prm``: the
+    kernels' copy with the ring table, :func:`envs.model.rings.kernel_params`)."""
+    m = int(prm[P_RINGS])
+    peak = 0.0
+    for t in range(n_edge_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib = edge_ends(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            _, rest = edge_constants(prm, t, i, n, m)
+            dx, dy = xb - xa, yb - ya
+            peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / rest - 1.0))
     disp = 0.0
-    inverted = 0
-    log_strain = 0.0
     for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        qx, qy = x[2 * i], x[2 * i + 1]
-        ax, ay = rest_point(i, n, prm[P_PHASE])
-        bx, by = rest_point(i1, n, prm[P_PHASE])
-        log_strain = max(log_strain, triangle_log_strain(ax, ay, bx, by, qx, qy, x[2 * i1],
-                                                         x[2 * i1 + 1]))
-        peak = max(peak, abs(math.sqrt(qx * qx + qy * qy) - 1.0))
-        dx, dy = x[2 * i1] - qx, x[2 * i1 + 1] - qy
-        peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / h - 1.0))
-        ux, uy = qx - ax, qy - ay
+        ax, ay = rest_xy(prm, n, m, m, i)
+        ux, uy = x[2 * i] - ax, x[2 * i + 1] - ay
         disp = max(disp, math.sqrt(ux * ux + uy * uy))
-        if qx * x[2 * i1 + 1] - qy * x[2 * i1] <= 0.0:
-            inverted += 1
     out[M_PEAK_STRAIN] = peak
     out[M_DISPLACEMENT] = disp
-    out[M_ENERGY] = fan_energy(x, n, prm)
-    out[M_INVERTED] = inverted
-    out[M_PEAK_LOG_STRAIN] = log_strain
+    out[M_ENERGY] = mesh_energy(x, n, prm)
+    out[M_INVERTED] = folded_triangles(x, n, prm)
+    out[M_PEAK_LOG_STRAIN] = _mesh_log_strain(x, n, m, prm)

@@ -21,6 +21,7 @@ from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
 from .energy import bulk_modulus_2d
 from .geometry import bar_distance, closed_angle_of, rest_points_into
 from .layout import (
+    N_KERNEL_PARAMS,
     N_PARAMS,
     N_SCENE,
     P_A0,
@@ -37,6 +38,7 @@ from .layout import (
     P_LMAX,
     P_PHASE,
     P_RHO,
+    P_RINGS,
     P_TAU,
     P_TH0,
     P_THMIN,
@@ -54,6 +56,16 @@ from .layout import (
     S_TORSION,
     S_WIDTH,
     S_YOUNG,
+)
+from .rings import (
+    N_RING_COLS,
+    R_AIN,
+    R_AOUT,
+    R_LCIRC,
+    R_LRAD,
+    fill_ring_table,
+    ring_rest_state_into,
+    ring_table_size,
 )
 from .stiffness import spring_stiffness
 
@@ -171,7 +183,7 @@ def stiffness_unit(s):
 
 
 def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van_gelder",
-                phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+                phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
     """Scaled solver parameters of valid scenes, shape (B, N_PARAMS) (layout ``P_*``).
 
     Parameters
@@ -185,16 +197,26 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
         row's Poisson ratio).
     phase_rad
         Angle of the first contour point [rad].
+    n_rings
+        Rings ``M`` of the point mesh (1: the paper's fan; :mod:`envs.model.rings`). Ring
+        meshes take the area rule on every edge (``stiffness_rule`` must be ``"van_gelder"``).
     """
     return pack_rows(cols.rows() if isinstance(cols, SceneColumns) else cols, n_triangles,
-                     stiffness_rule, phase_rad)
+                     stiffness_rule, phase_rad, n_rings)
 
 
 def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_gelder",
-              phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+              phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
     """:func:`pack_params` of a (B, N_SCENE) scene matrix."""
     n = int(n_triangles)
-    if stiffness_rule == "van_gelder":
+    m = int(n_rings)
+    if m > 1:
+        if stiffness_rule != "van_gelder":
+            raise ValueError(f"stiffness_rule must be 'van_gelder' for a ring mesh (n_rings = "
+                             f"{m}), got {stiffness_rule!r}")
+        k_int, k_ext = ring_unit_stiffness(n, m)
+        k_int_rows, k_ext_rows = np.full(scene.shape[0], k_int), np.full(scene.shape[0], k_ext)
+    elif stiffness_rule == "van_gelder":
         k_int, k_ext = _unit_stiffness(n)
         k_int_rows, k_ext_rows = np.full(scene.shape[0], k_int), np.full(scene.shape[0], k_ext)
     else:
@@ -202,7 +224,23 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
         k_int_rows, k_ext_rows = (np.array(v, dtype=np.float64) for v in zip(*pairs, strict=True))
     prm = np.empty((scene.shape[0], N_PARAMS))
     _pack_rows(scene, n, k_int_rows, k_ext_rows, float(phase_rad), prm)
+    prm[:, P_RINGS] = m
     return prm
+
+
+@functools.lru_cache(maxsize=256)
+def ring_unit_stiffness(n: int, m: int) -> tuple[float, float]:
+    """Area-rule stiffness (per ``s E t``) of the contour springs of an ``m``-ring mesh and the
+    largest radial one (the force scale of the solver's tolerances)."""
+    prm = np.zeros(N_KERNEL_PARAMS + ring_table_size(n, m))
+    prm[P_RINGS] = m
+    fill_ring_table(prm, n)
+    table = prm[N_KERNEL_PARAMS:N_KERNEL_PARAMS + (m + 1) * N_RING_COLS].reshape(m + 1, -1)
+    outer = table[m]
+    k_ext = float(outer[R_AOUT] / outer[R_LCIRC] ** 2)
+    k_int = float(np.max(2 * np.maximum(table[1:, R_AOUT], table[1:, R_AIN])
+                         / table[1:, R_LRAD] ** 2))
+    return k_int, k_ext
 
 
 @functools.lru_cache(maxsize=256)
@@ -242,19 +280,28 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
-    """Scaled start states of parameter rows: undeformed contour, fingers at rest, (B, 2N+2)."""
+    """Scaled start states of parameter rows (one mesh for all): undeformed mesh, fingers at
+    rest, (B, 2 N M + 2) (layout :mod:`envs.model.rings`)."""
     params = np.atleast_2d(params)
-    x = np.empty((params.shape[0], 2 * int(n_triangles) + 2))
-    _rest_rows(params, int(n_triangles), x)
+    n = int(n_triangles)
+    m = int(params[0, P_RINGS]) if params.shape[0] else 1
+    x = np.empty((params.shape[0], 2 * n * m + 2))
+    work = np.zeros(N_KERNEL_PARAMS + ring_table_size(n, m))
+    _rest_rows(params, n, x, work)
     return x
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _rest_rows(params, n, x):
+def _rest_rows(params, n, x, work):
     for b in range(params.shape[0]):
         rest_points_into(n, params[b, P_PHASE], x[b])
         x[b, 2 * n] = params[b, P_TH0]
         x[b, 2 * n + 1] = params[b, P_TH0]
+        if params[b, P_RINGS] > 1:
+            for j in range(N_PARAMS):
+                work[j] = params[b, j]
+            fill_ring_table(work, n)
+            ring_rest_state_into(work, n, x[b])
 
 
 def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:
@@ -275,7 +322,7 @@ def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:
 
 def scaled_params(scene, torque_nm: float, n_triangles: int,
                   stiffness_rule: str = "van_gelder",
-                  phase_rad: float = DEFAULT_PHASE_RAD) -> np.ndarray:
+                  phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
     """The solver's parameter row of one scene at one torque, float64[N_PARAMS]."""
     return pack_params(scene.columns(torque_nm), int(n_triangles), stiffness_rule,
-                       float(phase_rad))[0]
+                       float(phase_rad), int(n_rings))[0]

@@ -11,20 +11,28 @@ from numba import njit
 from ..model.energy import (
     area_curvature,
     area_slope,
-    fan_area,
-    fan_energy,
-    fan_gradient,
+    mesh_energy,
+    mesh_gradient,
     spring_hessian,
+    tri_area,
 )
 from ..model.layout import (
-    P_A0,
     P_GAUGE,
-    P_H,
     P_KA,
     P_KAPPA,
     P_KC,
     P_KR,
     P_PHASE,
+    P_RINGS,
+)
+from ..model.rings import (
+    edge_constants,
+    edge_ends,
+    n_edge_types,
+    n_tri_types,
+    point_xy,
+    tri_corners,
+    tri_rest_area,
 )
 from .contact import (
     _con_eval,
@@ -38,7 +46,7 @@ CH_BLOCK = 15  # column of the constraint curvature cache: 1 where the constrain
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _energy(x, n, prm):
     """The model's energy plus the solver's rotation gauge spring (when on)."""
-    e = fan_energy(x, n, prm)
+    e = mesh_energy(x, n, prm)
     kg = prm[P_GAUGE]
     if kg > 0.0:
         _, _, ut = _gauge_stretch(x, prm)
@@ -85,6 +93,25 @@ def _add_spring(ab, bb, dd, nb, pa, pb, kxx, kyy, kxy):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _add_edge(ab, bb, dd, nb, pa, pb, kxx, kyy, kxy):
+    """:func:`_add_spring` for an edge whose first end may be fixed (``pa < 0``)."""
+    if pa < 0:
+        _add_point(ab, pb, kxx, kyy, kxy)
+    else:
+        _add_spring(ab, bb, dd, nb, pa, pb, kxx, kyy, kxy)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _band_of(bidx, n, m, k, i):
+    """Band row of point ``(k, i)`` of the mesh (-1 for a fixed point)."""
+    if k == m:
+        return bidx[i]
+    if k == 0:
+        return -1
+    return bidx[n + (k - 1) * n + i]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _gauge_stretch(x, prm):
     """Tangent (tx, ty) of the contour at point 0's rest position and point 0's displacement
     ut along it: the gauge spring's direction and stretch."""
@@ -92,54 +119,81 @@ def _gauge_stretch(x, prm):
     return tx, ty, (x[0] - ty) * tx + (x[1] + tx) * ty
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _tri_pair(ab, bb, dd, nb, pu, pv, gxu, gyu, gxv, gyv, curv, half_slope):
+    """Coupling block of two free corners u, v of a triangle: ``E'' g_u g_v^T`` plus the area's
+    bilinear term (``half_slope = +-E'/2``: + when v follows u counter-clockwise)."""
+    _add(ab, bb, dd, nb, pu, pv, curv * gxu * gxv)
+    _add(ab, bb, dd, nb, pu, pv + 1, curv * gxu * gyv + half_slope)
+    _add(ab, bb, dd, nb, pu + 1, pv, curv * gyu * gxv - half_slope)
+    _add(ab, bb, dd, nb, pu + 1, pv + 1, curv * gyu * gyv)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
-    """Hessian (band order) of the area energy of every fan triangle.
+    """Hessian (band order) of the area energy of every triangle of the mesh.
 
-    ``H = E'' g g^T + E' d2A`` with ``g = dA/dq`` and ``d2A`` the constant bilinear coupling
-    of the two points (``+1/2`` between ``x_i`` and ``y_j``, ``-1/2`` between ``y_i`` and
-    ``x_j``). ``psd`` keeps only a non-negative ``E'' g g^T`` (the indefinite coupling and a
-    negative curvature dropped) for the interior point's convexified fallback. ``sign = -1``
-    takes a Hessian out again.
+    ``H = E'' g g^T + E' d2A`` with ``g = dA/dq`` and ``d2A`` the constant bilinear coupling of
+    two corners (``+1/2`` between ``x_u`` and ``y_v`` when v follows u counter-clockwise,
+    ``-1/2`` the other way). ``psd`` keeps only a non-negative ``E'' g g^T`` (the indefinite
+    coupling and a negative curvature dropped) for the interior point's convexified fallback.
+    ``sign = -1`` takes a Hessian out again.
     """
-    nb = 2 * n
-    for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        xi, yi, xj, yj = x[2 * i], x[2 * i + 1], x[2 * i1], x[2 * i1 + 1]
-        area = fan_area(xi, yi, xj, yj)
-        curv = area_curvature(area, prm[P_KA], prm[P_A0])
-        slope = area_slope(area, prm[P_KA], prm[P_A0])
-        if psd:
-            curv = max(curv, 0.0)
-            slope = 0.0
-        curv *= sign
-        slope *= sign
-        gxi, gyi, gxj, gyj = 0.5 * yj, -0.5 * xj, -0.5 * yi, 0.5 * xi
-        pa, pb = bidx[i], bidx[i1]
-        _add_point(ab, pa, curv * gxi * gxi, curv * gyi * gyi, curv * gxi * gyi)
-        _add_point(ab, pb, curv * gxj * gxj, curv * gyj * gyj, curv * gxj * gyj)
-        _add(ab, bb, dd, nb, pa, pb, curv * gxi * gxj)
-        _add(ab, bb, dd, nb, pa, pb + 1, curv * gxi * gyj + 0.5 * slope)
-        _add(ab, bb, dd, nb, pa + 1, pb, curv * gyi * gxj - 0.5 * slope)
-        _add(ab, bb, dd, nb, pa + 1, pb + 1, curv * gyi * gyj)
+    nb = ab.shape[0]
+    m = int(prm[P_RINGS])
+    for t in range(n_tri_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xc, yc = point_xy(x, n, m, prm, kc, ic)
+            area = tri_area(xa, ya, xb, yb, xc, yc)
+            a0 = tri_rest_area(prm, t, i, m)
+            curv = area_curvature(area, prm[P_KA], a0)
+            slope = area_slope(area, prm[P_KA], a0)
+            if psd:
+                curv = max(curv, 0.0)
+                slope = 0.0
+            curv *= sign
+            slope *= sign
+            half = 0.5 * slope
+            gxa, gya = 0.5 * (yb - yc), 0.5 * (xc - xb)
+            gxb, gyb = 0.5 * (yc - ya), 0.5 * (xa - xc)
+            gxc, gyc = 0.5 * (ya - yb), 0.5 * (xb - xa)
+            pa = _band_of(bidx, n, m, ka, ia)
+            pb = _band_of(bidx, n, m, kb, ib)
+            pc = _band_of(bidx, n, m, kc, ic)
+            if pa >= 0:
+                _add_point(ab, pa, curv * gxa * gxa, curv * gya * gya, curv * gxa * gya)
+            if pb >= 0:
+                _add_point(ab, pb, curv * gxb * gxb, curv * gyb * gyb, curv * gxb * gyb)
+            if pc >= 0:
+                _add_point(ab, pc, curv * gxc * gxc, curv * gyc * gyc, curv * gxc * gyc)
+            if pa >= 0 and pb >= 0:
+                _tri_pair(ab, bb, dd, nb, pa, pb, gxa, gya, gxb, gyb, curv, half)
+            if pa >= 0 and pc >= 0:
+                _tri_pair(ab, bb, dd, nb, pa, pc, gxa, gya, gxc, gyc, curv, -half)
+            if pb >= 0 and pc >= 0:
+                _tri_pair(ab, bb, dd, nb, pb, pc, gxb, gyb, gxc, gyc, curv, half)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
-    """Energy gradient (natural order) and Hessian (band order) of the model's terms and the
+    """Energy gradient (state order) and Hessian (band order) of the model's terms and the
     gauge spring."""
-    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
-    nb = 2 * n
-    fan_gradient(x, n, prm, grad)
+    mesh_gradient(x, n, prm, grad)
     if want_hess:
-        for i in range(n):
-            kxx, kyy, kxy = spring_hessian(x[2 * i], x[2 * i + 1], kr, 1.0, psd)
-            _add_point(ab, bidx[i], kxx, kyy, kxy)
-        for i in range(n):
-            i1 = i + 1 if i + 1 < n else 0
-            kxx, kyy, kxy = spring_hessian(x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1],
-                                           kc, h, psd)
-            _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], kxx, kyy, kxy)
+        nb = ab.shape[0]
+        m = int(prm[P_RINGS])
+        for t in range(n_edge_types(m)):
+            for i in range(n):
+                ka, ia, kb, ib = edge_ends(t, i, n, m)
+                xa, ya = point_xy(x, n, m, prm, ka, ia)
+                xb, yb = point_xy(x, n, m, prm, kb, ib)
+                k, rest = edge_constants(prm, t, i, n, m)
+                kxx, kyy, kxy = spring_hessian(xb - xa, yb - ya, k, rest, psd)
+                _add_edge(ab, bb, dd, nb, _band_of(bidx, n, m, ka, ia),
+                          _band_of(bidx, n, m, kb, ib), kxx, kyy, kxy)
         for j in range(2):
             dd[j, j] += prm[P_KAPPA]
         if prm[P_KA] > 0.0:
@@ -188,24 +242,22 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
     """Turn the exact Newton matrix of :func:`_newton_matrix` into its convexified fallback
     (``psd=True``) in place: the springs' negative geometric stiffness and the constraint
     curvature (kept in ``ch``) taken out, without evaluating the constraints again."""
-    nb = 2 * n
-    kr, kc, h = prm[P_KR], prm[P_KC], prm[P_H]
-    for i in range(n):
-        qx, qy = x[2 * i], x[2 * i + 1]
-        lr = math.sqrt(qx * qx + qy * qy)
-        tt = kr * (1.0 - 1.0 / lr)
-        if tt < 0.0:
-            ux, uy = qx / lr, qy / lr
-            _add_point(ab, bidx[i], -tt * (1.0 - ux * ux), -tt * (1.0 - uy * uy), tt * ux * uy)
-    for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        dx, dy = x[2 * i1] - x[2 * i], x[2 * i1 + 1] - x[2 * i + 1]
-        lc = math.sqrt(dx * dx + dy * dy)
-        tt = kc * (1.0 - h / lc)
-        if tt < 0.0:
-            ux, uy = dx / lc, dy / lc
-            _add_spring(ab, bb, dd, nb, bidx[i], bidx[i1], -tt * (1.0 - ux * ux),
-                        -tt * (1.0 - uy * uy), tt * ux * uy)
+    nb = ab.shape[0]
+    m = int(prm[P_RINGS])
+    for t in range(n_edge_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib = edge_ends(t, i, n, m)
+            xa, ya = point_xy(x, n, m, prm, ka, ia)
+            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            k, rest = edge_constants(prm, t, i, n, m)
+            dx, dy = xb - xa, yb - ya
+            lc = math.sqrt(dx * dx + dy * dy)
+            tt = k * (1.0 - rest / lc)
+            if tt < 0.0:
+                ux, uy = dx / lc, dy / lc
+                _add_edge(ab, bb, dd, nb, _band_of(bidx, n, m, ka, ia),
+                          _band_of(bidx, n, m, kb, ib), -tt * (1.0 - ux * ux),
+                          -tt * (1.0 - uy * uy), tt * ux * uy)
     if prm[P_KA] > 0.0:
         # the area energy: its exact Hessian out, its convexified one in
         _area_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
@@ -242,7 +294,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
     bb[:, :] = 0.0
     dd[:, :] = 0.0
     _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
-    for d in range(nb + 2):
+    for d in range(x.shape[0]):
         res[d] = grad[d]
         gb[d] = 0.0
     kmax = max(prm[P_KC], prm[P_KR])
@@ -282,15 +334,19 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
                 blk[a, b] = sig[m] * grad5[a] * grad5[b] - ch[m, t]
                 t += 1
         ch[m, CH_BLOCK] = 1.0
-        _scatter(kinds[m], fj[m], dofs, bidx, nb, blk, ab, bb, dd)
+        _scatter(kinds[m], fj[m], dofs, bidx, ab.shape[0], blk, ab, bb, dd)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _rhs_to_band(grad, bidx, nb, rb, rt):
-    """Right-hand side -grad of the Newton system in band order (points) and angles."""
+    """Right-hand side -grad of the Newton system in band order (points) and angles (``nb``:
+    the contour's 2N rows; a ring mesh's interior points follow the two angles)."""
     for d in range(nb):
         i = d // 2
         rb[bidx[i] + (d - 2 * i)] = -grad[d]
+    for d in range(nb + 2, grad.shape[0]):
+        p = (d - 2) // 2
+        rb[bidx[p] + (d - 2 - 2 * p)] = -grad[d]
     rt[0] = -grad[nb]
     rt[1] = -grad[nb + 1]
 
@@ -303,8 +359,11 @@ def _step_from_band(ob, ot, bidx, nb, grad, step):
         step[d] = ob[bidx[i] + (d - 2 * i)]
     step[nb] = ot[0]
     step[nb + 1] = ot[1]
+    for d in range(nb + 2, step.shape[0]):
+        p = (d - 2) // 2
+        step[d] = ob[bidx[p] + (d - 2 - 2 * p)]
     slope = 0.0
-    for d in range(nb + 2):
+    for d in range(step.shape[0]):
         slope += grad[d] * step[d]
     return slope
 

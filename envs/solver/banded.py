@@ -1,30 +1,38 @@
-"""Banded linear algebra of the Newton matrix: interleaved point ordering, block Cholesky by 2x2
-point blocks, bordered solve for the two finger angles.
+"""Banded linear algebra of the Newton matrix: interleaved point ordering, banded Cholesky,
+bordered solve for the two finger angles.
 
 The Newton matrix is a cyclic block-tridiagonal matrix (springs) bordered by the two finger
-angles; ordering the contour points 0, N-1, 1, N-2, ... makes it banded (half bandwidth 5), so
-each factorization is a banded Cholesky plus a 2x2 Schur complement: O(N) work.
+angles; ordering the angles 0, N-1, 1, N-2, ... makes it banded (half bandwidth 5 for the fan,
+``6 M - 1`` for a mesh of M rings: :func:`envs.model.rings.mesh_band_index`), so each
+factorization is a banded Cholesky plus a 2x2 Schur complement: O(N) work. The fan's band is
+factored by 2x2 point blocks (unrolled); a ring mesh's by the plain scalar banded Cholesky
+with the half bandwidth of its array.
 """
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
-BW = 5  # half bandwidth of the interleaved point ordering
+from ..model.layout import P_RINGS
+from ..model.rings import mesh_band_index, mesh_half_bandwidth
+
+BW = 5  # half bandwidth of the fan's interleaved point ordering (mesh_half_bandwidth(1))
 
 
 @njit(cache=True, error_model="numpy")
 def _band_index(n):
-    """Scalar index of component 0 of each point in the interleaved (banded) ordering."""
-    idx = np.empty(n, dtype=np.int64)
-    half = (n - 1) // 2
-    for i in range(n):
-        pos = 2 * i if i <= half else 2 * (n - 1 - i) + 1
-        idx[i] = 2 * pos
-    return idx
+    """Band row of each fan point's x component (the one-ring case of
+    :func:`envs.model.rings.mesh_band_index`)."""
+    return mesh_band_index(n, 1)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def band_shape(n, prm):
+    """Rows and half bandwidth of the Newton matrix's point block for the mesh of ``prm``."""
+    m = int(prm[P_RINGS])
+    return 2 * n * m, mesh_half_bandwidth(m)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -159,11 +167,67 @@ def _solve_band3(lb, nb, bb, rb, ybuf, out):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _chol_general(ab, lb, nb, shift):
+    """Scalar banded Cholesky of A + shift I (lower band of A in ``ab``, half bandwidth
+    ``ab.shape[1] - 1``): ``lb[j, d] = L[j, j - d]`` with the reciprocal of each diagonal entry
+    in column 0. Returns False if the matrix is not positive definite."""
+    bw = ab.shape[1] - 1
+    for j in range(nb):
+        j0 = max(0, j - bw)
+        for i in range(j0, j):
+            s = ab[j, j - i]
+            # columns shared by rows i and j: k in [max(j0, i - bw), i)
+            for k in range(max(j0, i - bw), i):
+                s -= lb[j, j - k] * lb[i, i - k]
+            lb[j, j - i] = s * lb[i, 0]
+        d = ab[j, 0] + shift
+        for k in range(j0, j):
+            d -= lb[j, j - k] * lb[j, j - k]
+        if not d > 0.0:
+            return False
+        lb[j, 0] = 1.0 / math.sqrt(d)
+    return True
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _solve_general3(lb, nb, bb, rb, ybuf, out):
+    """Solve L L^T [Y | z] = [B | r] with the factor of :func:`_chol_general`."""
+    bw = lb.shape[1] - 1
+    for j in range(nb):
+        a0, a1, a2 = bb[j, 0], bb[j, 1], rb[j]
+        for k in range(max(0, j - bw), j):
+            v = lb[j, j - k]
+            a0 -= v * ybuf[k, 0]
+            a1 -= v * ybuf[k, 1]
+            a2 -= v * out[k]
+        r = lb[j, 0]
+        ybuf[j, 0] = a0 * r
+        ybuf[j, 1] = a1 * r
+        out[j] = a2 * r
+    for j in range(nb - 1, -1, -1):
+        a0, a1, a2 = ybuf[j, 0], ybuf[j, 1], out[j]
+        for i in range(j + 1, min(nb, j + bw + 1)):
+            v = lb[i, i - j]
+            a0 -= v * ybuf[i, 0]
+            a1 -= v * ybuf[i, 1]
+            a2 -= v * out[i]
+        r = lb[j, 0]
+        ybuf[j, 0] = a0 * r
+        ybuf[j, 1] = a1 * r
+        out[j] = a2 * r
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
     """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
-    if not _chol_band(ab, lb, nb, shift):
-        return False
-    _solve_band3(lb, nb, bb, rb, ybuf, out_b)
+    if ab.shape[1] == BW + 1:
+        if not _chol_band(ab, lb, nb, shift):
+            return False
+        _solve_band3(lb, nb, bb, rb, ybuf, out_b)
+    else:
+        if not _chol_general(ab, lb, nb, shift):
+            return False
+        _solve_general3(lb, nb, bb, rb, ybuf, out_b)
     s00 = dd[0, 0] + shift
     s11 = dd[1, 1] + shift
     s01 = dd[0, 1]

@@ -10,6 +10,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ..model.energy import folded_triangles
 from ..model.layout import (
     I_CONTACT_GAP,
     I_INVERTED,
@@ -32,16 +33,15 @@ from ..model.layout import (
     P_KC,
     P_KR,
     P_POLICY,
+    P_RINGS,
     P_TAU,
     P_TH0,
     P_THMIN,
 )
+from ..model.rings import kernel_copy, mesh_band_index
 from .assembly import (
     _gauge_force,
     _stationarity,
-)
-from .banded import (
-    _band_index,
 )
 from .candidates import (
     CORNER_SWEEP,
@@ -86,6 +86,11 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
         qx, qy = xs[2 * i], xs[2 * i + 1]
         x0[2 * i] = c * qx - s * qy
         x0[2 * i + 1] = s * qx + c * qy
+    # a ring mesh's interior points turn with the contour (only its hub stays)
+    for d in range(nb + 2, xs.shape[0], 2):
+        qx, qy = xs[d], xs[d + 1]
+        x0[d] = c * qx - s * qy
+        x0[d + 1] = s * qx + c * qy
     for _k in range(16):
         for j in range(2):
             x0[nb + j] = min(xs[nb + j] + opening, prm[P_TH0])
@@ -179,7 +184,7 @@ def _release_gauge(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fsc
     stable = stable_out[0]
     if good:
         return OK, stable, False
-    for d in range(2 * n + 2):
+    for d in range(xs.shape[0]):
         xs[d] = xkeep[d]
     for m in range(mcount):
         lam[m] = lkeep[m]
@@ -221,19 +226,16 @@ def _finish(xs, n, prm, kinds, fj, fidx, mcount, lam, gbuf, fscale, status, lam_
             lam_corner[fj[m], c, fidx[m] - c * n] = lam[m]
         else:
             lam_stop[fj[m]] = lam[m]
-    res = np.zeros(nb + 2)
+    res = np.zeros(xs.shape[0])
     grad5 = np.zeros(5)
     hess5 = np.zeros((5, 5))
     dofs = np.zeros(5, dtype=np.int64)
     kkt = _stationarity(xs, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, dofs,
                         res)
-    # a fan triangle (centre, q_i, q_i+1) turned over: the springs allow this fold at finite
-    # energy, the material does not; the answer is an equilibrium of the model but not a grasp
-    inverted = 0
-    for i in range(n):
-        i1 = i + 1 if i + 1 < n else 0
-        if xs[2 * i] * xs[2 * i1 + 1] - xs[2 * i + 1] * xs[2 * i1] <= 0.0:
-            inverted += 1
+    # a triangle turned over: springs alone allow this fold at finite energy, the material
+    # does not; the answer is an equilibrium of the model but not a grasp (with the area
+    # energy it cannot happen)
+    inverted = folded_triangles(xs, n, prm)
     if status == OK:
         # final guard over every point and corner, candidates or not
         q = xs[:nb].reshape(n, 2)
@@ -299,17 +301,16 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     info : float64[N_INFO]
         Out: the ``I_*`` slots of :mod:`envs.model.layout`.
     """
-    nb = 2 * n
-    prm = np.zeros(P_POLICY + 1)
-    npr = min(prm_in.shape[0], P_GAUGE)
-    prm[:npr] = prm_in[:npr]
+    prm = kernel_copy(prm_in, n)
     # the gauge spring holds the nearly free turn of the polygon about its pin while the
     # contacts form (released once the contact set settles). Fine fans need it most: without
     # it the interior-point iterates swung the polygon to and fro at N = 500 and ran into the
-    # iteration limit at nearly every torque of the paper sweep
-    prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
+    # iteration limit at nearly every torque of the paper sweep. A ring mesh's hub holds the
+    # turn itself
+    if prm[P_RINGS] == 1:
+        prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
     prm[P_POLICY] = policy
-    bidx = _band_index(n)
+    bidx = mesh_band_index(n, int(prm[P_RINGS]))
     x0 = x.copy()
     mmax = 10 * n + 2
     kinds = np.zeros(mmax, dtype=np.int64)
@@ -341,7 +342,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     for rnd in range(int(opts[O_MAXROUND]) + 3):
         rounds = rnd + 1
         mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
-        for d in range(nb + 2):
+        for d in range(xs.shape[0]):
             xs[d] = x0[d]
         mu0, feasible = _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale,
                                      lam_guess_face, lam, gbuf)
@@ -417,14 +418,14 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         mnew = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
         xprev = x0.copy()
         if not _escape(xs, x0, n, prm, kinds, fj, fidx, mnew, 0, gbuf, 1e-4):
-            for d in range(nb + 2):
+            for d in range(x0.shape[0]):
                 x0[d] = xprev[d]
         if rnd >= int(opts[O_MAXROUND]) + escapes - 1:
             status = CONTACT_CYCLE
             break
     # outputs, on the constraint list the last solve used (the loop may have changed the
     # candidate sets after it)
-    for d in range(nb + 2):
+    for d in range(x.shape[0]):
         x[d] = xs[d]
     mcount = last_m
     kinds[:mcount] = last_kinds[:mcount]

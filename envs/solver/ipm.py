@@ -26,8 +26,8 @@ from .assembly import (
     _step_from_band,
 )
 from .banded import (
-    BW,
     _factor_solve,
+    band_shape,
 )
 from .contact import (
     _all_gaps,
@@ -46,13 +46,14 @@ from .status import (
 class IpmWork(NamedTuple):
     """Work arrays of the interior point (allocated once per call of :func:`_ipm`).
 
-    Natural-order vectors (2N + 2): ``grad`` (merit gradient), ``step``, ``xt`` (trial state),
-    ``res`` (stationarity residual), ``gb`` (gradient scratch). Band-ordered Newton matrix:
-    ``ab`` (band, 2N x (BW + 1)), its factor ``lb``, the border ``bb`` (2N x 2) and corner
-    ``dd`` (2 x 2), the solve's ``ybuf``, right-hand sides ``rb``/``rt`` and solutions
-    ``ob``/``ot``. Per constraint: gaps ``g``/``gt`` (current, trial), ``sig`` (multiplier over
-    gap), ``dlam`` (multiplier step), cached gradients ``cg``, their dofs ``cd`` and curvature
-    ``ch``. One constraint's scratch: ``grad5``, ``hess5``, ``dofs``.
+    State-order vectors (2 N M + 2): ``grad`` (merit gradient), ``step``, ``xt`` (trial
+    state), ``res`` (stationarity residual), ``gb`` (gradient scratch). Band-ordered Newton
+    matrix: ``ab`` (band, 2 N M rows, half bandwidth + 1 columns), its factor ``lb``, the
+    border ``bb`` (2 N M x 2) and corner ``dd`` (2 x 2), the solve's ``ybuf``, right-hand sides
+    ``rb``/``rt`` and solutions ``ob``/``ot``. Per constraint: gaps ``g``/``gt`` (current,
+    trial), ``sig`` (multiplier over gap), ``dlam`` (multiplier step), cached gradients ``cg``,
+    their dofs ``cd`` and curvature ``ch``. One constraint's scratch: ``grad5``, ``hess5``,
+    ``dofs``.
     """
 
     grad: np.ndarray
@@ -88,19 +89,19 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     Allocates the work arrays; the iterations run in :func:`_ipm_core`, compiled without
     reference counting (array views and helper calls inside it then cost nothing extra).
     """
-    nb = 2 * n
-    nx = nb + 2
+    nx = x.shape[0]
+    nbb, bw = band_shape(n, prm)
     grad = np.zeros(nx)
     step = np.zeros(nx)
     xt = np.zeros(nx)
     res = np.zeros(nx)
-    ab = np.zeros((nb, BW + 1))
-    lb = np.zeros((nb, BW + 1))
-    bb = np.zeros((nb, 2))
+    ab = np.zeros((nbb, bw + 1))
+    lb = np.zeros((nbb, bw + 1))
+    bb = np.zeros((nbb, 2))
     dd = np.zeros((2, 2))
-    ybuf = np.zeros((nb, 2))
-    rb = np.zeros(nb)
-    ob = np.zeros(nb)
+    ybuf = np.zeros((nbb, 2))
+    rb = np.zeros(nbb)
+    ob = np.zeros(nbb)
     rt = np.zeros(2)
     ot = np.zeros(2)
     g = np.zeros(mcount)
@@ -125,7 +126,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     (grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam, grad5, hess5,
      dofs, gb, cg, cd, ch) = work
     nb = 2 * n
-    nx = nb + 2
+    nx = x.shape[0]
+    nbb = ab.shape[0]
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
     maxit = int(opts[O_MAXIT])
     mu = mu0
@@ -176,7 +178,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         it += 1
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
-        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
         if ok:
             n_neg = 0
         else:
@@ -189,11 +191,11 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                     return SADDLE, it
             _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab, bb,
                             dd)
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
             while not ok:
-                ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
                 if ok:
                     break
                 shift *= 8.0
@@ -204,8 +206,9 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         slope = _step_from_band(ob, ot, bidx, nb, grad, step)
         # damp huge finger rotations (a full step can jump a finger past a vertex)
         smax = 0.0
-        for d in range(nb):
-            smax = max(smax, abs(step[d]))
+        for d in range(nx):
+            if d != nb and d != nb + 1:
+                smax = max(smax, abs(step[d]))
         alpha = 1.0
         lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
         if lim > 1.0:

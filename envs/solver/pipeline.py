@@ -35,7 +35,9 @@ from envs.model.layout import (
     P_KC,
     P_KR,
     P_RHO,
+    P_RINGS,
     P_THMIN,
+    S_CONTOUR_RATIO,
     S_DISTANCE,
     S_JOINT_OFFSET,
     S_LENGTH,
@@ -56,6 +58,7 @@ from envs.model.metrics import (
     state_metrics,
 )
 from envs.model.problem import SceneColumns, pack_params, rest_state, stiffness_unit
+from envs.model.rings import HUB_RADIUS, kernel_copy
 
 from . import driver
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
@@ -85,7 +88,8 @@ class BatchSolution(NamedTuple):
     energy_j: np.ndarray  # (B,) total potential energy [J]
     inverted: np.ndarray  # (B,) int
     check: np.ndarray  # (B, check.N_OUT): the independent check's verdict
-    state_scaled: np.ndarray  # (B, 2N + 2) solver state (warm starts)
+    state_scaled: np.ndarray  # (B, 2 N M + 2) solver state (warm starts)
+    interior_points_m: np.ndarray  # (B, (M - 1) N, 2) interior points of a ring mesh
     face_scaled: np.ndarray  # (B, 2, N) scaled face multipliers (warm starts)
     solve_time_s: float  # compiled solve time of the whole batch
 
@@ -136,6 +140,10 @@ def _check_row(s, prm, n, ck):
     ck[check.CK_REST_CONTOUR] = prm[P_H] * r
     ck[check.CK_AREA_STIFF] = prm[P_KA] * k_unit
     ck[check.CK_REST_AREA] = prm[P_A0] * r * r
+    ck[check.CK_RINGS] = prm[P_RINGS]
+    ck[check.CK_HUB] = HUB_RADIUS * r
+    ck[check.CK_UNIT] = k_unit
+    ck[check.CK_CRATIO] = s[S_CONTOUR_RATIO]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -188,13 +196,22 @@ def _public_status(raw, passed, inverted):
 @njit(cache=True, error_model="numpy")
 def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face, corner, stop,
                 totals, edges, metrics, ck, verdict):
-    state_metrics(x, n, prm, metrics)
+    state_metrics(x, n, kernel_copy(prm, n), metrics)
     # energy in J: the scaled energy is in units of s E t r^2
     metrics[M_ENERGY] *= stiffness_unit(s) * s[S_RADIUS] ** 2
     _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
     _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)
-    check.check_one(ck, points, x[2 * n :], face, corner, stop, verdict)
+    if prm[P_RINGS] == 1:
+        check.check_one(ck, points, x[2 * n : 2 * n + 2], face, corner, stop, verdict)
+    else:
+        r = s[S_RADIUS]
+        interior = np.empty(((x.shape[0] - 2 * n - 2) // 2, 2))
+        for p in range(interior.shape[0]):
+            interior[p, 0] = x[2 * n + 2 + 2 * p] * r
+            interior[p, 1] = x[2 * n + 3 + 2 * p] * r + s[S_DISTANCE] + r
+        check.check_mesh_one(ck, points, interior, x[2 * n : 2 * n + 2], face, corner, stop,
+                             verdict)
     return _public_status(int(info[I_STATUS]), verdict[check.OUT_PASSED] > 0.0,
                           int(metrics[M_INVERTED]))
 
@@ -211,7 +228,7 @@ def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, point
 def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
-                  lam0: np.ndarray | None = None) -> BatchSolution:
+                  lam0: np.ndarray | None = None, n_rings: int = 1) -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -224,12 +241,14 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     stiffness_rule, phase_rad
         As in :func:`envs.simulate`.
     x0, lam0
-        Scaled start states (B, 2N + 2) and face multipliers (B, 2, N) of a warm start
+        Scaled start states (B, 2 N M + 2) and face multipliers (B, 2, N) of a warm start
         (default: rest, no multipliers). The start must be strictly feasible.
+    n_rings
+        Rings ``M`` of the point mesh (1: the paper's fan).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
-    prm = pack_params(scene, n, stiffness_rule, phase_rad)
+    prm = pack_params(scene, n, stiffness_rule, phase_rad, int(n_rings))
     xs = rest_state(prm, n) if x0 is None else np.array(x0, dtype=np.float64, ndmin=2)
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3))
@@ -276,17 +295,22 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
                      corner, stop, totals, edges, metrics, ck, verdict, status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
     passed = verdict[:, check.OUT_PASSED] > 0.0
+    # interior points of a ring mesh (they follow the angles in the state), in SI
+    r = scene[:, S_RADIUS][:, None, None]
+    interior = xs[:, 2 * n + 2 :].reshape(b, -1, 2) * r
+    interior[:, :, 1] += (scene[:, S_DISTANCE][:, None] + scene[:, S_RADIUS][:, None])
     return BatchSolution(
         status=status, converged=status == OK, folded=(inverted > 0) & passed,
         iterations=infos[:, I_ITERATIONS].astype(np.int64),
         rounds=infos[:, I_ROUNDS].astype(np.int64), stable=infos[:, I_STABLE] != 0.0,
-        jaw_angles_rad=xs[:, 2 * n :].copy(), points_m=points, face_forces_n=face,
+        jaw_angles_rad=xs[:, 2 * n : 2 * n + 2].copy(), points_m=points, face_forces_n=face,
         corner_forces_n=corner, corner_totals_n=totals, corner_edges=edges,
         stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         peak_log_strain=metrics[:, M_PEAK_LOG_STRAIN],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY], inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,
+        interior_points_m=interior,
     )
 
 

@@ -24,8 +24,8 @@ from .assembly import (
     _step_from_band,
 )
 from .banded import (
-    BW,
     _factor_solve,
+    band_shape,
 )
 from .contact import (
     _all_gaps,
@@ -65,16 +65,16 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
 
     Returns (ok, stable) where stable means the final Newton matrix needed no shift.
     """
-    nb = 2 * n
-    nx = nb + 2
+    nx = x.shape[0]
+    nbb, bw = band_shape(n, prm)
     grad = np.zeros(nx)
-    ab = np.zeros((nb, BW + 1))
-    lb = np.zeros((nb, BW + 1))
-    bb = np.zeros((nb, 2))
+    ab = np.zeros((nbb, bw + 1))
+    lb = np.zeros((nbb, bw + 1))
+    bb = np.zeros((nbb, 2))
     dd = np.zeros((2, 2))
-    ybuf = np.zeros((nb, 2))
-    rb = np.zeros(nb)
-    ob = np.zeros(nb)
+    ybuf = np.zeros((nbb, 2))
+    rb = np.zeros(nbb)
+    ob = np.zeros(nbb)
     rt = np.zeros(2)
     ot = np.zeros(2)
     g = np.zeros(mcount)
@@ -101,7 +101,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                  grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
                  gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
     nb = 2 * n
-    nx = nb + 2
+    nx = x.shape[0]
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
     rho = 1e2 * kscale
     tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
@@ -127,13 +127,13 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                        dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd, ch)
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
-        ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+        ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
         stable = ok
         while not ok:
             shift = max(shift * 8.0, 1e-8 * kscale)
             if shift > 1e6 * kscale:
                 return False, False
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, ob, ot)
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
         # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
         # step): a plain Newton step from an indefinite matrix can throw the iterate far off
         slope = _step_from_band(ob, ot, bidx, nb, grad, step)
@@ -197,7 +197,6 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     Drops contacts that come out with a pulling force and adds constraints that come out
     violated. On success ``xs`` and ``lam`` hold the polished answer; returns a status.
     """
-    nb = 2 * n
     for _attempt in range(6):
         xp = xs.copy()
         lp = lam[:mcount].copy()
@@ -216,7 +215,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 active[m] = True
                 good = False
         if good:
-            for d in range(nb + 2):
+            for d in range(xs.shape[0]):
                 xs[d] = xp[d]
             for m in range(mcount):
                 lam[m] = max(lp[m], 0.0) if active[m] else 0.0

@@ -70,8 +70,14 @@ class GraspResult:
         Largest principal logarithmic (Hencky) strain ``max |ln lambda|`` over the fan
         triangles [-]: the FEM reference's measure (CONVENTIONS.md); infinite where a triangle
         has folded.
+    n_rings : int
+        Rings ``M`` of the point mesh (1: the paper's fan).
+    interior_points_m : numpy.ndarray
+        Interior points of a ring mesh, ``((M - 1) N, 2)``, ring by ring from the hub out
+        (empty for the fan) [m].
     inverted_triangles : int
-        Fan triangles (centre, point i, point i+1) turned over in the returned state. The
+        Mesh triangles (the fan's: centre, point i, point i+1) turned over in the returned
+        state. The
         springs allow such a fold at finite energy; a result with any is reported as not
         converged (the squeeze is beyond the model's valid range). A failed solve can also end
         on a folded iterate: :attr:`folded` tells the two apart.
@@ -101,6 +107,8 @@ class GraspResult:
     rounds: int = 1
     inverted_triangles: int = 0
     peak_log_strain: float = math.nan
+    n_rings: int = 1
+    interior_points_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def folded(self) -> bool:
@@ -145,6 +153,7 @@ class GraspResult:
             "method": self.method,
             "torque_nm": self.torque_nm,
             "n_triangles": self.n_triangles,
+            "n_rings": self.n_rings,
             "jaw_angles_rad": list(self.jaw_angles_rad),
             "peak_strain": self.peak_strain,
             "peak_log_strain": self.peak_log_strain,

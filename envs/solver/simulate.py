@@ -19,8 +19,9 @@ import numpy as np
 from envs import check
 from envs.model.defaults import DEFAULT_N_TRIANGLES, DEFAULT_PHASE_RAD, STIFFNESS_RULES
 from envs.model.problem import stiffness_unit
+from envs.model.rings import MAX_RINGS
 from envs.scene import Scene
-from envs.validation import check_choice, check_n_triangles, check_range
+from envs.validation import check_choice, check_integer, check_n_triangles, check_range
 
 from .pipeline import BatchSolution, row_message, solve_columns
 from .result import GraspResult
@@ -65,25 +66,28 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         rounds=int(sol.rounds[i]),
         inverted_triangles=int(sol.inverted[i]),
         peak_log_strain=float(sol.peak_log_strain[i]),
+        n_rings=int((sol.state_scaled.shape[1] - 2) // (2 * sol.points_m.shape[1])),
+        interior_points_m=sol.interior_points_m[i],
     )
 
 
 class _Problem:
     """One scene at one torque and mesh, solved through the pipeline (newton)."""
 
-    def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float):
-        self.scene, self.torque_nm, self.n, self.rule, self.phase = (
-            scene, float(torque_nm), int(n), rule, float(phase_rad))
+    def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float,
+                 m: int = 1):
+        self.scene, self.torque_nm, self.n, self.rule, self.phase, self.m = (
+            scene, float(torque_nm), int(n), rule, float(phase_rad), int(m))
         self.rows = scene.rows(self.torque_nm)
 
     def at(self, torque_nm: float, n: int | None = None) -> _Problem:
         return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
-                        self.phase)
+                        self.phase, self.m)
 
     def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
               ) -> tuple[GraspResult, BatchSolution]:
         sol = solve_columns(self.rows, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
-                            x0=x0, lam0=lam0)
+                            x0=x0, lam0=lam0, n_rings=self.m)
         return grasp_result(sol, 0, self.torque_nm, "newton", self.rule), sol
 
 
@@ -91,9 +95,11 @@ def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarr
     """Start from a previous equilibrium, fingers opened slightly (every gap strictly
     positive)."""
     n, r = prob.n, prob.scene.disk.radius_m
-    x = np.empty(2 * n + 2)
-    x[: 2 * n] = ((prev.points_m - prob.scene.disk.center_m) / r).ravel()
-    x[2 * n :] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
+    centre = prob.scene.disk.center_m
+    x = np.empty(2 * n * prob.m + 2)
+    x[: 2 * n] = ((prev.points_m - centre) / r).ravel()
+    x[2 * n : 2 * n + 2] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
+    x[2 * n + 2 :] = ((prev.interior_points_m - centre) / r).ravel()
     return x, prev.contact_forces_n / (stiffness_unit(prob.rows[0]) * r)
 
 
@@ -120,7 +126,7 @@ def _solve_newton(prob: _Problem) -> GraspResult:
     adaptive steps, each started from the previous equilibrium.
     """
     spent = 0.0  # compiled-solver time of every attempt (the checks are not counted)
-    if prob.n <= NESTED_ABOVE:
+    if prob.n <= NESTED_ABOVE or prob.m > 1:
         res, _ = prob.solve()
         extra = 0
     else:
@@ -175,14 +181,23 @@ def _continuation(prob: _Problem, first_step: float = 0.125, min_step: float = 1
     return replace(last, iterations=iterations, solve_time_s=spent)
 
 
-def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s) -> int:
+def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
+                  n_rings=1) -> tuple[int, int]:
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
     check_choice("method", method, METHODS)
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
     check_range("phase_rad", phase_rad)
     check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
-    return check_n_triangles(n_triangles)
+    n = check_n_triangles(n_triangles)
+    m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
+    if m > 1 and method != "newton":
+        raise ValueError(f"n_rings = {m} needs method = 'newton' (the baselines solve the fan), "
+                         f"got method = {method!r}")
+    if m > 1 and stiffness_rule != "van_gelder":
+        raise ValueError(f"n_rings = {m} needs stiffness_rule = 'van_gelder', got "
+                         f"{stiffness_rule!r}")
+    return n, m
 
 
 def simulate(
@@ -194,6 +209,7 @@ def simulate(
     stiffness_rule: str = "van_gelder",
     phase_rad: float = DEFAULT_PHASE_RAD,
     time_limit_s: float = 30.0,
+    n_rings: int = 1,
 ) -> GraspResult:
     """Solve the grasp at one actuation torque, starting from the rest configuration.
 
@@ -213,6 +229,9 @@ def simulate(
         Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
     time_limit_s
         Wall-time budget for the baselines [s] (the Newton solver needs none).
+    n_rings
+        Rings ``M`` of the point mesh, 1 to 16 (1: the paper's fan; more: interior rings and a
+        rigid hub, :mod:`envs.model.rings`; Newton only).
 
     Returns
     -------
@@ -225,9 +244,10 @@ def simulate(
     ValueError
         For a bad argument, naming it and its allowed range.
     """
-    n = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s)
+    n, m = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
+                         n_rings)
     torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
-    prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad))
+    prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), m)
     if method == "newton":
         return _solve_newton(prob)
     from . import baselines
@@ -245,6 +265,7 @@ def simulate_ramp(
     stiffness_rule: str = "van_gelder",
     phase_rad: float = DEFAULT_PHASE_RAD,
     time_limit_s: float = 30.0,
+    n_rings: int = 1,
 ) -> list[GraspResult]:
     """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
 
@@ -259,7 +280,8 @@ def simulate_ramp(
     Other parameters
         As in :func:`simulate`.
     """
-    n = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s)
+    n, m = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
+                         n_rings)
     try:
         torques = np.asarray(torques_nm, dtype=np.float64).ravel()
     except (TypeError, ValueError):
@@ -273,7 +295,7 @@ def simulate_ramp(
     if method != "newton":
         return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
                          phase_rad=phase_rad, time_limit_s=time_limit_s) for t in torques]
-    base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad))
+    base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), m)
     out: list[GraspResult] = []
     prev: GraspResult | None = None
     for t in torques.tolist():

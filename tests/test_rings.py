@@ -1,0 +1,175 @@
+"""Ring meshes of the model family (CONVENTIONS.md): geometry, energy, Newton matrix, solves.
+
+The paper's fan is the one-ring member (its answers are pinned by the regression corpus); these
+tests cover what rings add: the mesh's rest geometry, exact derivatives of the energy on it,
+the banded Newton matrix in its wider band, and checked equilibria of ring meshes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from envs.model.energy import energy_scaled, gradient_scaled
+from envs.model.problem import rest_state, scaled_params
+from envs.model.rings import (
+    HUB_RADIUS,
+    kernel_params,
+    mesh_band_index,
+    mesh_half_bandwidth,
+    n_state,
+    n_tri_types,
+    point_xy,
+    tri_corners,
+    tri_rest_area,
+)
+from envs.scene import Scene
+from envs.solver.assembly import _spring_terms
+from envs.solver.banded import _factor_solve, band_shape
+from envs.solver.simulate import simulate, simulate_ramp
+
+SCENE = Scene.preset("paper-r070").with_changes(area_stiffness_scale=0.3)
+
+
+def _rest(n, m, scene=SCENE, torque=0.2):
+    prm = scaled_params(scene, torque, n, n_rings=m)
+    return prm, rest_state(prm, n)[0]
+
+
+@pytest.mark.parametrize(("n", "m"), [(8, 2), (20, 3), (21, 4), (12, 6)])
+def test_ring_mesh_tiles_the_annulus(n, m):
+    """The triangles are counter-clockwise and tile the polygon annulus between the hub and
+    the contour: their rest areas sum to the two polygons' difference."""
+    prm, x = _rest(n, m)
+    kp = kernel_params(prm, n)
+    total = 0.0
+    for t in range(n_tri_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            a = np.array(point_xy(x, n, m, kp, ka, ia))
+            b = np.array(point_xy(x, n, m, kp, kb, ib))
+            c = np.array(point_xy(x, n, m, kp, kc, ic))
+            u, v = b - a, c - a
+            area = 0.5 * (u[0] * v[1] - u[1] * v[0])
+            assert area == pytest.approx(tri_rest_area(kp, t, i, m), rel=1e-12)
+            assert area > 0
+            total += area
+    polygon = 0.5 * n * math.sin(2 * math.pi / n)
+    assert total == pytest.approx(polygon * (1 - HUB_RADIUS**2), rel=1e-12)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 5])
+def test_band_order_covers_every_point_within_the_band(m):
+    n = 14
+    idx = mesh_band_index(n, m)
+    assert sorted(idx // 2) == list(range(n * m))
+    bw = mesh_half_bandwidth(m)
+    # every spring couples two points within the half bandwidth (neighbouring angles)
+    pos = idx.reshape(-1)
+    for k in range(1, m + 1):
+        for i in range(n):
+            p = i if k == m else n + (k - 1) * n + i
+            for dk in (-1, 0, 1):
+                k2 = k + dk
+                if not 1 <= k2 <= m:
+                    continue
+                for di in (-1, 0, 1):
+                    i2 = (i + di) % n
+                    q = i2 if k2 == m else n + (k2 - 1) * n + i2
+                    assert abs(pos[p] - pos[q]) + 1 <= bw
+
+
+@pytest.mark.parametrize(("n", "m"), [(10, 2), (16, 4)])
+def test_energy_gradient_and_band_hessian_are_exact(n, m):
+    """Gradient by central differences; the banded Newton matrix times a vector against
+    differences of the gradient."""
+    prm, x0 = _rest(n, m)
+    kp = kernel_params(prm, n)
+    rng = np.random.default_rng(3)
+    x = x0 + 2e-3 * rng.standard_normal(x0.size)
+    g = gradient_scaled(x, prm, n)
+    e = np.eye(x.size)
+    fd = np.array([(energy_scaled(x + 1e-6 * e[d], prm, n) - energy_scaled(x - 1e-6 * e[d], prm,
+                                                                              n)) / 2e-6
+                   for d in range(x.size)])
+    np.testing.assert_allclose(fd, g, atol=2e-8 * np.abs(g).max())
+    nbb, bw = band_shape(n, kp)
+    bidx = mesh_band_index(n, m)
+    ab, bb, dd = np.zeros((nbb, bw + 1)), np.zeros((nbb, 2)), np.zeros((2, 2))
+    grad = np.zeros(x.size)
+    _spring_terms(x, n, kp, bidx, grad, ab, bb, dd, True, False)
+    # dense Hessian in state order from the band
+    full = np.zeros((nbb + 2, nbb + 2))
+    for p in range(nbb):
+        for d in range(bw + 1):
+            if p - d >= 0:
+                full[p, p - d] = full[p - d, p] = ab[p, d]
+    full[:nbb, nbb:] = bb
+    full[nbb:, :nbb] = bb.T
+    full[nbb:, nbb:] = dd
+    perm = np.empty(x.size, dtype=int)  # state index -> band row
+    for d in range(x.size):
+        if d < 2 * n:
+            perm[d] = bidx[d // 2] + d % 2
+        elif d < 2 * n + 2:
+            perm[d] = nbb + d - 2 * n
+        else:
+            p = (d - 2) // 2
+            perm[d] = bidx[p] + (d - 2) % 2
+    hess = full[np.ix_(perm, perm)]
+    v = rng.standard_normal(x.size)
+    hv = (gradient_scaled(x + 1e-6 * v, prm, n) - gradient_scaled(x - 1e-6 * v, prm, n)) / 2e-6
+    np.testing.assert_allclose(hess @ v, hv, atol=1e-6 * np.abs(hv).max())
+    # and the banded factor-and-solve of the bordered matrix matches a dense solve
+    shift = 1.0
+    rhs = rng.standard_normal(nbb + 2)
+    lb, ybuf, ob, ot = np.zeros_like(ab), np.zeros((nbb, 2)), np.zeros(nbb), np.zeros(2)
+    assert _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rhs[:nbb].copy(), rhs[nbb:].copy(),
+                         ob, ot)
+    want = np.linalg.solve(full + shift * np.eye(nbb + 2), rhs)
+    np.testing.assert_allclose(np.concatenate((ob, ot)), want, rtol=1e-9, atol=1e-12)
+
+
+def test_rest_state_is_an_equilibrium_of_the_mesh():
+    for m in (2, 4):
+        prm, x = _rest(16, m)
+        g = gradient_scaled(x, prm, 16)
+        pts = np.delete(g, [32, 33])
+        assert np.abs(pts).max() < 1e-13
+        assert x.size == n_state(16, m)
+
+
+@pytest.mark.parametrize("m", [2, 4])
+def test_ring_grasp_is_a_checked_equilibrium(m):
+    """A ring mesh grasp converges and the independent check (its own mesh, forces from the
+    triangles' shares of each spring) passes; the interior points come back in metres."""
+    res = simulate(SCENE, 0.2, 20, n_rings=m)
+    assert res.converged, res.message
+    assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
+    assert res.n_rings == m
+    assert res.interior_points_m.shape == ((m - 1) * 20, 2)
+    r = SCENE.disk.radius_m
+    dist = np.linalg.norm(res.interior_points_m - SCENE.disk.center_m, axis=1)
+    assert np.all((dist > HUB_RADIUS * r) & (dist < r))
+    assert res.inverted_triangles == 0
+    # more points carry the load: the jaw still closes, and less than on the rigid disk
+    assert res.jaw_angles_rad[0] < SCENE.gripper.rest_angle_rad
+
+
+def test_ring_ramp_warm_starts_and_is_monotone():
+    torques = [0.05, 0.1, 0.2, 0.3]
+    out = simulate_ramp(SCENE, torques, 16, n_rings=3)
+    assert all(r.converged for r in out), [r.message for r in out]
+    closing = [SCENE.gripper.rest_angle_rad - np.mean(r.jaw_angles_rad) for r in out]
+    assert np.all(np.diff(closing) > 0)
+
+
+def test_ring_arguments_are_validated():
+    with pytest.raises(ValueError, match="n_rings"):
+        simulate(SCENE, 0.2, 20, n_rings=0)
+    with pytest.raises(ValueError, match="n_rings"):
+        simulate(SCENE, 0.2, 20, n_rings=2.5)
+    with pytest.raises(ValueError, match="newton"):
+        simulate(SCENE, 0.2, 20, method="slsqp", n_rings=2)
