@@ -173,3 +173,46 @@ def test_ring_arguments_are_validated():
         simulate(SCENE, 0.2, 20, n_rings=2.5)
     with pytest.raises(ValueError, match="newton"):
         simulate(SCENE, 0.2, 20, method="slsqp", n_rings=2)
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.4, 0.45, 0.49])
+def test_hybrid_scales_give_the_lame_moduli_on_the_equilateral_lattice(nu):
+    """Homogenisation: under a uniform small strain the equilateral lattice deforms affinely
+    (one node per cell); its energy per area, from the model's own spring and area terms with
+    the hybrid scales, is the plane-strain ``lambda/2 (tr e)^2 + mu e:e`` of E and nu."""
+    from envs.model.energy import area_energy, spring_energy
+    from envs.model.family import hybrid_scales
+
+    youngs, t = 1.0, 1.0
+    s, c_a = hybrid_scales(nu)
+    lam = youngs * nu / ((1 + nu) * (1 - 2 * nu))
+    mu = youngs / (2 * (1 + nu))
+    kappa = c_a * (lam + mu)
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, math.sqrt(3) / 2]])
+    a0 = math.sqrt(3) / 4
+    for strain in ([[1, 0], [0, 0]], [[0, 1], [1, 0]], [[1, 0], [0, 1]], [[0.3, -0.7],
+                                                                          [-0.7, 0.2]]):
+        eps = 1e-5 * np.asarray(strain, dtype=float)
+        moved = corners @ (np.eye(2) + eps).T
+        energy = 0.0
+        for c in range(3):
+            d = (c + 1) % 3
+            rest = np.linalg.norm(corners[d] - corners[c])
+            # the triangle's share of each edge's area-rule spring, s E t A0 / L0^2
+            dx, dy = moved[d] - moved[c]
+            energy += spring_energy(dx, dy, s * youngs * t * a0 / rest**2, rest)
+        u, v = moved[1] - moved[0], moved[2] - moved[0]
+        energy += area_energy(0.5 * (u[0] * v[1] - u[1] * v[0]), kappa * t, a0)
+        want = 0.5 * lam * np.trace(eps) ** 2 + mu * np.sum(eps * eps)
+        assert energy / (a0 * t) == pytest.approx(want, rel=2e-4)
+
+
+def test_hybrid_scales_validate_and_are_physical():
+    from envs.model.family import hybrid_scales
+
+    s, c_a = hybrid_scales(0.45)
+    assert s == pytest.approx(4 / (3 * 1.45)) and 0.9 < s < 1.0
+    assert c_a == pytest.approx(0.80, abs=0.01)
+    assert hybrid_scales(0.25)[1] == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(ValueError, match="poisson_ratio"):
+        hybrid_scales(0.2)

@@ -168,24 +168,28 @@ def _solve_band3(lb, nb, bb, rb, ybuf, out):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _chol_general(ab, lb, nb, shift):
-    """Scalar banded Cholesky of A + shift I (lower band of A in ``ab``, half bandwidth
-    ``ab.shape[1] - 1``): ``lb[j, d] = L[j, j - d]`` with the reciprocal of each diagonal entry
-    in column 0. Returns False if the matrix is not positive definite."""
+    """Scalar banded Cholesky of A + shift I (lower band of A in ``ab``: ``ab[j, d] =
+    A[j, j - d]``, half bandwidth ``bw = ab.shape[1] - 1``). The factor is stored left-aligned,
+    ``lb[j, bw - d] = L[j, j - d]`` with the reciprocal of the diagonal in ``lb[j, bw]``, so that
+    the dot products of two rows run forwards over contiguous memory (they vectorize). Returns
+    False if the matrix is not positive definite."""
     bw = ab.shape[1] - 1
     for j in range(nb):
         j0 = max(0, j - bw)
+        oj = bw - j  # lb[j, oj + k] = L[j, k]
         for i in range(j0, j):
+            oi = bw - i
             s = ab[j, j - i]
-            # columns shared by rows i and j: k in [max(j0, i - bw), i)
             for k in range(max(j0, i - bw), i):
-                s -= lb[j, j - k] * lb[i, i - k]
-            lb[j, j - i] = s * lb[i, 0]
+                s -= lb[j, oj + k] * lb[i, oi + k]
+            lb[j, oj + i] = s * lb[i, bw]
         d = ab[j, 0] + shift
         for k in range(j0, j):
-            d -= lb[j, j - k] * lb[j, j - k]
+            v = lb[j, oj + k]
+            d -= v * v
         if not d > 0.0:
             return False
-        lb[j, 0] = 1.0 / math.sqrt(d)
+        lb[j, bw] = 1.0 / math.sqrt(d)
     return True
 
 
@@ -195,26 +199,29 @@ def _solve_general3(lb, nb, bb, rb, ybuf, out):
     bw = lb.shape[1] - 1
     for j in range(nb):
         a0, a1, a2 = bb[j, 0], bb[j, 1], rb[j]
+        oj = bw - j
         for k in range(max(0, j - bw), j):
-            v = lb[j, j - k]
+            v = lb[j, oj + k]
             a0 -= v * ybuf[k, 0]
             a1 -= v * ybuf[k, 1]
             a2 -= v * out[k]
-        r = lb[j, 0]
+        r = lb[j, bw]
         ybuf[j, 0] = a0 * r
         ybuf[j, 1] = a1 * r
         out[j] = a2 * r
     for j in range(nb - 1, -1, -1):
-        a0, a1, a2 = ybuf[j, 0], ybuf[j, 1], out[j]
-        for i in range(j + 1, min(nb, j + bw + 1)):
-            v = lb[i, i - j]
-            a0 -= v * ybuf[i, 0]
-            a1 -= v * ybuf[i, 1]
-            a2 -= v * out[i]
-        r = lb[j, 0]
-        ybuf[j, 0] = a0 * r
-        ybuf[j, 1] = a1 * r
-        out[j] = a2 * r
+        r = lb[j, bw]
+        a0, a1, a2 = ybuf[j, 0] * r, ybuf[j, 1] * r, out[j] * r
+        ybuf[j, 0] = a0
+        ybuf[j, 1] = a1
+        out[j] = a2
+        # column j of L^T done: take it off the rows above (row j's entries L[j, k], k < j)
+        oj = bw - j
+        for k in range(max(0, j - bw), j):
+            v = lb[j, oj + k]
+            ybuf[k, 0] -= v * a0
+            ybuf[k, 1] -= v * a1
+            out[k] -= v * a2
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
