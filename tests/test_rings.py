@@ -216,3 +216,26 @@ def test_hybrid_scales_validate_and_are_physical():
     assert hybrid_scales(0.25)[1] == pytest.approx(0.0, abs=1e-12)
     with pytest.raises(ValueError, match="poisson_ratio"):
         hybrid_scales(0.2)
+
+
+def test_choose_model_picks_the_cheapest_member_within_tolerance():
+    """Against the FEM of paper-r070 the paper's fan (s = 1) is ~30 % off; hybrid ring members
+    are within a few percent, and the choice is the cheapest of those within tolerance."""
+    pytest.importorskip("skfem")
+    from envs.accuracy.members import Member, choose_model
+
+    torques = (0.1, 0.2, 0.3)
+    members = (Member(20, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"))
+    got = choose_model(Scene.preset("paper-r070"), 0.06, torques, members=members)
+    rows = {r.member: r for r in got.rows}
+    assert rows[Member(20, 1)].max_rel_error > 0.2
+    assert not rows[Member(20, 1)].within_tolerance
+    assert got.within_tolerance and got.member.n_rings > 1
+    ok = [r for r in got.rows if r.within_tolerance]
+    assert rows[got.member].compiled_s_per_torque == min(r.compiled_s_per_torque for r in ok)
+    # nothing within an impossible tolerance: the most accurate member, flagged
+    tight = choose_model(Scene.preset("paper-r070"), 1e-6, torques, members=members)
+    assert not tight.within_tolerance
+    assert tight.member != Member(20, 1)
+    with pytest.raises(ValueError, match="tolerance"):
+        choose_model(Scene.preset("paper-r070"), 0.0, torques, members=members)

@@ -45,6 +45,7 @@ from .curves import RETRY_FACTORS, PsmCurve, psm_curve
 from .errors import ErrorReport, closing_errors
 from .heldout import paper_heldout_cases
 from .jsonable import jsonable
+from .members import DEFAULT_MEMBERS, Member, MemberRow, ModelChoice, choose_model
 from .paper import HELDOUT_TORQUES_NM, PAPER_SCENES, PAPER_TORQUES_NM
 from .pareto import pareto_front
 from .reference import ReferenceCurve, fem_reference
@@ -67,6 +68,11 @@ __all__ = [
     "calibrate",
     "paper_heldout_cases",
     "choose_n_triangles",
+    "choose_model",
+    "Member",
+    "MemberRow",
+    "ModelChoice",
+    "DEFAULT_MEMBERS",
     "clear_n_cache",
     "pareto_front",
     "jsonable",
