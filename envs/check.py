@@ -123,7 +123,10 @@ CK_RINGS = 16  # rings M of the point mesh (1: the fan; the fields below serve M
 CK_HUB = 17  # hub radius of a ring mesh [m]
 CK_UNIT = 18  # s E t [N/m]: the area rule's stiffness unit
 CK_CRATIO = 19  # contour stiffness ratio (the contour ring's springs)
-N_CK = 20
+CK_MU = 20  # constant-strain neo-Hookean triangles: s mu t [N/m] (0: springs and area energy)
+CK_LAM = 21  # and s lambda t [N/m]
+CK_PHASE = 22  # angle of the first point of every ring [rad]
+N_CK = 23
 
 # output vector layout
 OUT_PASSED = 0
@@ -634,6 +637,8 @@ def _ring_radius(prm, k):
     """Rest radius of ring k of a ring mesh [m]: geometric from the hub (k = 0) to the rim."""
     m = prm[CK_RINGS]
     r, hub = prm[CK_RADIUS], prm[CK_HUB]
+    if m == 1:
+        return 0.0 if k == 0 else r  # the fan: centre and contour
     return r * (hub / r) ** ((m - k) / m)
 
 
@@ -644,7 +649,7 @@ def _ring_corner(prm, points, interior, k, i, rest):
     n = points.shape[0]
     m = int(prm[CK_RINGS])
     i %= n
-    ang = math.pi / 2 + 2 * math.pi * i / n
+    ang = prm[CK_PHASE] + 2 * math.pi * i / n
     rho = _ring_radius(prm, k)
     if rest or k == 0:
         return (prm[CK_CENTRE_X] + rho * math.cos(ang), prm[CK_CENTRE_Y] + rho * math.sin(ang),
@@ -693,6 +698,34 @@ def _area_push(force, row, slope, gx, gy):
 
 
 @njit(**_FLAGS)
+def _cst_forces(prm, force, q, p, ra, rb, rc, a0):
+    """Forces of a constant-strain neo-Hookean triangle (energy ``A0 t W(F)``, ``W = mu/2
+    (I1 - 2) - mu ln J + lam/2 (ln J)^2``): with ``F = Ds Dm^-1`` the gradient over the edge
+    matrix is ``A0 P Dm^-T``, ``P = mu F + (lam ln J - mu) F^-T``. Returns the largest force."""
+    dm00, dm01, dm10, dm11 = q[2] - q[0], q[4] - q[0], q[3] - q[1], q[5] - q[1]
+    det_m = dm00 * dm11 - dm01 * dm10
+    i00, i01, i10, i11 = dm11 / det_m, -dm01 / det_m, -dm10 / det_m, dm00 / det_m
+    ds00, ds01, ds10, ds11 = p[2] - p[0], p[4] - p[0], p[3] - p[1], p[5] - p[1]
+    f00, f01 = ds00 * i00 + ds01 * i10, ds00 * i01 + ds01 * i11
+    f10, f11 = ds10 * i00 + ds11 * i10, ds10 * i01 + ds11 * i11
+    jac = f00 * f11 - f01 * f10
+    mu, lam = prm[CK_MU], prm[CK_LAM]
+    c = (lam * math.log(jac) - mu) / jac  # NaN for an inverted triangle: the check fails
+    p00, p01, p10, p11 = mu * f00 + c * f11, mu * f01 - c * f10, mu * f10 - c * f01, \
+        mu * f11 + c * f00
+    # G = A0 P Dm^-T: column 0 acts on corner b, column 1 on c, minus their sum on a
+    g00, g01 = a0 * (p00 * i00 + p01 * i01), a0 * (p00 * i10 + p01 * i11)
+    g10, g11 = a0 * (p10 * i00 + p11 * i01), a0 * (p10 * i10 + p11 * i11)
+    big = 0.0
+    for row, gx, gy in ((ra, -(g00 + g01), -(g10 + g11)), (rb, g00, g10), (rc, g01, g11)):
+        if row >= 0:
+            force[row, 0] -= gx
+            force[row, 1] -= gy
+        big = _npmax(big, _hypot(gx, gy))
+    return big
+
+
+@njit(**_FLAGS)
 def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
     """Forces of one triangle (corners (ring, index) counter-clockwise) of a ring mesh: its
     share of its three edges' springs and its area energy. Returns the largest force [N]."""
@@ -704,6 +737,9 @@ def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
     pbx, pby, rb = _ring_corner(prm, points, interior, kb, ib, False)
     pcx, pcy, rc = _ring_corner(prm, points, interior, kc, ic, False)
     a0 = 0.5 * ((qbx - qax) * (qcy - qay) - (qcx - qax) * (qby - qay))
+    if prm[CK_MU] > 0.0:
+        return _cst_forces(prm, force, (qax, qay, qbx, qby, qcx, qcy),
+                           (pax, pay, pbx, pby, pcx, pcy), ra, rb, rc, a0)
     big = _triangle_edge(prm, force, m, ka, kb, (qax, qay, qbx, qby), (pax, pay, pbx, pby),
                          ra, rb, a0)
     big = _npmax(big, _triangle_edge(prm, force, m, kb, kc, (qbx, qby, qcx, qcy),
@@ -728,6 +764,11 @@ def _ring_forces(prm, points, interior, force):
     n = points.shape[0]
     m = int(prm[CK_RINGS])
     big = 0.0
+    if m == 1:
+        # the fan: triangles (centre, p_i, p_i+1)
+        for i in range(n):
+            big = _npmax(big, _mesh_triangle(prm, points, interior, 0, i, 1, i, 1, i + 1, force))
+        return big
     for k in range(1, m + 1):
         for i in range(n):
             if i % 2 == 0:
@@ -745,9 +786,10 @@ def _ring_forces(prm, points, interior, force):
 
 @njit(cache=True, error_model="numpy")
 def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
-    """:func:`check_one` for a ring mesh (``prm[CK_RINGS] >= 2``): equilibrium of every free
-    point, the contour's contacts as for the fan. ``interior``: the interior points [m],
-    ``((M - 1) N, 2)``, ring by ring from the hub out."""
+    """:func:`check_one` for a ring mesh (``prm[CK_RINGS] >= 2``) or constant-strain triangles
+    (``prm[CK_MU] > 0``): equilibrium of every free point, the contour's contacts as for the
+    fan. ``interior``: the interior points [m], ``((M - 1) N, 2)``, ring by ring from the hub
+    out (empty for the fan)."""
     n = points.shape[0]
     if face.shape[1] != n or corner.shape[2] != n or corner.shape[1] != 4:
         raise ValueError("check_mesh_one: face must be (2, N) and corner (2, 4, N)")
@@ -783,7 +825,7 @@ def check_batch(prms, points, angles, face, corner, stop, out):
 
 
 def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
-                 n_rings: int = 1) -> np.ndarray:
+                 n_rings: int = 1, element: str = "spring") -> np.ndarray:
     """Pack a problem into the parameter vector of :func:`check_one`.
 
     Parameters
@@ -799,6 +841,8 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     n_rings
         Rings of the point mesh (1: the fan; ring meshes are checked by
         :func:`check_mesh_one`).
+    element
+        ``"spring"`` or ``"cst"`` (constant-strain neo-Hookean triangles).
 
     Returns
     -------
@@ -837,6 +881,10 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     vals[CK_HUB] = 0.1 * r  # the ring meshes' rigid hub (envs.model.rings.HUB_RADIUS)
     vals[CK_UNIT] = k_unit
     vals[CK_CRATIO] = getattr(d, "contour_stiffness_ratio", 1.0)
+    vals[CK_PHASE] = math.pi / 2
+    if element == "cst":
+        vals[CK_MU] = k_unit / (2 * (1 + nu))
+        vals[CK_LAM] = k_unit * nu / ((1 + nu) * (1 - 2 * nu))
     return np.array(vals, dtype=np.float64)
 
 

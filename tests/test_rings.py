@@ -33,8 +33,8 @@ from envs.solver.simulate import simulate, simulate_ramp
 SCENE = Scene.preset("paper-r070").with_changes(area_stiffness_scale=0.3)
 
 
-def _rest(n, m, scene=SCENE, torque=0.2):
-    prm = scaled_params(scene, torque, n, n_rings=m)
+def _rest(n, m, scene=SCENE, torque=0.2, element="spring"):
+    prm = scaled_params(scene, torque, n, n_rings=m, element=element)
     return prm, rest_state(prm, n)[0]
 
 
@@ -81,11 +81,13 @@ def test_band_order_covers_every_point_within_the_band(m):
                     assert abs(pos[p] - pos[q]) + 1 <= bw
 
 
-@pytest.mark.parametrize(("n", "m"), [(10, 2), (16, 4)])
-def test_energy_gradient_and_band_hessian_are_exact(n, m):
+@pytest.mark.parametrize(("n", "m", "element"), [(10, 2, "spring"), (16, 4, "spring"),
+                                                 (10, 2, "cst"), (12, 1, "cst"),
+                                                 (16, 3, "cst")])
+def test_energy_gradient_and_band_hessian_are_exact(n, m, element):
     """Gradient by central differences; the banded Newton matrix times a vector against
-    differences of the gradient."""
-    prm, x0 = _rest(n, m)
+    differences of the gradient (springs and area energy, or constant-strain triangles)."""
+    prm, x0 = _rest(n, m, element=element)
     kp = kernel_params(prm, n)
     rng = np.random.default_rng(3)
     x = x0 + 2e-3 * rng.standard_normal(x0.size)
@@ -141,11 +143,13 @@ def test_rest_state_is_an_equilibrium_of_the_mesh():
         assert x.size == n_state(16, m)
 
 
-@pytest.mark.parametrize("m", [2, 4])
-def test_ring_grasp_is_a_checked_equilibrium(m):
+@pytest.mark.parametrize(("m", "element"), [(2, "spring"), (4, "spring"), (3, "cst"),
+                                              (1, "cst")])
+def test_ring_grasp_is_a_checked_equilibrium(m, element):
     """A ring mesh grasp converges and the independent check (its own mesh, forces from the
-    triangles' shares of each spring) passes; the interior points come back in metres."""
-    res = simulate(SCENE, 0.2, 20, n_rings=m)
+    triangles' shares of each spring, or its own constant-strain stresses) passes; the
+    interior points come back in metres."""
+    res = simulate(SCENE, 0.2, 20, n_rings=m, element=element)
     assert res.converged, res.message
     assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
     assert res.n_rings == m
@@ -173,6 +177,26 @@ def test_ring_arguments_are_validated():
         simulate(SCENE, 0.2, 20, n_rings=2.5)
     with pytest.raises(ValueError, match="newton"):
         simulate(SCENE, 0.2, 20, method="slsqp", n_rings=2)
+    with pytest.raises(ValueError, match="element"):
+        simulate(SCENE, 0.2, 20, n_rings=2, element="fem")
+
+
+def test_cst_fallback_matrix_is_the_linear_elastic_one():
+    """The convexified Hessian of a constant-strain triangle is the tangent at rest: positive
+    semi-definite (the rotation its only null mode), whatever the current state."""
+    from envs.model.energy import cst_hessian_column, cst_rest
+
+    m00, m01, m10, m11, a0 = cst_rest(0.0, 0.0, 1.0, 0.2, 0.3, 0.9)
+    for ds in ((1.0, 0.3, 0.2, 0.9), (0.5, -0.2, 0.4, 0.3)):  # the second compressed, sheared
+        cols = np.array([cst_hessian_column(*ds, m00, m01, m10, m11, a0, 0.3, 2.0, r, e, True)
+                         for r in (0, 1) for e in (0, 1)])
+        assert np.allclose(cols, cols.T)
+        # over the edge matrix the only null mode is the infinitesimal rotation
+        eig = np.linalg.eigvalsh(cols)
+        assert eig[0] == pytest.approx(0.0, abs=1e-12) and eig[1] > 1e-3
+        exact = np.array([cst_hessian_column(*ds, m00, m01, m10, m11, a0, 0.3, 2.0, r, e, False)
+                          for r in (0, 1) for e in (0, 1)])
+        assert np.allclose(exact, exact.T)
 
 
 @pytest.mark.parametrize("nu", [0.3, 0.4, 0.45, 0.49])

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .layout import P_KA, P_KAPPA, P_RINGS, P_TAU, P_TH0
+from .layout import P_KA, P_KAPPA, P_LAM, P_MU, P_RINGS, P_TAU, P_TH0
 from .rings import (
     edge_constants,
     edge_ends,
@@ -34,6 +34,7 @@ from .rings import (
     n_tri_types,
     point_dof,
     point_xy,
+    rest_xy,
     tri_corners,
     tri_rest_area,
 )
@@ -141,12 +142,122 @@ def tri_area(xa, ya, xb, yb, xc, yc):
     return 0.5 * ((xb - xa) * (yc - ya) - (xc - xa) * (yb - ya))
 
 
+
+# --- constant-strain neo-Hookean triangle (the FEM reference's energy on a linear element) ---
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def cst_rest(qax, qay, qbx, qby, qcx, qcy):
+    """Inverse ``(m00, m01, m10, m11)`` of the rest edge matrix ``Dm = [b - a, c - a]`` and the
+    rest area of the triangle (a, b, c)."""
+    d00, d01, d10, d11 = qbx - qax, qcx - qax, qby - qay, qcy - qay
+    det = d00 * d11 - d01 * d10
+    return d11 / det, -d01 / det, -d10 / det, d00 / det, 0.5 * det
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11):
+    """``F = Ds Dm^-1`` row by row."""
+    return (ds00 * m00 + ds01 * m10, ds00 * m01 + ds01 * m11,
+            ds10 * m00 + ds11 * m10, ds10 * m01 + ds11 * m11)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def cst_energy(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam):
+    """``A0 W(F)``, ``W = mu/2 (I1 - 2) - mu ln J + lam/2 (ln J)^2`` (plane strain: the
+    out-of-plane stretch is 1); infinite for ``J <= 0``. ``Ds`` holds the current edges
+    ``[b - a, c - a]`` by rows (x row, y row)."""
+    f00, f01, f10, f11 = _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11)
+    det = f00 * f11 - f01 * f10
+    if not det > 0.0:
+        return math.inf
+    lnj = math.log(det)
+    i1 = f00 * f00 + f01 * f01 + f10 * f10 + f11 * f11
+    return a0 * (0.5 * mu * (i1 - 2.0) - mu * lnj + 0.5 * lam * lnj * lnj)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _edge_force(p00, p01, p10, p11, m00, m01, m10, m11, a0):
+    """``dE/dDs = A0 P Dm^-T`` from the first Piola stress P (rows)."""
+    return (a0 * (p00 * m00 + p01 * m01), a0 * (p00 * m10 + p01 * m11),
+            a0 * (p10 * m00 + p11 * m01), a0 * (p10 * m10 + p11 * m11))
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def cst_gradient(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam):
+    """``dE/dDs`` (rows): the gradient over corner b is its column 0, over c its column 1, over
+    a minus their sum. ``P = mu F + (lam ln J - mu) F^-T``."""
+    f00, f01, f10, f11 = _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11)
+    det = f00 * f11 - f01 * f10
+    c = (lam * math.log(det) - mu) / det
+    # F^-T = [[f11, -f10], [-f01, f00]] / J
+    return _edge_force(mu * f00 + c * f11, mu * f01 - c * f10, mu * f10 - c * f01,
+                       mu * f11 + c * f00, m00, m01, m10, m11, a0)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam, r, e, psd):
+    """Column ``(r, e)`` of the Hessian ``d2E / dDs2``: ``d(dE/dDs)`` for a unit change of
+    ``Ds[r, e]`` (rows of the result as in :func:`cst_gradient`).
+
+    ``dP = mu dF + (mu - lam ln J) F^-T dF^T F^-T + lam (F^-T : dF) F^-T``. ``psd`` takes the
+    tangent at rest (F = I: linear elasticity, positive semi-definite) instead, the interior
+    point's convexified fallback.
+    """
+    if psd:
+        f00, f01, f10, f11 = 1.0, 0.0, 0.0, 1.0
+    else:
+        f00, f01, f10, f11 = _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11)
+    det = f00 * f11 - f01 * f10
+    g00, g01, g10, g11 = f11 / det, -f10 / det, -f01 / det, f00 / det  # F^-T
+    # dF = E_re Dm^-1: row r is row e of Dm^-1
+    me0 = m00 if e == 0 else m10
+    me1 = m01 if e == 0 else m11
+    d00, d01 = (me0, me1) if r == 0 else (0.0, 0.0)
+    d10, d11 = (0.0, 0.0) if r == 0 else (me0, me1)
+    tr = g00 * d00 + g01 * d01 + g10 * d10 + g11 * d11  # F^-T : dF
+    # F^-T dF^T F^-T
+    t00, t01 = g00 * d00 + g01 * d01, g00 * d10 + g01 * d11
+    t10, t11 = g10 * d00 + g11 * d01, g10 * d10 + g11 * d11
+    s00, s01 = t00 * g00 + t01 * g10, t00 * g01 + t01 * g11
+    s10, s11 = t10 * g00 + t11 * g10, t10 * g01 + t11 * g11
+    c = mu - lam * math.log(det)
+    return _edge_force(mu * d00 + c * s00 + lam * tr * g00, mu * d01 + c * s01 + lam * tr * g01,
+                       mu * d10 + c * s10 + lam * tr * g10, mu * d11 + c * s11 + lam * tr * g11,
+                       m00, m01, m10, m11, a0)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _cst_triangle(x, n, m, prm, t, i):
+    """Current edges ``Ds`` (rows), rest inverse and area of triangle ``i`` of family ``t``."""
+    ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+    xa, ya = point_xy(x, n, m, prm, ka, ia)
+    xb, yb = point_xy(x, n, m, prm, kb, ib)
+    xc, yc = point_xy(x, n, m, prm, kc, ic)
+    qax, qay = rest_xy(prm, n, m, ka, ia)
+    qbx, qby = rest_xy(prm, n, m, kb, ib)
+    qcx, qcy = rest_xy(prm, n, m, kc, ic)
+    m00, m01, m10, m11, a0 = cst_rest(qax, qay, qbx, qby, qcx, qcy)
+    return xb - xa, xc - xa, yb - ya, yc - ya, m00, m01, m10, m11, a0
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def mesh_energy(x, n, prm):
     """Total energy of the disk's point mesh (springs, area energy) and the two finger joints
     [scaled]; ``prm`` is the kernels' copy with the ring table (:mod:`envs.model.rings`)."""
     m = int(prm[P_RINGS])
     e = 0.0
+    if prm[P_MU] > 0.0:
+        # the constant-strain neo-Hookean member: the triangles instead of springs and area
+        for t in range(n_tri_types(m)):
+            for i in range(n):
+                ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0 = _cst_triangle(x, n, m, prm, t,
+                                                                               i)
+                e += cst_energy(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, prm[P_MU],
+                                prm[P_LAM])
+        for j in range(2):
+            e += joint_energy(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
+        return e
     ne = n_edge_types(m)
     for i in range(n):
         for t in range(ne):
@@ -178,9 +289,29 @@ def _add2(grad, d, gx, gy):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _cst_gradient_all(x, n, m, prm, grad):
+    """Add the gradient of every constant-strain triangle."""
+    for t in range(n_tri_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0 = _cst_triangle(x, n, m, prm, t, i)
+            h00, h01, h10, h11 = cst_gradient(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0,
+                                              prm[P_MU], prm[P_LAM])
+            _add2(grad, point_dof(n, m, ka, ia), -(h00 + h01), -(h10 + h11))
+            _add2(grad, point_dof(n, m, kb, ib), h00, h10)
+            _add2(grad, point_dof(n, m, kc, ic), h01, h11)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def mesh_gradient(x, n, prm, grad):
     """Add the gradient of :func:`mesh_energy` to ``grad`` (state order)."""
     m = int(prm[P_RINGS])
+    if prm[P_MU] > 0.0:
+        _cst_gradient_all(x, n, m, prm, grad)
+        for j in range(2):
+            grad[2 * n + j] += joint_gradient(x[2 * n + j], prm[P_TAU], prm[P_KAPPA],
+                                              prm[P_TH0])
+        return
     for t in range(n_edge_types(m)):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)

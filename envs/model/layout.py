@@ -23,6 +23,9 @@ P_RHO     rounding radius of the finger corners
 P_KA      area stiffness ``c_A K / (s E)`` of the area energy (0: springs only, the paper's fan)
 P_A0      rest area of a fan triangle ``sin(2 pi / N) / 2``
 P_RINGS   rings M of the disk's point mesh (1: the paper's fan; :mod:`envs.model.rings`)
+P_MU      element energy: 0 for springs and the area energy, else the shear modulus ``mu / E``
+          of the constant-strain neo-Hookean triangle that replaces them
+P_LAM     its Lame modulus ``lambda / E`` (plane strain)
 ========  ==================================================================================
 
 The kernels keep a longer private copy: two solver slots, P_GAUGE (stiffness of the rotation
@@ -37,10 +40,11 @@ import numpy as np
 # parameter vector
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
 P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0, P_RINGS = range(9, 18)
-N_PARAMS = 18
-P_GAUGE = 18  # solver copy only: gauge spring stiffness
-P_POLICY = 19  # solver copy only: contact policy of this attempt
-N_KERNEL_PARAMS = 20  # the ring table follows
+P_MU, P_LAM = 18, 19
+N_PARAMS = 20
+P_GAUGE = 20  # solver copy only: gauge spring stiffness
+P_POLICY = 21  # solver copy only: contact policy of this attempt
+N_KERNEL_PARAMS = 22  # the ring table follows
 
 # scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,

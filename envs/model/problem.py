@@ -35,7 +35,9 @@ from .layout import (
     P_KAPPA,
     P_KC,
     P_KR,
+    P_LAM,
     P_LMAX,
+    P_MU,
     P_PHASE,
     P_RHO,
     P_RINGS,
@@ -183,7 +185,8 @@ def stiffness_unit(s):
 
 
 def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van_gelder",
-                phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
+                phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1,
+                element: str = "spring") -> np.ndarray:
     """Scaled solver parameters of valid scenes, shape (B, N_PARAMS) (layout ``P_*``).
 
     Parameters
@@ -200,14 +203,21 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
     n_rings
         Rings ``M`` of the point mesh (1: the paper's fan; :mod:`envs.model.rings`). Ring
         meshes take the area rule on every edge (``stiffness_rule`` must be ``"van_gelder"``).
+    element
+        ``"spring"`` (springs and the area energy, CONVENTIONS.md) or ``"cst"`` (the
+        constant-strain neo-Hookean triangle of the FEM's material instead, scaled by the
+        disk's ``stiffness_scale``).
     """
     return pack_rows(cols.rows() if isinstance(cols, SceneColumns) else cols, n_triangles,
-                     stiffness_rule, phase_rad, n_rings)
+                     stiffness_rule, phase_rad, n_rings, element)
 
 
 def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_gelder",
-              phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
+              phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1,
+              element: str = "spring") -> np.ndarray:
     """:func:`pack_params` of a (B, N_SCENE) scene matrix."""
+    if element not in ELEMENTS:
+        raise ValueError(f"element must be one of {ELEMENTS}, got {element!r}")
     n = int(n_triangles)
     m = int(n_rings)
     if m > 1:
@@ -225,7 +235,19 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     prm = np.empty((scene.shape[0], N_PARAMS))
     _pack_rows(scene, n, k_int_rows, k_ext_rows, float(phase_rad), prm)
     prm[:, P_RINGS] = m
+    prm[:, P_MU] = 0.0
+    prm[:, P_LAM] = 0.0
+    if element == "cst":
+        # Lame moduli per E (the unit s E t r^2 of the energy makes s the calibration scale)
+        nu = scene[:, S_POISSON]
+        prm[:, P_MU] = 1.0 / (2.0 * (1.0 + nu))
+        prm[:, P_LAM] = nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
     return prm
+
+
+#: Element energies of the model family: springs (and the area energy) or the
+#: constant-strain neo-Hookean triangle.
+ELEMENTS = ("spring", "cst")
 
 
 @functools.lru_cache(maxsize=256)
@@ -322,7 +344,8 @@ def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:
 
 def scaled_params(scene, torque_nm: float, n_triangles: int,
                   stiffness_rule: str = "van_gelder",
-                  phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1) -> np.ndarray:
+                  phase_rad: float = DEFAULT_PHASE_RAD, n_rings: int = 1,
+                element: str = "spring") -> np.ndarray:
     """The solver's parameter row of one scene at one torque, float64[N_PARAMS]."""
     return pack_params(scene.columns(torque_nm), int(n_triangles), stiffness_rule,
                        float(phase_rad), int(n_rings))[0]

@@ -9,8 +9,10 @@ import math
 from numba import njit
 
 from ..model.energy import (
+    _cst_triangle,
     area_curvature,
     area_slope,
+    cst_hessian_column,
     mesh_energy,
     mesh_gradient,
     spring_hessian,
@@ -22,6 +24,8 @@ from ..model.layout import (
     P_KAPPA,
     P_KC,
     P_KR,
+    P_LAM,
+    P_MU,
     P_PHASE,
     P_RINGS,
 )
@@ -177,12 +181,76 @@ def _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
                 _tri_pair(ab, bb, dd, nb, pb, pc, gxb, gyb, gxc, gyc, curv, half)
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _cst_block(cols, tu0, tu1, tv0, tv1, r, rp):
+    """Entry (r, r') of the 2x2 block between corners u and v of a constant-strain triangle:
+    ``sum_e sum_e' T_u[e] T_v[e'] d2E / dDs[r, e] dDs[r', e']`` (``T``: how a corner enters
+    the two edges, a: (-1, -1), b: (1, 0), c: (0, 1))."""
+    return (tu0 * (tv0 * cols[2 * r][2 * rp] + tv1 * cols[2 * r][2 * rp + 1])
+            + tu1 * (tv0 * cols[2 * r + 1][2 * rp] + tv1 * cols[2 * r + 1][2 * rp + 1]))
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _cst_pair(ab, bb, dd, nb, cols, pu, tu0, tu1, pv, tv0, tv1, sign):
+    """Add the block between two free corners (the diagonal block when pu == pv)."""
+    if pu == pv:
+        _add_point(ab, pu, sign * _cst_block(cols, tu0, tu1, tu0, tu1, 0, 0),
+                   sign * _cst_block(cols, tu0, tu1, tu0, tu1, 1, 1),
+                   sign * _cst_block(cols, tu0, tu1, tu0, tu1, 1, 0))
+        return
+    for r in range(2):
+        for rp in range(2):
+            _add(ab, bb, dd, nb, pu + r, pv + rp,
+                 sign * _cst_block(cols, tu0, tu1, tv0, tv1, r, rp))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
+    """Hessian (band order) of every constant-strain neo-Hookean triangle (``psd``: the
+    tangent at rest, see :func:`envs.model.energy.cst_hessian_column`; ``sign = -1`` takes a
+    Hessian out again)."""
+    nb = ab.shape[0]
+    m = int(prm[P_RINGS])
+    mu, lam = prm[P_MU], prm[P_LAM]
+    for t in range(n_tri_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+            ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0 = _cst_triangle(x, n, m, prm, t, i)
+            cols = (cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam,
+                                       0, 0, psd),
+                    cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam,
+                                       0, 1, psd),
+                    cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam,
+                                       1, 0, psd),
+                    cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam,
+                                       1, 1, psd))
+            pa = _band_of(bidx, n, m, ka, ia)
+            pb = _band_of(bidx, n, m, kb, ib)
+            pc = _band_of(bidx, n, m, kc, ic)
+            if pa >= 0:
+                _cst_pair(ab, bb, dd, nb, cols, pa, -1.0, -1.0, pa, -1.0, -1.0, sign)
+                if pb >= 0:
+                    _cst_pair(ab, bb, dd, nb, cols, pa, -1.0, -1.0, pb, 1.0, 0.0, sign)
+                if pc >= 0:
+                    _cst_pair(ab, bb, dd, nb, cols, pa, -1.0, -1.0, pc, 0.0, 1.0, sign)
+            if pb >= 0:
+                _cst_pair(ab, bb, dd, nb, cols, pb, 1.0, 0.0, pb, 1.0, 0.0, sign)
+                if pc >= 0:
+                    _cst_pair(ab, bb, dd, nb, cols, pb, 1.0, 0.0, pc, 0.0, 1.0, sign)
+            if pc >= 0:
+                _cst_pair(ab, bb, dd, nb, cols, pc, 0.0, 1.0, pc, 0.0, 1.0, sign)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     """Energy gradient (state order) and Hessian (band order) of the model's terms and the
     gauge spring."""
     mesh_gradient(x, n, prm, grad)
-    if want_hess:
+    if want_hess and prm[P_MU] > 0.0:
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd)
+        for j in range(2):
+            dd[j, j] += prm[P_KAPPA]
+    elif want_hess:
         nb = ab.shape[0]
         m = int(prm[P_RINGS])
         for t in range(n_edge_types(m)):
@@ -244,7 +312,11 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
     curvature (kept in ``ch``) taken out, without evaluating the constraints again."""
     nb = ab.shape[0]
     m = int(prm[P_RINGS])
-    for t in range(n_edge_types(m)):
+    if prm[P_MU] > 0.0:
+        # constant-strain triangles: their exact Hessian out, the tangent at rest in
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
+    for t in range(n_edge_types(m) if prm[P_MU] == 0.0 else 0):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)
             xa, ya = point_xy(x, n, m, prm, ka, ia)
@@ -258,7 +330,7 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
                 _add_edge(ab, bb, dd, nb, _band_of(bidx, n, m, ka, ia),
                           _band_of(bidx, n, m, kb, ib), -tt * (1.0 - ux * ux),
                           -tt * (1.0 - uy * uy), tt * ux * uy)
-    if prm[P_KA] > 0.0:
+    if prm[P_KA] > 0.0 and prm[P_MU] == 0.0:
         # the area energy: its exact Hessian out, its convexified one in
         _area_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
         _area_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)

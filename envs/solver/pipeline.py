@@ -34,6 +34,9 @@ from envs.model.layout import (
     P_KA,
     P_KC,
     P_KR,
+    P_LAM,
+    P_MU,
+    P_PHASE,
     P_RHO,
     P_RINGS,
     P_THMIN,
@@ -144,6 +147,10 @@ def _check_row(s, prm, n, ck):
     ck[check.CK_HUB] = HUB_RADIUS * r
     ck[check.CK_UNIT] = k_unit
     ck[check.CK_CRATIO] = s[S_CONTOUR_RATIO]
+    ck[check.CK_PHASE] = prm[P_PHASE]
+    # constant-strain triangles: Lame moduli times s t [N/m] (0: springs)
+    ck[check.CK_MU] = prm[P_MU] * k_unit
+    ck[check.CK_LAM] = prm[P_LAM] * k_unit
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -202,7 +209,7 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face
     _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
     _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)
-    if prm[P_RINGS] == 1:
+    if prm[P_RINGS] == 1 and prm[P_MU] == 0.0:
         check.check_one(ck, points, x[2 * n : 2 * n + 2], face, corner, stop, verdict)
     else:
         r = s[S_RADIUS]
@@ -228,7 +235,8 @@ def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, point
 def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
-                  lam0: np.ndarray | None = None, n_rings: int = 1) -> BatchSolution:
+                  lam0: np.ndarray | None = None, n_rings: int = 1,
+                  element: str = "spring") -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -245,10 +253,12 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
         (default: rest, no multipliers). The start must be strictly feasible.
     n_rings
         Rings ``M`` of the point mesh (1: the paper's fan).
+    element
+        ``"spring"`` or ``"cst"`` (:func:`envs.model.problem.pack_params`).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
-    prm = pack_params(scene, n, stiffness_rule, phase_rad, int(n_rings))
+    prm = pack_params(scene, n, stiffness_rule, phase_rad, int(n_rings), element)
     xs = rest_state(prm, n) if x0 is None else np.array(x0, dtype=np.float64, ndmin=2)
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3))

@@ -18,7 +18,7 @@ import numpy as np
 
 from envs import check
 from envs.model.defaults import DEFAULT_N_TRIANGLES, DEFAULT_PHASE_RAD, STIFFNESS_RULES
-from envs.model.problem import stiffness_unit
+from envs.model.problem import ELEMENTS, stiffness_unit
 from envs.model.rings import MAX_RINGS
 from envs.scene import Scene
 from envs.validation import check_choice, check_integer, check_n_triangles, check_range
@@ -75,19 +75,20 @@ class _Problem:
     """One scene at one torque and mesh, solved through the pipeline (newton)."""
 
     def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float,
-                 m: int = 1):
+                 m: int = 1, element: str = "spring"):
         self.scene, self.torque_nm, self.n, self.rule, self.phase, self.m = (
             scene, float(torque_nm), int(n), rule, float(phase_rad), int(m))
+        self.element = element
         self.rows = scene.rows(self.torque_nm)
 
     def at(self, torque_nm: float, n: int | None = None) -> _Problem:
         return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
-                        self.phase, self.m)
+                        self.phase, self.m, self.element)
 
     def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
               ) -> tuple[GraspResult, BatchSolution]:
         sol = solve_columns(self.rows, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
-                            x0=x0, lam0=lam0, n_rings=self.m)
+                            x0=x0, lam0=lam0, n_rings=self.m, element=self.element)
         return grasp_result(sol, 0, self.torque_nm, "newton", self.rule), sol
 
 
@@ -182,7 +183,7 @@ def _continuation(prob: _Problem, first_step: float = 0.125, min_step: float = 1
 
 
 def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
-                  n_rings=1) -> tuple[int, int]:
+                  n_rings=1, element="spring") -> tuple[int, int]:
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
     check_choice("method", method, METHODS)
@@ -191,9 +192,10 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
     check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
     n = check_n_triangles(n_triangles)
     m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
-    if m > 1 and method != "newton":
-        raise ValueError(f"n_rings = {m} needs method = 'newton' (the baselines solve the fan), "
-                         f"got method = {method!r}")
+    check_choice("element", element, ELEMENTS)
+    if (m > 1 or element != "spring") and method != "newton":
+        raise ValueError(f"n_rings = {m} and element = {element!r} need method = 'newton' (the "
+                         f"baselines solve the spring fan), got method = {method!r}")
     if m > 1 and stiffness_rule != "van_gelder":
         raise ValueError(f"n_rings = {m} needs stiffness_rule = 'van_gelder', got "
                          f"{stiffness_rule!r}")
@@ -210,6 +212,7 @@ def simulate(
     phase_rad: float = DEFAULT_PHASE_RAD,
     time_limit_s: float = 30.0,
     n_rings: int = 1,
+    element: str = "spring",
 ) -> GraspResult:
     """Solve the grasp at one actuation torque, starting from the rest configuration.
 
@@ -232,6 +235,9 @@ def simulate(
     n_rings
         Rings ``M`` of the point mesh, 1 to 16 (1: the paper's fan; more: interior rings and a
         rigid hub, :mod:`envs.model.rings`; Newton only).
+    element
+        ``"spring"`` (springs and the area energy) or ``"cst"`` (constant-strain neo-Hookean
+        triangles of the disk's E and nu, scaled by its ``stiffness_scale``; Newton only).
 
     Returns
     -------
@@ -245,9 +251,9 @@ def simulate(
         For a bad argument, naming it and its allowed range.
     """
     n, m = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
-                         n_rings)
+                         n_rings, element)
     torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
-    prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), m)
+    prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), m, element)
     if method == "newton":
         return _solve_newton(prob)
     from . import baselines
@@ -266,6 +272,7 @@ def simulate_ramp(
     phase_rad: float = DEFAULT_PHASE_RAD,
     time_limit_s: float = 30.0,
     n_rings: int = 1,
+    element: str = "spring",
 ) -> list[GraspResult]:
     """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
 
@@ -281,7 +288,7 @@ def simulate_ramp(
         As in :func:`simulate`.
     """
     n, m = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
-                         n_rings)
+                         n_rings, element)
     try:
         torques = np.asarray(torques_nm, dtype=np.float64).ravel()
     except (TypeError, ValueError):
@@ -295,7 +302,7 @@ def simulate_ramp(
     if method != "newton":
         return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
                          phase_rad=phase_rad, time_limit_s=time_limit_s) for t in torques]
-    base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), m)
+    base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), m, element)
     out: list[GraspResult] = []
     prev: GraspResult | None = None
     for t in torques.tolist():
