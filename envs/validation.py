@@ -89,9 +89,16 @@ def check_integer(name: str, value, low: int, high: int) -> int:
 def check_n_triangles(n_triangles) -> int:
     """Validate the number of fan triangles ``N``.
 
-    ``N = 3`` gives 120-degree triangles, i.e. negative stiffness under the area rule.
+    ``N = 3`` gives 120-degree triangles, i.e. negative stiffness under the area rule; above
+    :data:`~envs.model.defaults.MAX_TRIANGLES` the solver mostly fails.
     """
-    return check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES)
+    n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, 2**62)
+    if n > MAX_TRIANGLES:
+        raise ValueError(
+            f"n_triangles = {n} is outside the allowed range [{MIN_TRIANGLES}, {MAX_TRIANGLES}]: "
+            f"beyond N = {MAX_TRIANGLES} most solves fail (MAX_TRIANGLES, measured in "
+            "envs/model/defaults.py)")
+    return n
 
 
 def check_choice(name: str, value, allowed) -> str:

@@ -134,8 +134,9 @@ def _describe_executor(executor: Any) -> str:
 class DesignProblem:
     """Gripper design for one fixed object, in the normalized space [-1, 1]^6.
 
-    Row ``x`` maps to the physical design ``bounds.scale(x)`` (columns of
-    :data:`envs.evaluate.DESIGN_FIELDS`); values outside [-1, 1] are clipped. The objective of
+    Row ``x`` maps to the physical design ``bounds.scale(x, disk)`` (columns of
+    :data:`envs.evaluate.DESIGN_FIELDS`; the box is relative to the object, see
+    :class:`~envs.evaluate.DesignBounds`); values outside [-1, 1] are clipped. The objective of
     the single-objective methods is the reward of :func:`envs.evaluate.evaluate_designs`
     (maximized). A design is *feasible* (for NSGA-II) when its grasp converged, both fingers
     touch the disk and the peak strain does not exceed the strain limit.
@@ -262,7 +263,7 @@ class DesignProblem:
 
     def to_physical(self, x: Any) -> np.ndarray:
         """Normalized rows (..., 6), clipped to [-1, 1], in physical units (SI)."""
-        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0))
+        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
         """One normalized row as ``{field: value}`` in physical units."""
@@ -305,7 +306,7 @@ class DesignProblem:
                 f"{x.shape[0]} evaluations asked, {self.remaining} left in the budget")
         if x.shape[0] == 0:
             return {k: np.zeros((0, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
-        out = self.evaluate_physical(self.bounds.scale(x))
+        out = self.evaluate_physical(self.bounds.scale(x, self.disk))
         self._record(x, out)
         return out
 

@@ -44,7 +44,7 @@ from envs.solver import simulate  # noqa: E402
 
 TORQUES_NM = (0.02, 0.1, 0.25, 0.5, 1.0)
 GRIDS = {
-    "newton": (4, 6, 8, 12, 16, 20, 32, 40, 60, 100, 160, 240, 400, 1000),
+    "newton": (4, 6, 8, 12, 16, 20, 32, 40, 60, 100, 160, 240, 400, 500),
     "slsqp": (4, 8, 12, 20, 32),
     "nelder-mead": (4, 8),
     "fem": (6, 12),  # rings of the FEM mesh
