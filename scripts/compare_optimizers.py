@@ -61,11 +61,17 @@ def best_at(result: OptimResult, grid: np.ndarray, axis: str) -> np.ndarray:
 
 
 def band(results: list[OptimResult], grid: np.ndarray, axis: str) -> dict[str, np.ndarray]:
-    """Median and quartiles across runs at each grid value (NaN-aware)."""
+    """Median and quartiles across runs at each grid value where every run has a best so far.
+
+    Quantiles of non-decreasing curves are non-decreasing, but only over the same runs: a median
+    over the runs that have started (RL runs start late, at their first probe) would drop when
+    a weaker run joins. Before the last run's first batch the band is NaN (not drawn).
+    """
     curves = np.array([best_at(r, grid, axis) for r in results])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns before a first batch
         q = np.nanpercentile(curves, [25, 50, 75], axis=0)
+    q[:, np.any(np.isnan(curves), axis=0)] = np.nan
     return {"grid": grid, "q25": q[0], "median": q[1], "q75": q[2]}
 
 
