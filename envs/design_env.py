@@ -219,7 +219,8 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
 
     if design is None:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
-        draw_design(fig.add_subplot(), np.array([0.2, math.radians(45.0), 0.025, 0.01, 0.0, 0.0]),
+        # the centre of the default box, at the object's scale
+        draw_design(fig.add_subplot(), DesignBounds().scale(np.zeros(N_DESIGN), disk),
                     disk.radius_m, title="no design yet: call step()")
         return figure_rgb_array(fig)
     chosen = Design.from_array(design)

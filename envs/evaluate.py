@@ -124,9 +124,9 @@ class DesignBounds:
     (:func:`~envs.scene.design_from_relative`). The model is invariant under this scaling, so
     a box means the same for every object: the paper's foam disks and the forceps' 2 mm TPU
     beads alike. Every design of the default box is valid at rest (its clearance is positive)
-    and 83 % of its random designs touch the disk with both fingers (measured on 3000 random
-    designs; the previous box in metres had 39 % invalid designs on the r = 0.07 m disk and 93 %
-    on the forceps' disks).
+    and 82-84 % of its random designs grasp with both fingers, on every preset (2000 random
+    designs each; the previous box in metres: 48-73 % valid on the paper disks, 7-14 % on the
+    forceps' beads, of which under 1 % touched with both fingers).
 
     ==  ====================  ==========================  =======  =======
     #   field                 meaning                     low      high

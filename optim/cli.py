@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from envs.model.defaults import MAX_TRIANGLES
-from envs.scene import PRESETS
+from envs.scene import PRESETS, Scene
 
 from .optimize import METHODS, get_optimizer
 from .problem import (
@@ -47,12 +47,15 @@ def paper_reference(problem: DesignProblem, scene: str = DEMO_SCENE,
                     torques_nm: tuple[float, ...] = REFERENCE_TORQUES_NM) -> tuple[float, float]:
     """Best reward of the scene's own (paper) gripper over a few torques, and that torque.
 
-    Not counted in the problem's evaluations.
+    The torques are those of the paper-r070 disk scaled by the disk's torque unit ``s E t r^2``
+    (the same squeeze for every object: unchanged on paper-r070, 0.4 to 4 mN·m on the forceps'
+    2 mm beads). Not counted in the problem's evaluations.
     """
-    designs = np.array([paper_design(scene, t) for t in torques_nm])
+    ratio = problem.disk.torque_unit_nm / Scene.preset(DEMO_SCENE).disk.torque_unit_nm
+    designs = np.array([paper_design(scene, t * ratio) for t in torques_nm])
     reward = problem.evaluate_physical(designs)["reward"]
     i = int(np.argmax(reward))
-    return float(reward[i]), float(torques_nm[i])
+    return float(reward[i]), float(torques_nm[i] * ratio)
 
 
 def _progress_bar(total: int, desc: str, enabled: bool):
@@ -100,8 +103,8 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
               f"d3 = {d['joint_offset_m']:.4f} m, w = {d['finger_width_m']:.4f} m, "
               f"T_a = {d['torque_nm']:.4f} N·m, d1 = {d['distance_m']:.4f} m")
     if reference is not None:
-        print(f"  paper gripper (best of T_a in {list(REFERENCE_TORQUES_NM)} N·m): "
-              f"{reference[0]:.4f} at T_a = {reference[1]:g} N·m")
+        print(f"  the scene's own gripper (best of 5 torques): {reference[0]:.4f} at "
+              f"T_a = {reference[1]:.3g} N·m")
     if result.pareto_front:
         print(f"  Pareto front: {len(result.pareto_front)} designs")
     print(f"  executor: {result.executor}, {result.evaluations_per_s:.0f} evaluations/s")
@@ -162,7 +165,7 @@ def run_optimize(
         finally:
             bar.close()
         result = replace(result, extra={**result.extra, "grasp_found": grasp_found(result)})
-        reference = paper_reference(problem, scene) if scene.startswith("paper") else None
+        reference = paper_reference(problem, scene)
         paths = write_outputs(result, out_dir, prefix, problem,
                               None if reference is None else reference[0])
     if verbose:
