@@ -571,9 +571,14 @@ def evaluate_designs(
           the fan triangles [-], the FEM reference's measure.
         - ``max_displacement_ratio``: max contour-point displacement / r [-].
         - ``strain_limit``: the limit used [-].
-        - ``reward_contact``, ``reward_deform``, ``penalty_miss``, ``penalty_invalid``,
-          ``penalty_fail``: signed reward terms (see :class:`RewardWeights`); ``reward`` is
-          their sum.
+        - ``finger_gap_m`` (B, 2): for a converged grasp, the distance from each finger that
+          does not touch the disk to the undeformed disk [m] (0 for a touching finger).
+        - ``rest_violation``: for a design invalid at rest, how far it is from valid,
+          ``v / (1 + v)`` in [0, 1] with ``v`` of :func:`rest_violation` (1 for a non-finite
+          value); 0 for valid designs.
+        - ``reward_contact``, ``reward_deform``, ``penalty_miss``, ``penalty_gap``,
+          ``penalty_invalid``, ``penalty_fail``: signed reward terms (see
+          :class:`RewardWeights`); ``reward`` is their sum.
 
     Raises
     ------

@@ -199,3 +199,17 @@ def test_convergence_chart_curves_are_monotone():
     fig: Figure = convergence_figure([res])
     ys = fig.axes[0].get_lines()[0].get_ydata()
     assert np.all(np.diff(ys) >= 0)
+
+
+def test_rl_training_objects_are_observable_for_the_forceps():
+    # before: the TPU scale 0.033 took the softest draws below the observable 1 kPa and PPO
+    # crashed mid-training on forceps scenes
+    from envs.design_env import observe
+    from optim.problem import DesignProblem
+    from optim.rl import training_distribution
+
+    dist = training_distribution(DesignProblem.from_scene("forceps-a"))
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        observe(*dist.sample(rng))
+    assert dist.youngs_modulus_range_pa[1] >= 29e6  # the forceps' own TPU is drawn too
