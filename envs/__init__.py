@@ -55,5 +55,6 @@ if ENV_ID not in gymnasium.registry:
         id=ENV_ID,
         entry_point="envs.design_env:GripperDesignEnv",
         vector_entry_point="envs.design_env:GripperDesignVectorEnv",
-        max_episode_steps=1,
+        # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
+        # would also flag that step as truncated (Gymnasium's checker rejects it)
     )

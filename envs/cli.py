@@ -6,20 +6,41 @@ import argparse
 import json
 import math
 import sys
-from pathlib import Path
 
 __all__ = ["main"]
 
 
+def cli_option(option: str, check, *args):
+    """``check(*args)``, its ``ValueError`` prefixed with the command-line option's name."""
+    try:
+        return check(*args)
+    except ValueError as exc:
+        raise ValueError(f"{option}: {exc}") from None
+
+
 def _simulate(args: argparse.Namespace) -> int:
+    import time
+
     from .scene import Scene
     from .solver import simulate
+    from .validation import check_n_triangles, check_output_file, check_range
 
+    # every option before any work: a bad --plot must not cost a solve
+    cli_option("--triangles", check_n_triangles, args.triangles)
+    check_range("--torque", args.torque, 0.0, math.inf)
+    plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene = Scene.preset(args.scene)
+    # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
+    # report the solve of the answer shown, as a user's next call would see it
+    t0 = time.perf_counter()
+    first = simulate(scene, args.torque, args.triangles, args.method, stiffness_rule=args.rule)
+    first_wall_s = time.perf_counter() - t0
     res = simulate(scene, args.torque, args.triangles, args.method, stiffness_rule=args.rule)
+    load_s = max(0.0, first_wall_s - first.solve_time_s)
     if args.json:
         data = res.to_dict()
         data["scene"] = args.scene
+        data["kernel_load_s"] = load_s
         print(json.dumps(data, indent=2))
     else:
         r, left = (math.degrees(a) for a in res.jaw_angles_rad)
@@ -35,17 +56,21 @@ def _simulate(args: argparse.Namespace) -> int:
         print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
               f"moment {res.kkt.moment_residual_rel:.1e}")
         print(f"  solve time     : {res.solve_time_s * 1e3:.2f} ms, {res.iterations} iterations")
-    if args.plot:
+        print(f"  kernel load    : {load_s * 1e3:.0f} ms (first call in this process: numba "
+              "loads its cached kernels, or compiles them on a fresh install)")
+    if plot is not None:
         from .render import grasp_figure
 
-        grasp_figure(scene, res, path=args.plot)
+        grasp_figure(scene, res, path=plot)
         if not args.json:
-            print(f"  plot           : {args.plot}")
+            print(f"  plot           : {plot}")
     return 0 if res.converged else 1
 
 
 def _demo(args: argparse.Namespace) -> int:
-    out = Path(args.out)
+    from .validation import check_output_dir
+
+    out = check_output_dir("--out", args.out)
     out.mkdir(parents=True, exist_ok=True)
     try:
         from optim.cli import run_demo
@@ -65,7 +90,7 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .model.defaults import STIFFNESS_RULES
+    from .model.defaults import MAX_TRIANGLES, STIFFNESS_RULES
     from .scene import PRESETS
     from .solver import METHODS
 
@@ -73,12 +98,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     sim = sub.add_parser("simulate", help="solve one grasp")
     sim.add_argument("--scene", default="paper-r070", choices=sorted(PRESETS))
-    sim.add_argument("--triangles", type=int, default=20, help="number of fan triangles N")
+    sim.add_argument("--triangles", type=int, default=20,
+                     help=f"number of fan triangles N, in [4, {MAX_TRIANGLES}] (default 20)")
     sim.add_argument("--torque", type=float, default=0.2, help="actuation torque T_a [N·m]")
     sim.add_argument("--method", default="newton", choices=METHODS)
     sim.add_argument("--rule", default="van_gelder", choices=STIFFNESS_RULES)
     sim.add_argument("--json", action="store_true", help="print the result as JSON")
-    sim.add_argument("--plot", metavar="PNG", help="write a drawing of the grasp")
+    sim.add_argument("--plot", metavar="PNG", help="write a drawing of the grasp (a .png file "
+                     "in an existing folder)")
     sim.set_defaults(func=_simulate)
     demo = sub.add_parser("demo", help="run the main job and write charts to --out")
     demo.add_argument("--out", default="out")

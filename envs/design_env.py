@@ -28,7 +28,7 @@ from .evaluate import (
 )
 from .model.defaults import DEFAULT_N_TRIANGLES, PAPER_TORSION_STIFFNESS_NM_PER_RAD
 from .scene import Design, SoftDisk
-from .validation import check_range
+from .validation import check_n_triangles, check_range
 
 __all__ = [
     "OBS_FIELDS",
@@ -183,6 +183,19 @@ def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
     return disk, limit, observe(disk, limit)
 
 
+def _check_settings(bounds, distribution, weights, n_triangles):
+    """The env settings, validated at construction (not at the first step); defaults for None."""
+    checked = []
+    for name, value, kind in (("bounds", bounds, DesignBounds),
+                              ("distribution", distribution, ObjectDistribution),
+                              ("weights", weights, RewardWeights)):
+        if value is not None and not isinstance(value, kind):
+            raise ValueError(f"{name} must be None or a {kind.__name__}, got "
+                             f"{type(value).__name__}")
+        checked.append(kind() if value is None else value)
+    return (*checked, check_n_triangles(n_triangles))
+
+
 def _spaces() -> tuple[spaces.Box, spaces.Box]:
     action = spaces.Box(-1.0, 1.0, shape=(N_DESIGN,), dtype=np.float32)
     obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
@@ -206,7 +219,8 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
 
     if design is None:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
-        draw_design(fig.add_subplot(), np.array([0.2, math.radians(45.0), 0.025, 0.01, 0.0, 0.0]),
+        # the centre of the default box, at the object's scale
+        draw_design(fig.add_subplot(), DesignBounds().scale(np.zeros(N_DESIGN), disk),
                     disk.radius_m, title="no design yet: call step()")
         return figure_rgb_array(fig)
     chosen = Design.from_array(design)
@@ -244,18 +258,26 @@ class GripperDesignEnv(gym.Env):
     ## Action Space
 
     The action is a `ndarray` with shape `(6,)`, float32 in `[-1, 1]`, mapped linearly to the
-    box of `bounds` (a :class:`~envs.evaluate.DesignBounds`; defaults below). Values outside
-    `[-1, 1]` are clipped (reported in `info["clipped"]`); NaN, inf or a wrong shape raise
-    `ValueError`.
+    box of `bounds` (a :class:`~envs.evaluate.DesignBounds`), which is relative to the object
+    drawn at reset: lengths in disk radii `r`, the torque in the disk's torque unit
+    `s E t r^2`, and the placement given as the rest clearance between the disk and the
+    gripping faces (so every action of the default box is a design valid at rest, for a 2 mm
+    bead as for a 100 mm disk). Values outside `[-1, 1]` are clipped (reported in
+    `info["clipped"]`); NaN, inf or a wrong shape raise `ValueError`. `info["design"]` holds
+    the physical design (SI units).
 
-    | Num | Action                          | Unit | Min (-1) | Max (+1) |
-    |-----|---------------------------------|------|----------|----------|
-    | 0   | finger length `l`               | m    | 0.05     | 0.30     |
-    | 1   | rest angle `theta_a0`           | rad  | 0.2618 (15 deg) | 1.3090 (75 deg) |
-    | 2   | joint offset `d_3`              | m    | 0.0      | 0.05     |
-    | 3   | finger width `w`                | m    | 0.002    | 0.03     |
-    | 4   | actuation torque `T_a`          | N·m  | 0.0      | 1.0      |
-    | 5   | object placement `d_1`          | m    | 0.0      | 0.06     |
+    | Num | Action                                    | Unit | Min (-1)        | Max (+1)        |
+    |-----|-------------------------------------------|------|-----------------|-----------------|
+    | 0   | finger length `l / r`                     | -    | 1.5             | 8               |
+    | 1   | rest angle `theta_a0`                     | rad  | 0.1745 (10 deg) | 1.0472 (60 deg) |
+    | 2   | joint offset `d_3 / r`                    | -    | 0.0             | 0.6             |
+    | 3   | finger width `w / r`                      | -    | 0.05            | 0.4             |
+    | 4   | actuation torque `T_a / (s E t r^2)`      | -    | 0.0             | 0.3             |
+    | 5   | rest clearance of disk and faces, `/ r`   | -    | 0.005           | 1.2             |
+
+    The placement `d_1` follows from the clearance `g`:
+    `d_1 = max(0, (r (1 + g) + w/2 - d_3 cos theta_a0) / sin theta_a0 - r)`
+    (:func:`envs.scene.design_from_relative`).
 
     ## Observation Space
 
@@ -276,7 +298,8 @@ class GripperDesignEnv(gym.Env):
     With the weights `w` of :class:`~envs.evaluate.RewardWeights` (defaults in brackets):
 
     *r = w_contact min(c, c_max) - w_deform min(eps / eps_max, q_max) - w_miss m
-    - w_invalid [invalid] - w_fail [not converged]*
+    - w_gap g / (1 + g) - [invalid] (w_invalid + w_violation v / (1 + v))
+    - w_fail [not converged]*
 
     - `c`: contact score, `(contacts on the right face + contacts on the left face) / N`, the
       fraction of the contour in contact, nearly independent of `N`
@@ -284,12 +307,19 @@ class GripperDesignEnv(gym.Env):
     - `eps`: peak spring strain, `eps_max` the object's strain limit (`w_deform = 0.25`,
       `q_max = 4`);
     - `m`: number of fingers that do not touch the disk (`w_miss = 0.5`);
+    - `g`: the largest distance between a finger that does not touch and the disk, in disk
+      radii (`w_gap = 0.5`): a design that misses scores higher the closer its fingers close;
     - invalid: the fingers overlap the disk at rest, or the design is otherwise impossible
-      (`w_invalid = 3`, nothing is solved);
+      (nothing is solved; `w_invalid = 3`); `v` is how far it is from valid (overlap depth
+      in radii and any other violated limit, :func:`envs.evaluate.rest_violation`;
+      `w_violation = 1`), so less overlap scores higher;
     - not converged: the solver failed (`w_fail = 2.5`, metrics reported as 0).
 
+    Outcomes are ordered: every valid converged grasp scores above -2.5, a solver failure
+    -2.5, every invalid design -3 down to -4. The reward is finite and lies in `(-4, 0.5]`.
     Each signed term is in `info` (`reward_contact`, `reward_deform`, `penalty_miss`,
-    `penalty_invalid`, `penalty_fail`). The reward is finite and lies in `[-3, 0.5]`.
+    `penalty_gap`, `penalty_invalid`, `penalty_fail`), with `finger_gap_m` and
+    `rest_violation`.
 
     ## Starting State
 
@@ -301,10 +331,16 @@ class GripperDesignEnv(gym.Env):
 
     ## Episode End
 
-    The episode terminates after its single step (`terminated=True`); it is registered with
-    `max_episode_steps=1`, so under `gymnasium.make` the step is also reported as truncated by
-    the `TimeLimit` wrapper. Stepping again without a reset evaluates another design on the same
-    object.
+    The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
+    a contextual bandit, one object and one design per episode. It is registered without a
+    `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v0"))`
+    passes. Stepping again without a reset evaluates another design on the same object.
+
+    Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v0", n)`
+    (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
+    default. Gymnasium's `"sync"` and `"async"` modes reset on the *next* step unless told
+    otherwise, which would spend every other step on a reset: pass
+    `vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}`.
 
     ## Arguments
 
@@ -312,20 +348,24 @@ class GripperDesignEnv(gym.Env):
       window). The frame shows the jaws at rest and closed, the rest and deformed disk, the
       contacts and the springs coloured by strain; it re-solves the last design with
       :func:`envs.solver.simulate` (same kernel).
-    - `bounds`: :class:`~envs.evaluate.DesignBounds` of the action mapping.
+    - `bounds`: :class:`~envs.evaluate.DesignBounds` of the action mapping (relative units).
     - `distribution`: :class:`ObjectDistribution` of the objects drawn at reset.
     - `weights`: :class:`~envs.evaluate.RewardWeights`.
-    - `n_triangles`: number of fan triangles `N` of the disk model (default 20).
+    - `n_triangles`: number of fan triangles `N` of the disk model (default 20), an integer in
+      `[4, MAX_TRIANGLES]` (:data:`envs.model.defaults`).
     - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` [N·m/rad] (default: the paper
       gripper's 0.073).
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
-    `clipped`, the physical `design` (6 values in SI units, action order) and the object.
+    `clipped`, the physical `design` (6 values in SI units, :data:`envs.scene.DESIGN_FIELDS`
+    order) and the object.
 
     ## Version History
 
-    * v0: Initial version.
+    * v0: Initial version. Later in v0: actions relative to the object (lengths in radii,
+      torque in `s E t r^2`, placement as a rest clearance) instead of metres; graded
+      penalties for missing and invalid designs; no `TimeLimit` in the registration.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": RENDER_FPS}
@@ -344,10 +384,8 @@ class GripperDesignEnv(gym.Env):
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
         self.render_mode = render_mode
-        self.bounds = DesignBounds() if bounds is None else bounds
-        self.distribution = ObjectDistribution() if distribution is None else distribution
-        self.weights = RewardWeights() if weights is None else weights
-        self.n_triangles = int(n_triangles)
+        self.bounds, self.distribution, self.weights, self.n_triangles = _check_settings(
+            bounds, distribution, weights, n_triangles)
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
@@ -373,7 +411,7 @@ class GripperDesignEnv(gym.Env):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
         act, clipped = _check_actions(action, (N_DESIGN,))
-        design = self.bounds.scale(act)
+        design = self.bounds.scale(act, self._disk)
         out = evaluate_designs(
             design[None, :], self._disk, strain_limits=self._strain_limit,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
@@ -438,17 +476,17 @@ class GripperDesignVectorEnv(VectorEnv):
 
     Autoreset (``autoreset_mode``, see https://farama.org/Vector-Autoreset-Mode):
 
-    - ``NEXT_STEP`` (default, as Gymnasium's own vector envs): every episode is one step, so
+    - ``SAME_STEP`` (default: no wasted steps): every step evaluates the designs and returns
+      the observation of the next object; the evaluated object's observation and info are in
+      ``info["final_obs"]`` and ``info["final_info"]``.
+    - ``NEXT_STEP`` (Gymnasium's own vector envs' default): every episode is one step, so
       steps alternate: a step evaluating the designs (reward, ``terminated=True``) is followed
       by a step that resets the sub-envs and ignores their actions (reward 0,
       ``terminated=False``).
-    - ``SAME_STEP`` (recommended here: no wasted steps): every step evaluates the designs and
-      returns the observation of the next object; the evaluated object's observation and info
-      are in ``info["final_obs"]`` and ``info["final_info"]``.
     - ``DISABLED``: the caller resets with ``reset(options={"reset_mask": mask})``.
 
-    ``truncated`` mirrors the ``TimeLimit`` wrapper of ``make``: True on the evaluation step when
-    ``max_episode_steps`` is 1 (the registered value).
+    ``truncated`` mirrors a ``TimeLimit`` wrapper: True on the evaluation step when
+    ``max_episode_steps`` is 1 (the registration sets none: the episode terminates by itself).
 
     Parameters
     ----------
@@ -459,13 +497,13 @@ class GripperDesignVectorEnv(VectorEnv):
     bounds, distribution, weights, n_triangles, torsion_stiffness_nm_per_rad
         As for :class:`GripperDesignEnv`.
     max_episode_steps
-        Passed by ``gymnasium.make_vec``; see ``truncated`` above.
+        ``None`` (the registered value) or an integer >= 1; see ``truncated`` above.
     autoreset_mode
         An :class:`gymnasium.vector.AutoresetMode` (or its value).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": RENDER_FPS,
-                "autoreset_mode": AutoresetMode.NEXT_STEP}
+                "autoreset_mode": AutoresetMode.SAME_STEP}
 
     def __init__(
         self,
@@ -478,7 +516,7 @@ class GripperDesignVectorEnv(VectorEnv):
         n_triangles: int = DEFAULT_N_TRIANGLES,
         torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
         max_episode_steps: int | None = None,
-        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
     ) -> None:
         if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
@@ -491,10 +529,8 @@ class GripperDesignVectorEnv(VectorEnv):
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
-        self.bounds = DesignBounds() if bounds is None else bounds
-        self.distribution = ObjectDistribution() if distribution is None else distribution
-        self.weights = RewardWeights() if weights is None else weights
-        self.n_triangles = int(n_triangles)
+        self.bounds, self.distribution, self.weights, self.n_triangles = _check_settings(
+            bounds, distribution, weights, n_triangles)
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
@@ -539,7 +575,7 @@ class GripperDesignVectorEnv(VectorEnv):
 
     def _evaluate(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, dict]:
         act, clipped = _check_actions(actions[rows], (rows.size, N_DESIGN))
-        designs = self.bounds.scale(act)
+        designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_designs(
             designs, [self._disks[i] for i in rows.tolist()], strain_limits=self._limits[rows],
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,

@@ -1,7 +1,8 @@
 """Drawings of a grasp shared by the design environment, the CLI and the scripts.
 
 :func:`draw_grasp` draws on a matplotlib ``Axes``: the fingers at rest (dashed) and at the grasp
-angles, the rest and the deformed disk, the springs coloured by strain and the contact points.
+angles, the rest and the deformed disk, the springs coloured by strain (with a labelled colour
+bar) and the contact points, with a legend for each mark.
 :func:`grasp_figure` makes a stand-alone figure (saved as PNG when given a path) and
 :func:`grasp_rgb_array` renders one off-screen with the Agg canvas, so no pyplot state or GUI
 backend is involved.
@@ -30,8 +31,14 @@ __all__ = [
     "spring_segments",
 ]
 
+# Strain colours: blue compressed, white unstrained, red stretched, always with a labelled
+# colour bar; the contact markers use colours that map has none of (green and yellow with a
+# black edge), so that no red dot reads as a high strain.
 STRAIN_CMAP = "coolwarm"
+STRAIN_LABEL = "spring strain [-] (blue: compressed, red: stretched)"
 REST_STYLE = {"fill": False, "linestyle": "--", "linewidth": 0.8, "edgecolor": "0.55"}
+CONTACT_STYLE = ({"color": "limegreen", "label": "contact, right"},
+                 {"color": "gold", "label": "contact, left"})
 
 
 def _finger_polygon(length: float, angle: float, offset: float, width: float, side: int
@@ -125,6 +132,7 @@ def draw_grasp(
     show_springs: bool = True,
     cmap: str = STRAIN_CMAP,
     title: str | None = None,
+    legend: bool = True,
 ):
     """Draw a grasp: fingers, rest and deformed disk, springs coloured by strain, contacts.
 
@@ -147,6 +155,9 @@ def draw_grasp(
         Diverging colour map for the strain (blue: compressed, red: stretched).
     title
         Axes title.
+    legend
+        Add a legend naming the contact points of each finger, the rest outlines, the deformed
+        disk, the pinned centre and the joints.
 
     Returns
     -------
@@ -164,13 +175,14 @@ def draw_grasp(
     if show_rest and result is not None:
         for poly in rest_fingers:
             ax.add_patch(Polygon(poly, closed=True, **REST_STYLE))
-        ax.add_patch(Circle(center, d.radius_m, **REST_STYLE))
+        ax.add_patch(Circle(center, d.radius_m, **REST_STYLE, label="rest (dashed)"))
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.9,
                              zorder=3))
     joints = np.array([[g.joint_offset_m, 0.0], [-g.joint_offset_m, 0.0]])
-    ax.plot(joints[:, 0], joints[:, 1], "o", color="k", markersize=4, zorder=4)
-    ax.plot(*center, "+", color="k", markersize=8, zorder=4)
+    ax.plot(joints[:, 0], joints[:, 1], "o", color="k", markersize=4, zorder=4,
+            label="joints")
+    ax.plot(*center, "+", color="k", markersize=8, zorder=4, label="centre (pinned)")
     lines = None
     if result is None:
         ax.add_patch(Circle(center, d.radius_m, facecolor="tab:orange", alpha=0.3,
@@ -178,7 +190,7 @@ def draw_grasp(
     else:
         pts = np.asarray(result.points_m, dtype=float)
         ax.add_patch(Polygon(pts, closed=True, facecolor="tab:orange", alpha=0.15,
-                             edgecolor="0.2", linewidth=2.4, zorder=1))
+                             edgecolor="0.2", linewidth=2.4, zorder=1, label="deformed disk"))
         if show_springs:
             segs, strains = spring_segments(pts, center, d.radius_m)
             lim = strain_limit if strain_limit else max(float(np.max(np.abs(strains))), 1e-6)
@@ -188,10 +200,16 @@ def draw_grasp(
             lines.set_array(strains)
             ax.add_collection(lines)
         mask = np.asarray(result.contact_mask, dtype=bool)
-        for side, colour in ((0, "tab:red"), (1, "tab:purple")):
+        for side, style in enumerate(CONTACT_STYLE):
             hit = pts[mask[side]]
-            ax.plot(hit[:, 0], hit[:, 1], "o", color=colour, markersize=5, zorder=5)
+            ax.plot(hit[:, 0], hit[:, 1], "o", markersize=6, markeredgecolor="k",
+                    markeredgewidth=0.8, zorder=5, linestyle="none",
+                    **{"markerfacecolor": style["color"], "label": style["label"]})
     _frame(ax, rest_fingers + fingers, center, d.radius_m)
+    if legend:
+        # below the axes: inside, it would hide the grasp it explains
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7,
+                  frameon=False, handlelength=1.5, columnspacing=1.0)
     if title:
         ax.set_title(title, fontsize=9)
     return lines
@@ -236,7 +254,7 @@ def grasp_figure(
         title = _summary(result)
     lines = draw_grasp(ax, scene, result, strain_limit=strain_limit, title=title)
     if lines is not None:
-        fig.colorbar(lines, ax=ax, shrink=0.7, label="spring strain [-]")
+        fig.colorbar(lines, ax=ax, shrink=0.7, label=STRAIN_LABEL)
     fig.tight_layout()
     if path is not None:
         path = Path(path)

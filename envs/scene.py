@@ -41,7 +41,10 @@ __all__ = [
     "Scene",
     "Design",
     "DESIGN_FIELDS",
+    "RELATIVE_FIELDS",
     "PRESETS",
+    "design_from_relative",
+    "relative_from_design",
 ]
 
 # A design is six numbers in SI units, in this column order.
@@ -54,6 +57,22 @@ DESIGN_FIELDS = (
     "distance_m",
 )
 N_DESIGN = len(DESIGN_FIELDS)
+
+# The same design relative to its object, in this column order: lengths in disk radii, the
+# torque in the disk's torque unit ``s E t r^2`` and, instead of the placement ``d_1``, the
+# clearance between the disk and the gripping faces at rest. The model is invariant under this
+# scaling (the solver works in these units), so one box of relative designs means the same for
+# a 70 mm foam disk and a 2 mm TPU bead; and a positive clearance is valid at rest by
+# construction, which an independent placement ``d_1 / r`` is not (a third of such a box
+# overlaps the fingers at small rest angles).
+RELATIVE_FIELDS = (
+    "finger_length_r",
+    "rest_angle_rad",
+    "joint_offset_r",
+    "finger_width_r",
+    "torque_rel",
+    "rest_clearance_r",
+)
 
 
 @dataclass(frozen=True)
@@ -158,6 +177,14 @@ class SoftDisk:
         """Plane-strain 2-D bulk modulus ``K = lambda + mu = E / (2 (1 + nu) (1 - 2 nu))`` [Pa]
         (the plane of the FEM reference)."""
         return bulk_modulus_2d(self.youngs_modulus_pa, self.poisson_ratio)
+
+    @property
+    def torque_unit_nm(self) -> float:
+        """Torque unit ``s E t r^2`` of this disk [N·m]: the solver's unit of torque. A torque of
+        a few hundredths of it squeezes the disk by a few percent whatever its size and
+        stiffness (0.2 N·m on the paper's r = 0.07 m foam disk is 0.04 units)."""
+        return (self.stiffness_scale * self.youngs_modulus_pa * self.thickness_m
+                * self.radius_m**2)
 
     @property
     def center_m(self) -> np.ndarray:
@@ -324,6 +351,49 @@ class Design:
             raise ValueError(f"a design needs shape ({N_DESIGN},), got {arr.shape}")
         return cls(*arr.tolist())
 
+
+def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:
+    """SI designs of relative ones (columns of :data:`RELATIVE_FIELDS`), shape (..., 6).
+
+    The placement is chosen so that the gripping faces clear the disk at rest by the relative
+    clearance ``g``: ``d_1 = (r (1 + g) + w / 2 - d_3 cos theta_a0) / sin theta_a0 - r``, but never
+    below 0 (the disk does not sit below the joints' line; a larger ``d_1`` only widens the
+    clearance). When the disk centre lies beyond a fingertip the clearance to the finger bar
+    is larger than ``g r``, so a design with ``g > 0`` is always clear of the fingers at rest.
+
+    Parameters
+    ----------
+    relative
+        Relative designs, shape (..., 6).
+    radius_m
+        Disk radius ``r`` [m], scalar or broadcastable to the rows (...).
+    torque_unit_nm
+        The disk's torque unit ``s E t r^2`` [N·m] (:attr:`SoftDisk.torque_unit_nm`), same shape
+        rules.
+    """
+    rel = np.asarray(relative, dtype=np.float64)
+    r = np.asarray(radius_m, dtype=np.float64)
+    length, angle, offset, width = rel[..., 0] * r, rel[..., 1], rel[..., 2] * r, rel[..., 3] * r
+    torque = rel[..., 4] * np.asarray(torque_unit_nm, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = (r * (1.0 + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
+            angle) - r
+    return np.stack([length, angle, offset, width, torque, np.maximum(distance, 0.0)], axis=-1)
+
+
+def relative_from_design(designs, radius_m, torque_unit_nm) -> np.ndarray:
+    """Relative designs (columns of :data:`RELATIVE_FIELDS`) of SI ones, shape (..., 6).
+
+    The inverse of :func:`design_from_relative` where its placement was not raised to 0; the
+    clearance is that of the gripping-face line, ``(d_3 cos theta_a0 + (d_1 + r) sin theta_a0
+    - w / 2) / r - 1``.
+    """
+    des = np.asarray(designs, dtype=np.float64)
+    r = np.asarray(radius_m, dtype=np.float64)
+    length, angle, offset, width, torque, distance = np.moveaxis(des, -1, 0)
+    clearance = (offset * np.cos(angle) + (distance + r) * np.sin(angle) - width / 2) / r - 1.0
+    return np.stack([length / r, angle, offset / r, width / r,
+                     torque / np.asarray(torque_unit_nm, dtype=np.float64), clearance], axis=-1)
 
 
 PAPER_GRIPPER = Gripper(

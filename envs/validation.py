@@ -7,12 +7,21 @@ allowed range, so that a user sees at once what to change.
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 
 from envs.model.defaults import MAX_TRIANGLES, MIN_TRIANGLES
 
-__all__ = ["check_range", "check_integer", "check_n_triangles", "check_choice"]
+__all__ = [
+    "check_range",
+    "check_integer",
+    "check_n_triangles",
+    "check_choice",
+    "check_output_file",
+    "check_output_dir",
+]
 
 
 def check_range(
@@ -89,9 +98,16 @@ def check_integer(name: str, value, low: int, high: int) -> int:
 def check_n_triangles(n_triangles) -> int:
     """Validate the number of fan triangles ``N``.
 
-    ``N = 3`` gives 120-degree triangles, i.e. negative stiffness under the area rule.
+    ``N = 3`` gives 120-degree triangles, i.e. negative stiffness under the area rule; above
+    :data:`~envs.model.defaults.MAX_TRIANGLES` the solver mostly fails.
     """
-    return check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES)
+    try:
+        return check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES)
+    except ValueError as exc:
+        if "outside" in str(exc) and float(n_triangles) > MAX_TRIANGLES:
+            raise ValueError(f"{exc}: beyond N = {MAX_TRIANGLES} most solves fail "
+                             "(MAX_TRIANGLES, measured in envs/model/defaults.py)") from None
+        raise
 
 
 def check_choice(name: str, value, allowed) -> str:
@@ -99,3 +115,51 @@ def check_choice(name: str, value, allowed) -> str:
     if not isinstance(value, str) or value not in allowed:
         raise ValueError(f"{name} = {value!r} is not one of {tuple(allowed)}")
     return value
+
+
+def _writable_dir(name: str, folder: Path, shown) -> None:
+    if not folder.exists():
+        raise ValueError(f"{name} = {str(shown)!r}: the folder {str(folder)!r} does not exist "
+                         "(create it first)")
+    if not folder.is_dir():
+        raise ValueError(f"{name} = {str(shown)!r}: {str(folder)!r} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{name} = {str(shown)!r}: the folder {str(folder)!r} is not writable")
+
+
+def check_output_file(name: str, path, suffixes: tuple[str, ...]) -> Path:
+    """Validate an output file before any work: its folder exists and is writable, the path is
+    not a folder and its extension is one of ``suffixes`` (e.g. ``(".png",)``).
+
+    Raises
+    ------
+    ValueError
+        Naming the option, the user's path and what is wrong with it.
+    """
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise ValueError(f"{name} = {str(path)!r} must end in {' or '.join(suffixes)} (the "
+                         f"format written), got {p.suffix or 'no extension'!r}")
+    if p.is_dir():
+        raise ValueError(f"{name} = {str(path)!r} is a folder, not a file")
+    _writable_dir(name, p.parent if str(p.parent) else Path("."), path)
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ValueError(f"{name} = {str(path)!r} exists and is not writable")
+    return p
+
+
+def check_output_dir(name: str, path) -> Path:
+    """Validate an output folder before any work: it is a writable folder, or it does not exist
+    yet and its parent is a writable folder (it is created then).
+
+    Raises
+    ------
+    ValueError
+        Naming the option, the user's path and what is wrong with it.
+    """
+    p = Path(path)
+    if p.exists():
+        _writable_dir(name, p, path)
+    else:
+        _writable_dir(name, p.parent if str(p.parent) else Path("."), path)
+    return p

@@ -55,7 +55,8 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     return Design(**{k: design[k] for k in DESIGN_FIELDS}).to_scene(disk, torsion)
 
 
-def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title: str) -> None:
+def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title: str,
+                       legend: bool = True) -> None:
     """Solve and draw a design's grasp; fall back to the bare design if it is invalid."""
     from envs.solver import simulate
 
@@ -66,7 +67,7 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
         draw_design(ax, row, obj["radius_m"], title=title + " (invalid)")
         return
     res = simulate(scene, design["torque_nm"], int(obj.get("n_triangles", DEFAULT_N_TRIANGLES)))
-    draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title)
+    draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend)
 
 
 def convergence_figure(results: Sequence[OptimResult], path: str | Path | None = None, *,
@@ -194,6 +195,6 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
         p = front[i]
         _draw_design_grasp(sub, p["design"], result.object,
                            f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
-                           f"strain {p['peak_strain']:.3f}")
+                           f"strain {p['peak_strain']:.3f}", legend=k == 0)
     fig.tight_layout()
     return _save(fig, path)

@@ -33,6 +33,7 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 __all__ = [
+    "check_executor_options",
     "ChunkFailedError",
     "SerialExecutor",
     "RetryingExecutor",
@@ -316,6 +317,22 @@ class DaskExecutor(RetryingExecutor):
             self.cluster.close()
 
 
+def check_executor_options(dask: str | None = None, workers: int | None = None) -> None:
+    """Validate the CLI's ``--dask`` and ``--workers`` without starting anything.
+
+    Raises
+    ------
+    ValueError
+        Naming the option and the user's value.
+    """
+    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
+                                or workers < 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if dask is not None and not str(dask).strip():
+        raise ValueError(f"dask must be 'local' or a scheduler address such as "
+                         f"tcp://host:8786, got {dask!r}")
+
+
 @contextlib.contextmanager
 def make_executor(dask: str | None = None, workers: int | None = None) -> Iterator[Any]:
     """The executor of the CLI options, closed on exit.
@@ -334,11 +351,7 @@ def make_executor(dask: str | None = None, workers: int | None = None) -> Iterat
     None or an executor
         ``None`` means in-process batched evaluation.
     """
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
-                                or workers < 1):
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    if dask is not None and not str(dask).strip():
-        raise ValueError("dask must be 'local' or a scheduler address such as tcp://host:8786")
+    check_executor_options(dask, workers)
     if dask is None and (workers is None or workers == 1):
         yield None
         return

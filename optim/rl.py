@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from envs.design_env import ObjectDistribution, observe
+from envs.design_env import OBS_FIELDS, ObjectDistribution, observe
 from envs.scene import SoftDisk
 
 from .problem import DesignProblem, check_budget, check_seed
@@ -72,6 +72,11 @@ def training_distribution(problem: DesignProblem) -> ObjectDistribution:
     d = problem.disk
     radii = tuple(sorted(set(base.radii_m) | {d.radius_m}))
     e_lo, e_hi = base.youngs_modulus_range_pa
+    # every drawn object must stay observable: the observation is the effective modulus s E,
+    # and the object's own calibration scale (0.033 for the forceps' TPU) applies to all draws
+    (_, _, log_low, log_high), = (f for f in OBS_FIELDS if f[0] == "effective_modulus_pa")
+    e_lo = max(e_lo, 10.0**log_low / d.stiffness_scale)
+    e_hi = min(e_hi, 10.0**log_high / d.stiffness_scale)
     s_lo, s_hi = base.strain_limit_range
     return ObjectDistribution(
         radii_m=radii,

@@ -1,12 +1,12 @@
 """Benchmark GripperDesign-v0: the plain step loop against batched ``evaluate_designs``.
 
 Prints a summary and writes ``out/bench_env.json``. All paths draw designs uniformly from the
-default :class:`envs.DesignBounds` (so part of them are invalid at rest and are not solved, in
-all paths alike) on the paper-r070 disk, at N = 20. numba is warmed up before any timing. The
-third path is what RL training sees: random actions stepped through the stable-baselines3
-``VecEnv`` of :func:`envs.sb3_env.sb3_vec_env` (one batched evaluation per step, every sub-env
-resetting itself with a new object drawn from a distribution holding only that disk); it is
-skipped if stable-baselines3 is not installed.
+default :class:`envs.DesignBounds` (relative to the object: every design is valid at rest, a few
+of the solves fail, in all paths alike) on the paper-r070 disk, at N = 20. numba is warmed up
+before any timing. The third path is what RL training sees: random actions stepped through the
+stable-baselines3 ``VecEnv`` of :func:`envs.sb3_env.sb3_vec_env` (one batched evaluation per
+step, every sub-env resetting itself with a new object drawn from a distribution holding only
+that disk); it is skipped if stable-baselines3 is not installed.
 
 Targets of the project's issue 3: batched >= 20,000 designs/s and >= 10x the step loop.
 
@@ -75,7 +75,7 @@ def bench_step_loop(n_steps: int, n_triangles: int, seed: int) -> dict:
 
 def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
     """One ``evaluate_designs`` call on ``batch`` random designs."""
-    designs = DesignBounds().sample(np.random.default_rng(seed), batch)
+    designs = DesignBounds().sample(np.random.default_rng(seed), batch, paper_disk())
     t0 = time.perf_counter()
     out = evaluate_designs(designs, paper_disk(), n_triangles=n_triangles)
     elapsed = time.perf_counter() - t0

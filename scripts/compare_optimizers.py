@@ -61,11 +61,17 @@ def best_at(result: OptimResult, grid: np.ndarray, axis: str) -> np.ndarray:
 
 
 def band(results: list[OptimResult], grid: np.ndarray, axis: str) -> dict[str, np.ndarray]:
-    """Median and quartiles across runs at each grid value (NaN-aware)."""
+    """Median and quartiles across runs at each grid value where every run has a best so far.
+
+    Quantiles of non-decreasing curves are non-decreasing, but only over the same runs: a median
+    over the runs that have started (RL runs start late, at their first probe) would drop when
+    a weaker run joins. Before the last run's first batch the band is NaN (not drawn).
+    """
     curves = np.array([best_at(r, grid, axis) for r in results])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns before a first batch
         q = np.nanpercentile(curves, [25, 50, 75], axis=0)
+    q[:, np.any(np.isnan(curves), axis=0)] = np.nan
     return {"grid": grid, "q25": q[0], "median": q[1], "q75": q[2]}
 
 
@@ -111,7 +117,8 @@ def format_table(rows: list[dict[str, Any]], reference: float, budget: int) -> s
     head = (f"{'method':>7s} {'runs':>4s} {'median':>8s} {'IQR':>17s} {'min':>8s} {'max':>8s} "
             f"{'beat paper':>10s} {'evals to beat':>13s} {'contact':>7s} {'strain':>7s} "
             f"{'time s':>7s} {'eval/s':>7s}")
-    lines = [f"best reward after {budget} evaluations (paper gripper: {reference:.4f})", head,
+    lines = [f"best reward after {budget} evaluations (the scene's own gripper: "
+             f"{reference:.4f})", head,
              "-" * len(head)]
     for r in rows:
         beat = r["median_evals_to_beat_paper"]
@@ -147,7 +154,7 @@ def draw(runs: dict[str, list[OptimResult]], curves: dict[str, dict[str, dict]],
             colour = METHOD_COLOURS.get(method)
             ax.plot(b["grid"], b["median"], color=colour, label=f"{method} (median)")
             ax.fill_between(b["grid"], b["q25"], b["q75"], color=colour, alpha=0.2, linewidth=0)
-        ax.axhline(reference, color="k", linestyle="--", linewidth=1, label="paper gripper")
+        ax.axhline(reference, color="k", linestyle="--", linewidth=1, label="scene's own gripper")
         ax.set_xlabel(label)
         ax.set_ylabel("best reward so far")
         ax.grid(alpha=0.3)

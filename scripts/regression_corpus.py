@@ -2,9 +2,12 @@
 
 Stores in ``tests/data/regression_corpus.npz``:
 
-* 1200 random designs of the default :class:`envs.DesignBounds` on the paper r = 0.07 disk and
-  300 on each of r = 0.05 and r = 0.10 (N = 20), evaluated by :func:`envs.evaluate_designs`:
-  status, converged flag, jaw angles, contacts, peak strain and reward of each row;
+* 1200 random designs of a fixed box in metres (:data:`CORPUS_LOW`, :data:`CORPUS_HIGH`: the
+  design box of the package before it became relative to the object; about a third of its
+  designs are invalid at rest, which pins the invalid-design penalty too) on the paper r = 0.07
+  disk and 300 on each of r = 0.05 and r = 0.10 (N = 20), evaluated by
+  :func:`envs.evaluate_designs`: status, converged flag, jaw angles, contacts, peak strain and
+  reward of each row;
 * every preset at four torques through :func:`envs.simulate` (N = 20, and N = 8 / 40 on
   paper-r070): converged flag, jaw angles, contour points and face forces.
 
@@ -28,16 +31,19 @@ DESIGN_ROWS = {0.07: 1200, 0.05: 300, 0.10: 300}
 PRESET_TORQUES_REL = (0.05, 0.2, 0.5, 1.0)  # of the preset's reference torque below
 REFERENCE_TORQUE_NM = {"paper": 0.4, "forceps": 2e-3}
 EXTRA_N = {"paper-r070": (8, 40)}
+# lower and upper bound of each column of envs.scene.DESIGN_FIELDS [SI]
+CORPUS_LOW = np.array([0.05, np.radians(15.0), 0.0, 0.002, 0.0, 0.0])
+CORPUS_HIGH = np.array([0.30, np.radians(75.0), 0.05, 0.03, 1.0, 0.06])
 DESIGN_KEYS = ("status", "converged", "jaw_angles_rad", "n_contacts", "peak_strain", "reward")
 
 
 def design_inputs() -> tuple[np.ndarray, np.ndarray]:
     """Designs (B, 6) and the radius of each row's disk (B,)."""
     rng = np.random.default_rng(SEED)
-    bounds = envs.DesignBounds()
     rows, radii = [], []
     for radius, count in DESIGN_ROWS.items():
-        rows.append(bounds.sample(rng, count))
+        action = rng.uniform(-1.0, 1.0, size=(count, 6))
+        rows.append(CORPUS_LOW + 0.5 * (action + 1.0) * (CORPUS_HIGH - CORPUS_LOW))
         radii.append(np.full(count, radius))
     return np.concatenate(rows), np.concatenate(radii)
 

@@ -35,7 +35,7 @@ from envs.check import (
     check_params,
     report_from_output,
 )
-from envs.evaluate import DESIGN_FIELDS, DesignBounds
+from envs.evaluate import DESIGN_FIELDS
 from tests.kkt_reference import kkt_check
 
 PAPER = ("paper-r050", "paper-r070", "paper-r100")
@@ -97,7 +97,11 @@ def design_results():
     rng = np.random.default_rng(20240611)
     bases = [Scene.preset(name) for name in PAPER]
     out = []
-    for k, design in enumerate(DesignBounds().sample(rng, 600)):
+    # a box in metres around the paper scenes (the one DesignBounds had before it became
+    # relative to the object), so that the same designs are checked as before
+    low = np.array([0.05, math.radians(15.0), 0.0, 0.002, 0.0, 0.0])
+    high = np.array([0.30, math.radians(75.0), 0.05, 0.03, 1.0, 0.06])
+    for k, design in enumerate(low + 0.5 * (rng.uniform(-1.0, 1.0, (600, 6)) + 1) * (high - low)):
         fields = dict(zip(DESIGN_FIELDS, design, strict=True))
         torque = fields.pop("torque_nm")
         try:

@@ -30,11 +30,19 @@ from envs.scene import PRESETS, Gripper
 GRIPPER, DISK = PRESETS["paper-r070"]
 PAPER = np.array([GRIPPER.finger_length_m, GRIPPER.rest_angle_rad, GRIPPER.joint_offset_m,
                   GRIPPER.finger_width_m, 0.2, DISK.distance_m])
+# a box in metres around the paper scenes, with valid and invalid designs (the default
+# DesignBounds is relative to the object and valid at rest by construction)
+WIDE_LOW = np.array([0.05, math.radians(15.0), 0.0, 0.002, 0.0, 0.0])
+WIDE_HIGH = np.array([0.30, math.radians(75.0), 0.05, 0.03, 1.0, 0.06])
 ACTIONS = np.array([
     [0.2, 0.0, 0.0, -0.4, -0.5, -0.5],
     [-0.3, -0.2, 0.1, 0.0, 0.1, 0.3],
     [0.5, 0.4, -0.6, 0.2, 0.8, -0.2],
 ])
+
+
+def wide_designs(rng: np.random.Generator, size: int) -> np.ndarray:
+    return WIDE_LOW + rng.uniform(0.0, 1.0, (size, 6)) * (WIDE_HIGH - WIDE_LOW)
 
 
 def paper_designs(torques) -> np.ndarray:
@@ -67,7 +75,7 @@ def test_outputs_have_documented_keys_shapes_and_paper_values():
     np.testing.assert_array_equal(out["n_contacts"], [[3, 3], [3, 3]])
     np.testing.assert_allclose(out["contact_score"], 0.3)
     total = (out["reward_contact"] + out["reward_deform"] + out["penalty_miss"]
-             + out["penalty_invalid"] + out["penalty_fail"])
+             + out["penalty_gap"] + out["penalty_invalid"] + out["penalty_fail"])
     np.testing.assert_array_equal(out["reward"], total)
 
 
@@ -83,7 +91,7 @@ def test_matches_simulate_on_the_paper_scene():
 def test_batch_design_to_scene_is_the_scene_path():
     # validity and packing of design rows are those of Design.to_scene + Scene, row by row
     rng = np.random.default_rng(7)
-    designs = DesignBounds().sample(rng, 400)
+    designs = wide_designs(rng, 400)
     cols = _columns(designs, _disk_table(DISK, 400), np.full(400, 0.073))
     valid = rest_codes(cols) == REST_OK
     prm = pack_params(cols, 20)
@@ -147,6 +155,7 @@ def test_reward_prefers_a_grasp_over_a_miss():
     np.testing.assert_array_equal(out["n_contacts"][0], [0, 0])  # too weak to reach the disk
     assert np.all(out["n_contacts"][1] > 0)
     assert out["penalty_miss"][0] == -2 * RewardWeights().miss
+    assert out["penalty_gap"][0] < 0.0 and out["penalty_gap"][1] == 0.0
     assert out["reward"][1] > out["reward"][0]
 
 
@@ -176,8 +185,11 @@ def test_invalid_design_gets_the_penalty_and_finite_values():
     nan_row[0] = np.nan
     out = evaluate_designs(np.stack([bad, nan_row]), DISK)
     assert not out["valid_at_rest"].any() and not out["converged"].any()
-    np.testing.assert_array_equal(out["penalty_invalid"], -RewardWeights().invalid)
-    np.testing.assert_array_equal(out["reward"], -RewardWeights().invalid)
+    w = RewardWeights()
+    # graded: an overlap scores between -invalid and -(invalid + violation); NaN the worst
+    assert -w.invalid - w.violation < out["reward"][0] < -w.invalid
+    assert out["reward"][1] == -w.invalid - w.violation
+    np.testing.assert_array_equal(out["reward"], out["penalty_invalid"])
     np.testing.assert_array_equal(out["status"], -1)
     assert_all_finite(out)
 
@@ -196,11 +208,70 @@ def test_malformed_inputs_raise():
 def test_bounds_scale_round_trip():
     bounds = DesignBounds()
     a = np.random.default_rng(0).uniform(-1, 1, (5, 6))
-    np.testing.assert_allclose(bounds.unscale(bounds.scale(a)), a, atol=1e-14)
-    np.testing.assert_allclose(bounds.scale(-np.ones(6)), bounds.low)
-    assert np.all((bounds.low_array <= PAPER) & (PAPER <= bounds.high_array))
-    with pytest.raises(ValueError, match="finger_length_m"):
-        DesignBounds(low=(0.3, 0.2, 0.0, 0.002, 0.0, 0.0))
+    a[:, 1] = np.abs(a[:, 1])  # rest angles over 35 deg: no placement raised to 0
+    np.testing.assert_allclose(bounds.unscale(bounds.scale(a, DISK), DISK), a, atol=1e-12)
+    disks = [DISK, SoftDisk(0.002, 0.0, 29e6, stiffness_scale=0.033)] * 2 + [DISK]
+    np.testing.assert_allclose(bounds.unscale(bounds.scale(a, disks), disks), a, atol=1e-12)
+    for name in PRESETS:  # every preset's own gripper lies in the box, the forceps included
+        scene = Scene.preset(name)
+        design = Design.from_scene(scene, 0.01 * scene.disk.torque_unit_nm).to_array()
+        assert np.all(np.abs(bounds.unscale(design, scene.disk)) <= 1.0), name
+    with pytest.raises(ValueError, match="finger_length_r"):
+        DesignBounds(low=(9.0, 0.2, 0.0, 0.002, 0.0, 0.0))
+
+
+def test_relative_box_scales_with_the_object():
+    # the same actions on a 70 mm foam disk and a 2 mm TPU bead: the same grasp in radii
+    bounds = DesignBounds()
+    small = SoftDisk(0.002, 0.0, 29e6, stiffness_scale=0.033)
+    a = np.random.default_rng(1).uniform(-1, 1, (40, 6))
+    big = evaluate_designs(bounds.scale(a, DISK), DISK, torsion_stiffness_nm_per_rad=0.073)
+    kf_small = 0.073 * small.torque_unit_nm / DISK.torque_unit_nm
+    tiny = evaluate_designs(bounds.scale(a, small), small, torsion_stiffness_nm_per_rad=kf_small)
+    assert big["valid_at_rest"].all() and tiny["valid_at_rest"].all()
+    np.testing.assert_array_equal(big["converged"], tiny["converged"])
+    np.testing.assert_allclose(big["jaw_angles_rad"], tiny["jaw_angles_rad"], atol=1e-7)
+    np.testing.assert_allclose(big["reward"], tiny["reward"], atol=1e-6)
+
+
+def test_default_box_is_valid_for_every_preset():
+    rng = np.random.default_rng(2)
+    for name in PRESETS:
+        disk = Scene.preset(name).disk
+        cols = _columns(DesignBounds().sample(rng, 500, disk), _disk_table(disk, 500),
+                        np.full(500, 1e-3))
+        assert np.all(rest_codes(cols) == REST_OK), name
+
+
+def test_graded_penalties_point_towards_a_grasp():
+    # deeper overlap scores lower; a finger farther from the disk scores lower
+    overlap = paper_designs([0.2, 0.2, 0.2])
+    overlap[:, 5] = [0.0, -0.01, -0.03]
+    overlap[:, 1] = math.radians(30.0)
+    out = evaluate_designs(overlap, DISK)
+    assert not out["valid_at_rest"].any()
+    v = out["rest_violation"]
+    assert 0 < v[0] < v[1] < v[2] < 1
+    assert out["reward"][0] > out["reward"][1] > out["reward"][2]
+    weak = paper_designs([1e-4, 3e-4, 1e-3])  # too weak to reach the disk: miss by less
+    out = evaluate_designs(weak, DISK)
+    assert out["converged"].all() and not out["touching"].any()
+    gaps = out["finger_gap_m"][:, 0]
+    assert gaps[0] > gaps[1] > gaps[2] > 0
+    assert out["reward"][0] < out["reward"][1] < out["reward"][2]
+
+
+def test_every_invalid_design_scores_below_every_valid_one():
+    rng = np.random.default_rng(4)
+    out = evaluate_designs(wide_designs(rng, 400), DISK)
+    valid = out["valid_at_rest"]
+    assert 0 < valid.sum() < 400
+    assert out["reward"][~valid].max() < out["reward"][valid].min()
+    failed = valid & ~out["converged"]
+    assert np.all(out["reward"][failed] == -RewardWeights().fail)
+    assert np.all(out["reward"][out["converged"]] > -RewardWeights().fail)
+    with pytest.raises(ValueError, match="invalid = 1.0 must be at least"):
+        RewardWeights(invalid=1.0)
 
 
 # --- the environment ---------------------------------------------------------------------------
@@ -209,6 +280,17 @@ def test_bounds_scale_round_trip():
 def test_gymnasium_check_env():
     check_env(GripperDesignEnv(), skip_render_check=True)
     check_env(gym.make("GripperDesign-v0", render_mode="rgb_array").unwrapped)
+
+
+def test_gymnasium_check_env_as_registered():
+    # as a user makes it: with the wrappers of make (no TimeLimit: one step terminates)
+    env = gym.make("GripperDesign-v0")
+    assert env.spec.max_episode_steps is None
+    with pytest.warns(UserWarning, match="different from the unwrapped"):
+        check_env(env, skip_render_check=True)
+    env.reset(seed=0)
+    *_, terminated, truncated, _ = env.step(env.action_space.sample())
+    assert terminated is True and truncated is False
 
 
 def test_sb3_check_env():
@@ -266,24 +348,29 @@ def test_clipping_is_reported():
     assert info["clipped"] is False
     *_, info = env.step(np.array([1.5, 0, 0, 0, -3.0, 0]))
     assert info["clipped"] is True
-    assert info["design"][0] == env.bounds.high[0]
-    assert info["design"][4] == env.bounds.low[4]
+    assert info["design"][0] == env.bounds.high[0] * info["radius_m"]
+    assert info["design"][4] == env.bounds.low[4] == 0.0
 
 
 def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
     env = GripperDesignEnv()
     obs, info = env.reset(seed=0, options={"disk": DISK, "strain_limit": 0.1})
     assert info["radius_m"] == DISK.radius_m and info["strain_limit"] == 0.1
-    action = env.bounds.unscale(PAPER)
+    action = env.bounds.unscale(PAPER, DISK)
     _, reward, terminated, truncated, info = env.step(action)
     assert terminated and not truncated and info["converged"]
-    ref = evaluate_designs(env.bounds.scale(np.clip(action, -1, 1))[None], DISK,
+    ref = evaluate_designs(env.bounds.scale(np.clip(action, -1, 1), DISK)[None], DISK,
                            strain_limits=0.1)
     assert reward == ref["reward"][0]
-    bad = PAPER.copy()
-    bad[1], bad[5] = math.radians(15.0), 0.0
-    _, reward, *_, info = env.step(env.bounds.unscale(bad))
-    assert reward == -RewardWeights().invalid and not info["valid_at_rest"]
+    # a box reaching negative clearances (overlap) gets the graded invalid penalty
+    low = list(DesignBounds().low)
+    low[5] = -0.5
+    env = GripperDesignEnv(bounds=DesignBounds(low=tuple(low)))
+    env.reset(seed=0, options={"disk": DISK})
+    action = -np.ones(6)
+    action[1] = 1.0  # 60 deg: the disk would sit below the joints; raised to 0, it overlaps
+    _, reward, *_, info = env.step(action)
+    assert -4.0 < reward < -RewardWeights().invalid and not info["valid_at_rest"]
     with pytest.raises(ValueError):
         env.reset(options={"disk": SoftDisk(2.0, 0.0)})  # outside the observable range
     with pytest.raises(ValueError):
@@ -296,7 +383,7 @@ def test_render_rgb_array_and_grasp_figure(tmp_path):
     env = GripperDesignEnv(render_mode="rgb_array")
     env.reset(seed=0, options={"disk": DISK})
     before = env.render()
-    env.step(env.bounds.unscale(PAPER))
+    env.step(env.bounds.unscale(PAPER, DISK))
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
     assert frame.shape == before.shape and not np.array_equal(frame, before)
@@ -328,27 +415,55 @@ def _assert_same_trace(a, b, info_keys=("peak_strain", "_peak_strain", "radius_m
                 np.testing.assert_array_equal(sa[4][key], sb[4][key], err_msg=key)
 
 
+SAME_STEP = {"autoreset_mode": AutoresetMode.SAME_STEP}
+
+
+@pytest.mark.parametrize("mode,kwargs", [
+    ("vector_entry_point", {}),  # the batched env: same-step autoreset by default
+    ("sync", {"vector_kwargs": SAME_STEP}),
+    ("async", {"vector_kwargs": SAME_STEP}),
+])
+def test_make_vec_evaluates_a_design_on_every_step(mode, kwargs):
+    env = gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode, **kwargs)
+    assert env.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    env.reset(seed=11)
+    for _ in range(3):
+        _, rewards, terminated, truncated, info = env.step(ACTIONS)
+        # every sub-env scored a design in every step: no reset step with reward 0
+        assert terminated.all() and not truncated.any()
+        assert info["_final_info"].all()
+        np.testing.assert_array_equal(rewards, info["final_info"]["reward"])
+        assert np.all(rewards != 0.0)
+    env.close()
+
+
 def test_make_vec_modes_agree():
-    # load the kernel in this process first so forked async workers inherit it
-    evaluate_designs(paper_designs([0.1]), DISK)
     traces = {
-        mode: _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode))
-        for mode in ("sync", "async", "vector_entry_point")
+        mode: _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode,
+                                    **kwargs))
+        for mode, kwargs in (("sync", {"vector_kwargs": SAME_STEP}),
+                             ("async", {"vector_kwargs": SAME_STEP}),
+                             ("vector_entry_point", {}))
     }
-    vec = gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode="vector_entry_point")
+    vec = gym.make_vec("GripperDesign-v0", num_envs=3)
     assert isinstance(vec.unwrapped, GripperDesignVectorEnv)
-    steps = traces["vector_entry_point"][1:]
-    assert steps[0][2].all() and steps[0][3].all()  # 1-step episodes, TimeLimit(1) semantics
-    assert not steps[1][2].any() and np.all(steps[1][1] == 0.0)  # next-step autoreset
     for mode in ("sync", "async"):
-        _assert_same_trace(traces[mode], traces["vector_entry_point"])
+        _assert_same_trace(traces[mode], traces["vector_entry_point"],
+                           info_keys=("radius_m", "_radius_m", "_final_obs"))
+
+
+def test_next_step_autoreset_is_still_available():
+    env = GripperDesignVectorEnv(3, autoreset_mode=AutoresetMode.NEXT_STEP)
+    steps = _run_vec(env)[1:]
+    assert steps[0][2].all() and not steps[0][3].any()
+    assert not steps[1][2].any() and np.all(steps[1][1] == 0.0)  # the reset step
 
 
 def test_same_step_autoreset_agrees_with_sync():
     same = AutoresetMode.SAME_STEP
     sync = _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode="sync",
                                  vector_kwargs={"autoreset_mode": same}))
-    ours = _run_vec(GripperDesignVectorEnv(3, max_episode_steps=1, autoreset_mode=same))
+    ours = _run_vec(GripperDesignVectorEnv(3, autoreset_mode=same))
     _assert_same_trace(sync, ours, info_keys=("radius_m", "_radius_m", "_final_obs"))
     for sa, sb in zip(sync[1:], ours[1:], strict=True):
         assert sb[2].all()
@@ -385,9 +500,9 @@ def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
 
 
 @pytest.mark.parametrize("value,match", [
-    (np.nan, r"n_triangles must be an integer in \[4, 20000\], got nan"),
-    (20.7, r"n_triangles must be an integer in \[4, 20000\], got 20.7"),
-    (0, r"n_triangles = 0 is outside the allowed range \[4, 20000\]"),
+    (np.nan, r"n_triangles must be an integer in \[4, 500\], got nan"),
+    (20.7, r"n_triangles must be an integer in \[4, 500\], got 20.7"),
+    (0, r"n_triangles = 0 is outside the allowed range \[4, 500\]"),
     ([20, "a"], r"n_triangles\[1\] must be an integer"),
 ])
 def test_evaluate_names_a_bad_mesh_size(value, match):
@@ -402,6 +517,21 @@ def test_a_nan_row_is_reported_and_the_others_answered():
     out = evaluate_designs(designs, DISK)
     np.testing.assert_array_equal(out["valid_at_rest"], [True, False, True])
     np.testing.assert_array_equal(out["converged"], [True, False, True])
-    assert out["status"][1] == -1 and out["reward"][1] == -3.0
+    assert out["status"][1] == -1 and out["reward"][1] == -4.0
     assert out["reward"][0] == out["reward"][2] > 0
     assert all(np.isfinite(v).all() for v in out.values() if v.dtype.kind == "f")
+
+
+@pytest.mark.parametrize("value,match", [
+    (20.7, r"n_triangles must be an integer in \[4, .*got 20.7"),
+    (100000, r"n_triangles = 100000 is outside the allowed range \[4, 500\]: beyond N = 500"),
+    (np.nan, r"n_triangles must be an integer"),
+])
+def test_envs_check_the_mesh_size_at_construction(value, match):
+    # before: 20.7 ran N = 20 silently and 100000 failed only at the first step
+    with pytest.raises(ValueError, match=match):
+        GripperDesignEnv(n_triangles=value)
+    with pytest.raises(ValueError, match=match):
+        GripperDesignVectorEnv(2, n_triangles=value)
+    with pytest.raises(ValueError, match="weights must be None or a RewardWeights"):
+        GripperDesignEnv(weights={"contact": 1.0})

@@ -351,7 +351,8 @@ def test_charted_grasp_is_the_scored_grasp_with_calibration_fields():
     design = np.array([0.2, 0.8, 0.025, 0.01, 0.3, 0.013])
     out = problem.evaluate_physical(design[None, :])
     assert out["converged"][0]
-    scene = scene_of(problem.design_dict(problem.bounds.unscale(design)), problem.object_info())
+    action = problem.bounds.unscale(design, disk)
+    scene = scene_of(problem.design_dict(action), problem.object_info())
     assert scene.disk.contour_stiffness_ratio == 2.5
     res = envs.simulate(scene, design[4], 20)
     np.testing.assert_allclose(res.jaw_angles_rad, out["jaw_angles_rad"][0], rtol=0, atol=1e-12)

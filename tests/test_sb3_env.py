@@ -56,8 +56,9 @@ def disk_of(info: dict) -> SoftDisk:
 
 def reference(actions: np.ndarray, objects: list[dict], **kwargs) -> dict[str, np.ndarray]:
     """evaluate_designs on the same designs and objects, without the adapter."""
-    designs = DesignBounds().scale(np.clip(actions.astype(np.float64), -1.0, 1.0))
-    return evaluate_designs(designs, [disk_of(o) for o in objects],
+    disks = [disk_of(o) for o in objects]
+    designs = DesignBounds().scale(np.clip(actions.astype(np.float64), -1.0, 1.0), disks)
+    return evaluate_designs(designs, disks,
                             strain_limits=np.array([o["strain_limit"] for o in objects]),
                             **kwargs)
 
@@ -110,7 +111,7 @@ def test_step_matches_evaluate_designs_and_follows_sb3_conventions(vec):
         assert type(info["iterations"]) is int
         np.testing.assert_array_equal(info["jaw_angles_rad"], ref["jaw_angles_rad"][i])
         np.testing.assert_array_equal(info["design"], DesignBounds().scale(
-            np.clip(actions[i].astype(np.float64), -1, 1)))
+            np.clip(actions[i].astype(np.float64), -1, 1), disk_of(objects[i][0])))
         assert info["clipped"] is (i == 0)
         for key in OBJECT_KEYS:
             assert info[key] == objects[i][0][key]

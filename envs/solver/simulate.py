@@ -223,7 +223,7 @@ def simulate(
     torque_nm
         Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
     n_triangles
-        Number of fan triangles ``N`` (4 to 20000).
+        Number of fan triangles ``N`` (4 to ``MAX_TRIANGLES`` = 500).
     method
         ``"newton"`` (default), ``"slsqp"`` or ``"nelder-mead"``.
     stiffness_rule
