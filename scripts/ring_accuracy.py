@@ -1,8 +1,10 @@
 """Accuracy and cost of the model family's ring meshes against the FEM reference.
 
-For members (N contour points, M rings) with the physics-derived hybrid scales
-(:func:`envs.model.family.hybrid_scales`: no fit) and the paper's fan (s = 1, springs only),
-ramps each disk through :data:`envs.accuracy.PAPER_TORQUES_NM` and prints the closing-angle
+For members of the family (:data:`envs.accuracy.members.DEFAULT_MEMBERS` and a few more: the
+paper's fan with s = 1, spring ring meshes with the physics-derived hybrid scales of
+:func:`envs.model.family.hybrid_scales` (no fit), constant-strain ring meshes with their
+shipped scale :data:`envs.model.family.CST_SCALES` (fitted on the paper disks only)), ramps
+each disk through :data:`envs.accuracy.PAPER_TORQUES_NM` and prints the closing-angle
 error ``(theta_a0 - theta)_PSM / (theta_a0 - theta)_FEM - 1`` (RMS, mean, max) on the three
 paper disks and on held-out disks (other radii, moduli and Poisson ratios), beside the compiled
 solve time per torque and the wall time a user sees. The issue's targets: 2 % RMS and 4 % max
@@ -28,12 +30,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from envs.accuracy import PAPER_SCENES, PAPER_TORQUES_NM, fem_reference  # noqa: E402
-from envs.model.family import hybrid_disk  # noqa: E402
+from envs.accuracy.members import DEFAULT_MEMBERS, Member  # noqa: E402
 from envs.scene import Scene  # noqa: E402
 from envs.solver.simulate import simulate_ramp  # noqa: E402
 
-MEMBERS = ((20, 1), (20, 2), (20, 3), (24, 3), (20, 4), (24, 4), (32, 4), (20, 6), (32, 6))
-QUICK_MEMBERS = ((20, 1), (20, 3), (24, 4))
+MEMBERS = DEFAULT_MEMBERS + (Member(32, 4, "hybrid"), Member(32, 6, "hybrid"),
+                             Member(24, 6, "calibrated", "cst"))
+QUICK_MEMBERS = (Member(20, 1), Member(20, 3, "hybrid"), Member(20, 3, "calibrated", "cst"))
 
 
 def heldout_scenes() -> dict[str, Scene]:
@@ -50,11 +53,11 @@ def heldout_scenes() -> dict[str, Scene]:
     }
 
 
-def member_errors(scene: Scene, ref, n: int, m: int) -> dict:
+def member_errors(scene: Scene, ref, member: Member) -> dict:
     """Closing-angle errors and times of one member on one disk."""
-    model = scene if m == 1 else Scene(scene.gripper, hybrid_disk(scene.disk))
     t0 = time.perf_counter()
-    out = simulate_ramp(model, list(ref.torques_nm), n, n_rings=m)
+    out = simulate_ramp(member.scene(scene), list(ref.torques_nm), member.n_triangles,
+                        n_rings=member.n_rings, element=member.element)
     wall = time.perf_counter() - t0
     th0 = scene.gripper.rest_angle_rad
     fem = th0 - np.asarray(ref.jaw_angles_rad)
@@ -83,15 +86,15 @@ def main(argv: list[str] | None = None) -> int:
         refs[name] = fem_reference(scene, PAPER_TORQUES_NM)
         print(f"FEM {name}: {time.perf_counter() - t0:.1f} s", flush=True)
     # compile outside the timings
-    simulate_ramp(Scene(scenes["paper-r070"].gripper, hybrid_disk(scenes["paper-r070"].disk)),
-                  [0.1], 20, n_rings=2)
+    for element in ("spring", "cst"):
+        simulate_ramp(scenes["paper-r070"], [0.1], 20, n_rings=2, element=element)
     rows = []
-    for n, m in QUICK_MEMBERS if args.quick else MEMBERS:
-        per = {name: member_errors(scene, refs[name], n, m) for name, scene in scenes.items()}
+    for member in QUICK_MEMBERS if args.quick else MEMBERS:
+        per = {name: member_errors(scene, refs[name], member) for name, scene in scenes.items()}
         held = [v for k, v in per.items() if k not in PAPER_SCENES]
         row = {
-            "n_triangles": n, "n_rings": m,
-            "scales": "paper (s = 1, springs only)" if m == 1 else "hybrid (no fit)",
+            "member": member.label, "n_triangles": member.n_triangles,
+            "n_rings": member.n_rings, "element": member.element, "scales": member.scales,
             "paper_rms_max": max(per[k]["rms"] for k in PAPER_SCENES),
             "paper_max": max(per[k]["max"] for k in PAPER_SCENES),
             "heldout_rms_max": max(v["rms"] for v in held),
@@ -104,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
             "disks": per,
         }
         rows.append(row)
-        print(f"N = {n:3d}, M = {m}: paper RMS <= {100 * row['paper_rms_max']:5.1f} % "
+        print(f"{member.label:28s}: paper RMS <= {100 * row['paper_rms_max']:5.1f} % "
               f"(max {100 * row['paper_max']:5.1f} %), held-out RMS <= "
               f"{100 * row['heldout_rms_max']:5.1f} % (max {100 * row['heldout_max']:5.1f} %), "
               f"{row['compiled_ms_per_torque']:6.2f} ms compiled / "

@@ -1,8 +1,10 @@
 """The cheapest member of the model family for a tolerance (:func:`choose_model`).
 
-A member is named by its contour points ``N``, rings ``M`` and material scales: the paper's fan
-(``M = 1``, the disk's own ``stiffness_scale``, springs only unless the disk says otherwise) or
-a ring mesh with the physics-derived hybrid scales (:func:`envs.model.family.hybrid_scales`).
+A member is named by its contour points ``N``, rings ``M``, element energy and material scales:
+the paper's fan (``M = 1``, the disk's own ``stiffness_scale``, springs only unless the disk
+says otherwise), a spring ring mesh with the physics-derived hybrid scales
+(:func:`envs.model.family.hybrid_scales`) or a constant-strain ring mesh with its shipped
+calibration (:data:`envs.model.family.CST_SCALES`).
 :func:`choose_model` ramps each candidate through the torques, compares its closing angle with
 the FEM reference of the same scene (:func:`envs.accuracy.fem_reference`, disk-cached) and
 returns the cheapest one (measured compiled time per torque) within the tolerance.
@@ -16,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..model.family import hybrid_disk
+from ..model.family import cst_disk, hybrid_disk
 from ..scene import Scene
 from ..solver.simulate import simulate_ramp
 from ..validation import check_integer, check_range
@@ -38,35 +40,48 @@ class Member:
         Rings ``M`` (1: the paper's fan).
     scales
         ``"disk"``: the disk's own ``stiffness_scale`` and ``area_stiffness_scale`` (the
-        paper's model for a preset); ``"hybrid"``: the scales derived from E and nu
-        (:func:`envs.model.family.hybrid_scales`).
+        paper's model for a preset); ``"hybrid"``: the spring member's scales derived from E
+        and nu (:func:`envs.model.family.hybrid_scales`); ``"calibrated"``: the constant-strain
+        member's shipped scale (:data:`envs.model.family.CST_SCALES`).
+    element
+        ``"spring"`` (springs and the area energy) or ``"cst"`` (constant-strain neo-Hookean
+        triangles).
     """
 
     n_triangles: int
     n_rings: int = 1
     scales: str = "disk"
+    element: str = "spring"
 
     def __post_init__(self) -> None:
         check_integer("n_triangles", self.n_triangles, 4, 20000)
         check_integer("n_rings", self.n_rings, 1, 16)
-        if self.scales not in ("disk", "hybrid"):
-            raise ValueError(f"scales must be 'disk' or 'hybrid', got {self.scales!r}")
+        if self.scales not in ("disk", "hybrid", "calibrated"):
+            raise ValueError(f"scales must be 'disk', 'hybrid' or 'calibrated', got "
+                             f"{self.scales!r}")
+        if self.element not in ("spring", "cst"):
+            raise ValueError(f"element must be 'spring' or 'cst', got {self.element!r}")
+        if self.scales == "calibrated":
+            cst_disk(Scene.preset("paper-r070").disk, self.n_triangles, self.n_rings)
 
     def scene(self, scene: Scene) -> Scene:
         """The scene as this member models it (its disk's scales set)."""
-        if self.scales == "disk":
-            return scene
-        return replace(scene, disk=hybrid_disk(scene.disk))
+        if self.scales == "hybrid":
+            return replace(scene, disk=hybrid_disk(scene.disk))
+        if self.scales == "calibrated":
+            return replace(scene, disk=cst_disk(scene.disk, self.n_triangles, self.n_rings))
+        return scene
 
     @property
     def label(self) -> str:
-        return f"N={self.n_triangles} M={self.n_rings} {self.scales}"
+        return f"N={self.n_triangles} M={self.n_rings} {self.element} {self.scales}"
 
 
 #: Candidates of :func:`choose_model`, roughly by cost.
 DEFAULT_MEMBERS = (
-    Member(20, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"), Member(24, 3, "hybrid"),
-    Member(24, 4, "hybrid"), Member(32, 4, "hybrid"), Member(32, 6, "hybrid"),
+    Member(20, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"), Member(24, 4, "hybrid"),
+    Member(20, 3, "calibrated", "cst"), Member(24, 4, "calibrated", "cst"),
+    Member(32, 6, "calibrated", "cst"), Member(48, 8, "calibrated", "cst"),
 )
 
 
@@ -116,7 +131,7 @@ def _row(scene: Scene, ref: ReferenceCurve, member: Member, tolerance: float) ->
 
     t0 = time.perf_counter()
     out = simulate_ramp(member.scene(scene), list(ref.torques_nm), member.n_triangles,
-                        n_rings=member.n_rings)
+                        n_rings=member.n_rings, element=member.element)
     wall = (time.perf_counter() - t0) / len(out)
     failed = sum(not r.converged for r in out)
     th0 = scene.gripper.rest_angle_rad
