@@ -255,12 +255,13 @@ def run_to_rest(scene: Scene, model, data, mesh: FlexMesh, torque_nm: float,
     t0 = time.perf_counter()
     while data.time < s.max_sim_time_s:
         data.ctrl[:] = torque_nm * min(1.0, data.time / s.ramp_s)
+        t_before = float(data.time)
         mujoco.mj_step(model, data)
         steps += 1
         vmax = float(np.max(np.abs(data.qvel)))
         if data.warning[bad_qacc].number > 0 or not math.isfinite(vmax):
             # MuJoCo resets an unstable state to the model's rest and carries on: stop here
-            reason = f"unstable (NaN or huge acceleration at t = {data.time:.4f} s)"
+            reason = f"unstable (NaN or huge acceleration at t = {t_before:.4f} s)"
             break
         calm = calm + 1 if (data.time > s.ramp_s and vmax < s.rest_velocity_tol) else 0
         if calm >= window:
@@ -271,7 +272,7 @@ def run_to_rest(scene: Scene, model, data, mesh: FlexMesh, torque_nm: float,
     wall = time.perf_counter() - t0
     if reason.startswith("unstable"):  # the state was reset: nothing to measure
         return {"torque_nm": torque_nm, "rest_reached": False, "ok": False, "message": reason,
-                "wall_time_s": wall, "sim_time_s": float(data.time), "steps": steps,
+                "wall_time_s": wall, "sim_time_s": t_before, "steps": steps,
                 "jaw_angles_rad": (math.nan, math.nan), "closing_rad": math.nan,
                 "mujoco_contacts": 0, "contour_vertices_touching": [0, 0],
                 "peak_log_strain": None, "max_vertex_penetration_m": None,
