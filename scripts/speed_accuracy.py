@@ -12,11 +12,16 @@ Pareto front (filled line) is computed over the points whose every solve passed 
 points are the coarser meshes (r / 4, r / 6, r / 12) against the r / 24 reference, with the cost
 per torque of their ramp.
 
+MuJoCo's points (``scripts/peer_mujoco.py``: a 2-D flex per mesh size, wall time from rest to
+rest per torque, scored against the same reference) are drawn when ``--mujoco`` names an
+existing file (default ``out/peer_mujoco.json``; skipped when it is absent).
+``--replot`` redraws the chart from an existing ``out/speed_accuracy.json`` without solving.
+
 Writes ``out/speed_accuracy.png`` and ``out/speed_accuracy.json``.
 
 Usage::
 
-    python scripts/speed_accuracy.py [--out out]
+    python scripts/speed_accuracy.py [--out out] [--mujoco out/peer_mujoco.json] [--replot]
 """
 
 from __future__ import annotations
@@ -57,6 +62,7 @@ Y_CLIP = 300.0  # [%] errors above are drawn at the top of the chart
 NEWTON_REPEATS = 3  # timing repeats (median) of the Newton ramps up to N = 80
 STYLE = {"newton": ("tab:blue", "o"), "slsqp": ("tab:orange", "s"),
          "nelder-mead": ("tab:red", "D"), "fem": ("k", "P")}
+MUJOCO_STYLE = ("tab:purple", "X")
 
 
 def _closing_error(th0: float, ref_angles: np.ndarray, angles: np.ndarray) -> tuple[float, float]:
@@ -64,12 +70,90 @@ def _closing_error(th0: float, ref_angles: np.ndarray, angles: np.ndarray) -> tu
     return float(np.sqrt(np.mean(rel**2))), float(np.max(np.abs(rel)))
 
 
+def mujoco_points(path: Path) -> list[dict]:
+    """MuJoCo's points from ``scripts/peer_mujoco.py``'s JSON (empty when the file is absent)."""
+    if not path.is_file():
+        return []
+    data = json.loads(path.read_text())
+    return [{"method": "mujoco", "rings": m["rings"], "n_triangles": m.get("n_triangles"),
+             "time_per_torque_s": m["time_per_torque_s"],
+             "rms_rel_error": m["rms_rel_error"] if m["rms_rel_error"] is not None else math.nan,
+             "all_converged": bool(m["all_ok"])}
+            for m in data.get("meshes", []) if m.get("time_per_torque_s") is not None]
+
+
+def draw_chart(points: list[dict], front: list[int], title: str, path: Path,
+               peers: list[dict] = ()) -> None:
+    """The chart: every point, the Pareto front (indices into ``points``) and peer points."""
+    fig = Figure(figsize=(8, 5.5))
+    ax = fig.add_subplot()
+    styles = dict(STYLE, mujoco=MUJOCO_STYLE) if peers else STYLE
+    every = list(points) + list(peers)
+    for method, (col, mk) in styles.items():
+        sel = [p for p in every if p["method"] == method]
+        for p in sel:
+            e = 100 * p["rms_rel_error"]
+            y = min(max(e, 1e-3), Y_CLIP) if math.isfinite(e) else Y_CLIP
+            ax.plot(p["time_per_torque_s"], y, mk, color=col,
+                    mfc=col if p["all_converged"] else "none", ms=7)
+            lab = (f"r/{p['rings']}" if method in ("fem", "mujoco")
+                   else str(p["n_triangles"]))
+            if y >= Y_CLIP:
+                lab += " (off scale)"
+            ax.annotate(lab, (p["time_per_torque_s"], y), textcoords="offset points",
+                        xytext=(4, 3), fontsize=6, color=col)
+        label = {"fem": "FEM (vs r/24)",
+                 "mujoco": "MuJoCo 2-D flex, to rest (labels: mesh r/rings)"}.get(method, method)
+        ax.plot([], [], mk, color=col, label=label)
+    fx = [points[i]["time_per_torque_s"] for i in front]
+    fy = [100 * points[i]["rms_rel_error"] for i in front]
+    ax.step(fx, fy, where="post", color="tab:green", lw=2, alpha=0.7, label="Pareto front")
+    ax.plot([], [], "o", color="0.5", mfc="none", label="failed KKT check / time limit")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time per torque [s]")
+    ax.set_ylabel("jaw closing-angle error vs FEM r/24 [%] (RMS over 3 torques)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def _title(scale: float) -> str:
+    return f"{SCENE}, T = {TORQUES_NM} N·m, PSM scale {scale:.3f} (labels: N)"
+
+
+def replot(out: Path, mujoco_json: Path) -> int:
+    """Redraw the chart from ``out/speed_accuracy.json`` (no solving)."""
+    data = json.loads((out / "speed_accuracy.json").read_text())
+    points = data["points"]
+    for p in points:
+        if p["rms_rel_error"] is None:
+            p["rms_rel_error"] = math.nan
+    front = [i for i, p in enumerate(points) if p.get("pareto")]
+    front.sort(key=lambda i: points[i]["time_per_torque_s"])
+    peers = mujoco_points(mujoco_json)
+    draw_chart(points, front, _title(data["calibration"]["scale"]), out / "speed_accuracy.png",
+               peers)
+    print(f"redrew {out / 'speed_accuracy.png'} ({len(peers)} MuJoCo points)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out", help="output folder")
+    parser.add_argument("--mujoco", default=None,
+                        help="peer_mujoco.py's JSON to add MuJoCo's points from (default: "
+                        "OUT/peer_mujoco.json, if it exists)")
+    parser.add_argument("--replot", action="store_true",
+                        help="redraw from OUT/speed_accuracy.json without solving")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    mujoco_json = Path(args.mujoco) if args.mujoco else out / "peer_mujoco.json"
+    if args.replot:
+        return replot(out, mujoco_json)
     t_start = time.perf_counter()
 
     base = Scene.preset(SCENE)
@@ -123,35 +207,8 @@ def main(argv: list[str] | None = None) -> int:
     for i in front:
         points[i]["pareto"] = True
 
-    fig = Figure(figsize=(8, 5.5))
-    ax = fig.add_subplot()
-    for method, (col, mk) in STYLE.items():
-        sel = [p for p in points if p["method"] == method]
-        for p in sel:
-            e = 100 * p["rms_rel_error"]
-            y = min(max(e, 1e-3), Y_CLIP) if math.isfinite(e) else Y_CLIP
-            ax.plot(p["time_per_torque_s"], y, mk, color=col,
-                    mfc=col if p["all_converged"] else "none", ms=7)
-            lab = f"r/{p['rings']}" if method == "fem" else str(p["n_triangles"])
-            if y >= Y_CLIP:
-                lab += " (off scale)"
-            ax.annotate(lab, (p["time_per_torque_s"], y), textcoords="offset points",
-                        xytext=(4, 3), fontsize=6, color=col)
-        ax.plot([], [], mk, color=col, label=method if method != "fem" else "FEM (vs r/24)")
-    fx = [points[i]["time_per_torque_s"] for i in front]
-    fy = [100 * points[i]["rms_rel_error"] for i in front]
-    ax.step(fx, fy, where="post", color="tab:green", lw=2, alpha=0.7, label="Pareto front")
-    ax.plot([], [], "o", color="0.5", mfc="none", label="failed KKT check / time limit")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("wall time per torque [s]")
-    ax.set_ylabel("jaw closing-angle error vs FEM r/24 [%] (RMS over 3 torques)")
-    ax.set_title(f"{SCENE}, T = {TORQUES_NM} N·m, PSM scale {cal.scale:.3f} (labels: N)",
-                 fontsize=9)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(out / "speed_accuracy.png", dpi=120)
+    peers = mujoco_points(mujoco_json)
+    draw_chart(points, front, _title(cal.scale), out / "speed_accuracy.png", peers)
 
     summary = {
         "scene": SCENE,
@@ -160,6 +217,7 @@ def main(argv: list[str] | None = None) -> int:
         "calibration": cal,
         "points": points,
         "pareto_front": [points[i] for i in front],
+        "mujoco_points": peers,
         "time_limits_s": TIME_LIMIT_S,
         "wall_time_s": time.perf_counter() - t_start,
     }
