@@ -24,8 +24,10 @@ P_KA      area stiffness ``c_A K / (s E)`` of the area energy (0: springs only, 
 P_A0      rest area of a fan triangle ``sin(2 pi / N) / 2``
 ========  ==================================================================================
 
-The solver keeps a longer private copy with two more slots: P_GAUGE (stiffness of the rotation
-gauge spring) and P_POLICY (contact policy of the attempt).
+The solver keeps a longer private copy with more slots: P_GAUGE (stiffness of the rotation
+gauge spring), P_POLICY (contact policy of the attempt), and the gauge's state in the fast
+attempt (envs.solver.gauge): P_GREF (its anchor), P_GMAX (its starting stiffness) and P_GPROX
+(its mode, one of the ``GAUGE_*`` values).
 """
 
 from __future__ import annotations
@@ -38,7 +40,15 @@ P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0 = range(9, 17)
 N_PARAMS = 17
 P_GAUGE = 17  # solver copy only: gauge spring stiffness
 P_POLICY = 18  # solver copy only: contact policy of this attempt
-N_KERNEL_PARAMS = 19
+P_GREF = 19  # solver copy only: the gauge spring's anchor (point 0's tangential displacement)
+P_GMAX = 20  # solver copy only: the gauge stiffness at the start of the attempt
+P_GPROX = 21  # solver copy only: the gauge's mode (GAUGE_* below)
+N_KERNEL_PARAMS = 22
+
+# modes of the gauge spring (slot P_GPROX)
+GAUGE_AT_REST = 0.0  # holds point 0 at rest; tested for holding up a saddle (fast attempt)
+GAUGE_PROXIMAL = 1.0  # re-anchored at each iterate, its stiffness adapted to the step length
+GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 
 # scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
