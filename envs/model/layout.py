@@ -28,9 +28,11 @@ P_MU      element energy: 0 for springs and the area energy, else the shear modu
 P_LAM     its Lame modulus ``lambda / E`` (plane strain)
 ========  ==================================================================================
 
-The kernels keep a longer private copy: two solver slots, P_GAUGE (stiffness of the rotation
-gauge spring) and P_POLICY (contact policy of the attempt), then from N_KERNEL_PARAMS on the
-ring table of the mesh (:func:`envs.model.rings.fill_ring_table`).
+The kernels keep a longer private copy: the solver's slots P_GAUGE (stiffness of the rotation
+gauge spring), P_POLICY (contact policy of the attempt) and the gauge's state in the fast
+attempt (envs.solver.gauge): P_GREF (its anchor), P_GMAX (its starting stiffness) and P_GPROX
+(its mode, one of the ``GAUGE_*`` values); then, from N_KERNEL_PARAMS on, the ring table of
+the mesh (:func:`envs.model.rings.fill_ring_table`).
 """
 
 from __future__ import annotations
@@ -44,7 +46,15 @@ P_MU, P_LAM = 18, 19
 N_PARAMS = 20
 P_GAUGE = 20  # solver copy only: gauge spring stiffness
 P_POLICY = 21  # solver copy only: contact policy of this attempt
-N_KERNEL_PARAMS = 22  # the ring table follows
+P_GREF = 22  # solver copy only: the gauge spring's anchor (point 0's tangential displacement)
+P_GMAX = 23  # solver copy only: the gauge stiffness at the start of the attempt
+P_GPROX = 24  # solver copy only: the gauge's mode (GAUGE_* below)
+N_KERNEL_PARAMS = 25  # the ring table follows
+
+# modes of the gauge spring (slot P_GPROX)
+GAUGE_AT_REST = 0.0  # holds point 0 at rest; tested for holding up a saddle (fast attempt)
+GAUGE_PROXIMAL = 1.0  # re-anchored at each iterate, its stiffness adapted to the step length
+GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 
 # scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,

@@ -20,6 +20,7 @@ from ..model.energy import (
 )
 from ..model.layout import (
     P_GAUGE,
+    P_GREF,
     P_KA,
     P_KAPPA,
     P_KC,
@@ -117,10 +118,13 @@ def _band_of(bidx, n, m, k, i):
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _gauge_stretch(x, prm):
-    """Tangent (tx, ty) of the contour at point 0's rest position and point 0's displacement
-    ut along it: the gauge spring's direction and stretch."""
+    """Tangent (tx, ty) of the contour at point 0's rest position and the gauge spring's
+    stretch along it: point 0's displacement along the tangent less the spring's anchor (slot
+    ``P_GREF``: zero while the gauge holds the rest position; a parameter vector without that
+    slot, as in the derivative tests, has no anchor)."""
     tx, ty = -math.sin(prm[P_PHASE]), math.cos(prm[P_PHASE])
-    return tx, ty, (x[0] - ty) * tx + (x[1] + tx) * ty
+    ref = prm[P_GREF] if prm.shape[0] > P_GREF else 0.0
+    return tx, ty, (x[0] - ty) * tx + (x[1] + tx) * ty - ref
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

@@ -12,6 +12,8 @@ from numba import njit, prange
 
 from ..model.energy import folded_triangles
 from ..model.layout import (
+    GAUGE_AT_REST,
+    GAUGE_HELD,
     I_CONTACT_GAP,
     I_INVERTED,
     I_ITERATIONS,
@@ -29,6 +31,8 @@ from ..model.layout import (
     O_POLISH,
     O_TOL,
     P_GAUGE,
+    P_GMAX,
+    P_GPROX,
     P_KAPPA,
     P_KC,
     P_KR,
@@ -62,6 +66,9 @@ from .ipm import (
 from .polish import (
     _polish_set,
 )
+from .start import (
+    _close_to_contact,
+)
 from .status import (
     BLOCKED,
     CONTACT_CYCLE,
@@ -73,6 +80,8 @@ from .status import (
     POLISH_FAIL,
     SADDLE,
 )
+
+FAST_BUDGET = 1.0 / 3.0  # iteration limit of the fast attempt, as a fraction of the option's
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -110,29 +119,67 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01
 
 @njit(cache=True, error_model="numpy")
 def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand, info):
-    """Solve one grasp in place, trying up to two contact policies.
+    """Solve one grasp in place: a fast attempt, then the plain ones as a fallback.
 
-    Policy 0 (fast): corner-edge constraints for the edges near the arc each corner sweeps as
+    Contact policy 0: corner-edge constraints for the edges near the arc each corner sweeps as
     its finger closes. Policy 1: every contour edge for the tip corners. In both, line-search
     steps that would carry a corner or a point right through the contour or a finger are
-    refused (the gaps are distances, positive again on the far side). Policy 1 starts again
-    from the given start point and runs only when policy 0 failed (an inverted fan, a property
-    of the model, is not retried). Arguments as in :func:`_solve_attempt`; ``info[1]`` counts
-    the iterations of both attempts.
+    refused (the gaps are distances, positive again on the far side).
+
+    The fast attempt (policy 0, a third of the iteration limit) closes the fingers of the
+    start to just short of the first contact (:mod:`envs.solver.start`) and leaves a saddle
+    held up by the gauge as soon as the interior point meets it (:mod:`envs.solver.gauge`).
+    Unless it ends on a stable equilibrium, the plain attempts run from the given start as the
+    solver did before those two steps: policy 0, then policy 1 unless policy 0 converged or
+    ended on an inverted fan (a property of the model). So no grasp the plain sequence solves
+    is lost.
+
+    Which answer is kept (the arbitration): the model's grasp is the stable equilibrium
+    reached by ramping the torque from 0, but a direct solve at one torque cannot tell which
+    of several stable equilibria the ramp would follow; the fast attempt's turn off a saddle
+    may end in another one than the plain sequence's escape (mirror images of equal energy
+    for a symmetric scene, and a few of lower or higher energy; a torque ramp reaches the
+    fast answer for some of the higher-energy ones and the plain answer for others). Hence:
+    a stable converged fast answer is kept without running the plain sequence (running it to
+    compare energies would cost the whole gain); a converged but unstable fast answer (a
+    saddle its escapes could not leave, rare) is replaced by the plain answer if that is
+    converged and stable, and kept otherwise; a fast attempt that did not converge, or ended
+    on an inverted fan, gives way to the plain answer whatever it is (the solver's answer
+    before the fast attempt existed).
+
+    Arguments as in :func:`_solve_attempt`; ``info[I_ITERATIONS]`` counts the iterations of
+    every attempt.
     """
     x_in = x.copy()
     lam_in = lam_face.copy()
-    total = 0.0
+    fast = opts.copy()
+    fast[O_MAXIT] = opts[O_MAXIT] * FAST_BUDGET
+    _solve_attempt(n, prm_in, fast, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
+                   info, 0.0, False)
+    if info[I_STATUS] == OK and info[I_STABLE] == 1.0:
+        return
+    total = info[I_ITERATIONS]
+    keep_fast = info[I_STATUS] == OK
+    if keep_fast:
+        kept = (x.copy(), lam_face.copy(), lam_corner.copy(), lam_stop.copy(),
+                corner_cand.copy(), face_cand.copy(), info.copy())
     for policy in range(2):
-        if policy > 0:
-            x[:] = x_in
-            lam_face[:, :] = lam_in
+        x[:] = x_in
+        lam_face[:, :] = lam_in
         _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand,
-                       face_cand, info, float(policy))
-        total += info[1]
-        if info[0] == OK or info[0] == INVERTED:
+                       face_cand, info, float(policy), True)
+        total += info[I_ITERATIONS]
+        if info[I_STATUS] == OK or info[I_STATUS] == INVERTED:
             break
-    info[1] = total
+    if keep_fast and not (info[I_STATUS] == OK and info[I_STABLE] == 1.0):
+        x[:] = kept[0]
+        lam_face[:, :] = kept[1]
+        lam_corner[:, :, :] = kept[2]
+        lam_stop[:] = kept[3]
+        corner_cand[:, :, :] = kept[4]
+        face_cand[:, :] = kept[5]
+        info[:] = kept[6]
+    info[I_ITERATIONS] = total
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -270,7 +317,7 @@ def _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face):
 
 @njit(cache=True, error_model="numpy")
 def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
-                   info, policy):
+                   info, policy, plain):
     """Solve one grasp in place.
 
     Parameters
@@ -300,17 +347,28 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         Work/out: face constraints considered.
     info : float64[N_INFO]
         Out: the ``I_*`` slots of :mod:`envs.model.layout`.
+    plain : bool
+        Start from ``x`` as given, the gauge held at rest until released (no saddle test); else
+        the fast attempt's start and gauge (see :func:`solve_one`).
     """
     prm = kernel_copy(prm_in, n)
     # the gauge spring holds the nearly free turn of the polygon about its pin while the
-    # contacts form (released once the contact set settles). Fine fans need it most: without
-    # it the interior-point iterates swung the polygon to and fro at N = 500 and ran into the
-    # iteration limit at nearly every torque of the paper sweep. A ring mesh's hub holds the
-    # turn itself
+    # contacts form (released once the contact set settles, or made proximal once it is found
+    # holding up a saddle). Fine fans need it most: without it the interior-point iterates
+    # swung the polygon to and fro at N = 500 and ran into the iteration limit at nearly every
+    # torque of the paper sweep. A ring mesh's hub holds the turn itself
     if prm[P_RINGS] == 1:
         prm[P_GAUGE] = opts[O_GAUGE] * max(prm[P_KC], prm[P_KR])
+    prm[P_GMAX] = prm[P_GAUGE]
     prm[P_POLICY] = policy
     bidx = mesh_band_index(n, int(prm[P_RINGS]))
+    if plain:
+        prm[P_GPROX] = GAUGE_HELD
+    else:
+        prm[P_GPROX] = GAUGE_AT_REST
+        # fingers closed freely up to just short of the first contact (from rest, a third of
+        # the Newton iterations closed them at the line search's limit of 0.05 rad a step)
+        _close_to_contact(x, n, prm)
     x0 = x.copy()
     mmax = 10 * n + 2
     kinds = np.zeros(mmax, dtype=np.int64)

@@ -11,9 +11,13 @@ import numpy as np
 from numba import njit
 
 from ..model.layout import (
+    GAUGE_AT_REST,
+    GAUGE_PROXIMAL,
     N_OPTIONS,
     O_MAXIT,
     O_TOL,
+    P_GAUGE,
+    P_GPROX,
     P_KC,
     P_KR,
 )
@@ -32,6 +36,10 @@ from .banded import (
 from .contact import (
     _all_gaps,
     _tunnels,
+)
+from .gauge import (
+    _gauge_reanchor,
+    _leave_saddle,
 )
 from .status import (
     BLOCKED,
@@ -53,7 +61,8 @@ class IpmWork(NamedTuple):
     ``rb``/``rt`` and solutions ``ob``/``ot``. Per constraint: gaps ``g``/``gt`` (current,
     trial), ``sig`` (multiplier over gap), ``dlam`` (multiplier step), cached gradients ``cg``,
     their dofs ``cd`` and curvature ``ch``. One constraint's scratch: ``grad5``, ``hess5``,
-    ``dofs``.
+    ``dofs``. The gauge's saddle test (:mod:`envs.solver.gauge`): ``wb`` (band order) and
+    ``wt`` (2) get ``W^-1 t``.
     """
 
     grad: np.ndarray
@@ -80,6 +89,8 @@ class IpmWork(NamedTuple):
     cg: np.ndarray
     cd: np.ndarray
     ch: np.ndarray
+    wb: np.ndarray
+    wt: np.ndarray
 
 
 @njit(cache=True, error_model="numpy")
@@ -115,8 +126,10 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     cg = np.zeros((mcount, 5))
     cd = np.zeros((mcount, 5), dtype=np.int64)
     ch = np.zeros((mcount, CH_BLOCK + 1))
+    wb = np.zeros(nbb)
+    wt = np.zeros(2)
     work = IpmWork(grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
-                   grad5, hess5, dofs, gb, cg, cd, ch)
+                   grad5, hess5, dofs, gb, cg, cd, ch, wb, wt)
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
                      work)
 
@@ -124,7 +137,7 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it, work):
     (grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam, grad5, hess5,
-     dofs, gb, cg, cd, ch) = work
+     dofs, gb, cg, cd, ch, _, _) = work
     nb = 2 * n
     nx = x.shape[0]
     nbb = ab.shape[0]
@@ -141,8 +154,13 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     have_acc = False  # merit parts at x known (from the line search that reached x)
     e_acc = 0.0
     l_acc = 0.0
+    alpha = -1.0  # length of the last accepted step (none yet): the proximal gauge follows it
+    check_gauge = False  # test whether the gauge holds up a saddle (after each decrease of mu)
     _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
     while it < maxit:
+        if prm[P_GAUGE] > 0.0 and prm[P_GPROX] == GAUGE_PROXIMAL:
+            # the merit at x loses the gauge spring's energy there (anchored at x, it is zero)
+            e_acc -= _gauge_reanchor(x, prm, alpha)
         # exact Hessian first; where it is indefinite (compressed springs), the Hessian with the
         # springs' negative geometric stiffness and the constraint curvature removed (made from
         # the exact one in place, _drop_curvature); a diagonal shift only as a last resort.
@@ -170,6 +188,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                 for d in range(nx):
                     grad[d] += (mu - mu_new) * gb[d]
                 mu = mu_new
+                check_gauge = True
                 continue
             break
         if done:
@@ -181,6 +200,20 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
         if ok:
             n_neg = 0
+            if check_gauge and prm[P_GAUGE] > 0.0 and prm[P_GPROX] == GAUGE_AT_REST:
+                check_gauge = False
+                # tested after each decrease of mu: the saddle shows as soon as the barrier
+                # problem has it. Off it, the gauge is proximal (it damps the turn without
+                # holding it) and the barrier goes back to the first mu: the turn moves contacts
+                if _leave_saddle(x, n, prm, bidx, kinds, fj, fidx, mcount, shift, work):
+                    if mu < mu0:
+                        mu = mu0
+                        shrink = 0.01
+                        for m in range(mcount):
+                            lam[m] = max(lam[m], mu / g[m])
+                    have_acc = False
+                    alpha = -1.0
+                    continue
         else:
             if mu < 1e-7 * fscale:
                 n_neg += 1
