@@ -28,15 +28,16 @@ from .layout import P_KA, P_KAPPA, P_LAM, P_MU, P_RINGS, P_TAU, P_TH0
 from .rings import (
     edge_constants,
     edge_ends,
+    edge_xy,
     kernel_params,
     n_edge_types,
     n_state,
     n_tri_types,
     point_dof,
-    point_xy,
     rest_xy,
     tri_corners,
     tri_rest_area,
+    tri_xy,
 )
 
 __all__ = [
@@ -231,9 +232,7 @@ def cst_hessian_column(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam, 
 def _cst_triangle(x, n, m, prm, t, i):
     """Current edges ``Ds`` (rows), rest inverse and area of triangle ``i`` of family ``t``."""
     ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
-    xa, ya = point_xy(x, n, m, prm, ka, ia)
-    xb, yb = point_xy(x, n, m, prm, kb, ib)
-    xc, yc = point_xy(x, n, m, prm, kc, ic)
+    xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
     qax, qay = rest_xy(prm, n, m, ka, ia)
     qbx, qby = rest_xy(prm, n, m, kb, ib)
     qcx, qcy = rest_xy(prm, n, m, kc, ic)
@@ -261,9 +260,7 @@ def mesh_energy(x, n, prm):
     ne = n_edge_types(m)
     for i in range(n):
         for t in range(ne):
-            ka, ia, kb, ib = edge_ends(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
             k, rest = edge_constants(prm, t, i, n, m)
             e += spring_energy(xb - xa, yb - ya, k, rest)
     for j in range(2):
@@ -271,10 +268,7 @@ def mesh_energy(x, n, prm):
     if prm[P_KA] > 0.0:
         for t in range(n_tri_types(m)):
             for i in range(n):
-                ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
-                xa, ya = point_xy(x, n, m, prm, ka, ia)
-                xb, yb = point_xy(x, n, m, prm, kb, ib)
-                xc, yc = point_xy(x, n, m, prm, kc, ic)
+                xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
                 e += area_energy(tri_area(xa, ya, xb, yb, xc, yc), prm[P_KA],
                                  tri_rest_area(prm, t, i, m))
     return e
@@ -315,8 +309,7 @@ def mesh_gradient(x, n, prm, grad):
     for t in range(n_edge_types(m)):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
             k, rest = edge_constants(prm, t, i, n, m)
             dx, dy = xb - xa, yb - ya
             f = spring_force(dx, dy, k, rest)
@@ -328,9 +321,7 @@ def mesh_gradient(x, n, prm, grad):
         for t in range(n_tri_types(m)):
             for i in range(n):
                 ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
-                xa, ya = point_xy(x, n, m, prm, ka, ia)
-                xb, yb = point_xy(x, n, m, prm, kb, ib)
-                xc, yc = point_xy(x, n, m, prm, kc, ic)
+                xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
                 f = 0.5 * area_slope(tri_area(xa, ya, xb, yb, xc, yc), prm[P_KA],
                                      tri_rest_area(prm, t, i, m))
                 _add2(grad, point_dof(n, m, ka, ia), f * (yb - yc), f * (xc - xb))
@@ -345,10 +336,7 @@ def folded_triangles(x, n, prm):
     count = 0
     for t in range(n_tri_types(m)):
         for i in range(n):
-            ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
-            xc, yc = point_xy(x, n, m, prm, kc, ic)
+            xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
             if tri_area(xa, ya, xb, yb, xc, yc) <= 0.0:
                 count += 1
     return count

@@ -17,7 +17,7 @@ from .layout import P_RINGS
 from .rings import (
     HUB_RADIUS,
     edge_constants,
-    edge_ends,
+    edge_xy,
     n_edge_types,
     n_tri_types,
     point_xy,
@@ -95,9 +95,7 @@ def state_metrics(x, n, prm, out):
     peak = 0.0
     for t in range(n_edge_types(m)):
         for i in range(n):
-            ka, ia, kb, ib = edge_ends(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
             _, rest = edge_constants(prm, t, i, n, m)
             dx, dy = xb - xa, yb - ya
             peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / rest - 1.0))

@@ -71,6 +71,8 @@ __all__ = [
     "tri_corners",
     "tri_rest_area",
     "point_xy",
+    "edge_xy",
+    "tri_xy",
     "rest_xy",
     "ring_rest_state_into",
     "mesh_band_index",
@@ -299,6 +301,25 @@ def tri_rest_area(prm, t, i, m):
     row = _row(k)
     outer = (t % 2 == 0) == (i % 2 == 0)
     return prm[row + R_AOUT] if outer else prm[row + R_AIN]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def edge_xy(x, n, m, prm, t, i):
+    """Both ends ``(xa, ya, xb, yb)`` of edge ``i`` of family ``t`` in state ``x``."""
+    ka, ia, kb, ib = edge_ends(t, i, n, m)
+    xa, ya = point_xy(x, n, m, prm, ka, ia)
+    xb, yb = point_xy(x, n, m, prm, kb, ib)
+    return xa, ya, xb, yb
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def tri_xy(x, n, m, prm, t, i):
+    """The three corners ``(xa, ya, xb, yb, xc, yc)`` of triangle ``i`` of family ``t``."""
+    ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
+    xa, ya = point_xy(x, n, m, prm, ka, ia)
+    xb, yb = point_xy(x, n, m, prm, kb, ib)
+    xc, yc = point_xy(x, n, m, prm, kc, ic)
+    return xa, ya, xb, yb, xc, yc
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

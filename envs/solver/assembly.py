@@ -33,11 +33,12 @@ from ..model.layout import (
 from ..model.rings import (
     edge_constants,
     edge_ends,
+    edge_xy,
     n_edge_types,
     n_tri_types,
-    point_xy,
     tri_corners,
     tri_rest_area,
+    tri_xy,
 )
 from .contact import (
     _con_eval,
@@ -152,9 +153,7 @@ def _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
     for t in range(n_tri_types(m)):
         for i in range(n):
             ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
-            xc, yc = point_xy(x, n, m, prm, kc, ic)
+            xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
             area = tri_area(xa, ya, xb, yb, xc, yc)
             a0 = tri_rest_area(prm, t, i, m)
             curv = area_curvature(area, prm[P_KA], a0)
@@ -260,8 +259,7 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
         for t in range(n_edge_types(m)):
             for i in range(n):
                 ka, ia, kb, ib = edge_ends(t, i, n, m)
-                xa, ya = point_xy(x, n, m, prm, ka, ia)
-                xb, yb = point_xy(x, n, m, prm, kb, ib)
+                xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
                 k, rest = edge_constants(prm, t, i, n, m)
                 kxx, kyy, kxy = spring_hessian(xb - xa, yb - ya, k, rest, psd)
                 _add_edge(ab, bb, dd, nb, _band_of(bidx, n, m, ka, ia),
@@ -323,8 +321,7 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
     for t in range(n_edge_types(m) if prm[P_MU] == 0.0 else 0):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)
-            xa, ya = point_xy(x, n, m, prm, ka, ia)
-            xb, yb = point_xy(x, n, m, prm, kb, ib)
+            xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
             k, rest = edge_constants(prm, t, i, n, m)
             dx, dy = xb - xa, yb - ya
             lc = math.sqrt(dx * dx + dy * dy)
