@@ -12,6 +12,11 @@ Pareto front (filled line) is computed over the points whose every solve passed 
 points are the coarser meshes (r / 4, r / 6, r / 12) against the r / 24 reference, with the cost
 per torque of their ramp.
 
+The model family's members are drawn beside them with their own scales, *not* refitted on this
+reference: the paper's fan at s = 1, spring ring meshes with the hybrid scales derived from E and
+nu, and constant-strain ring meshes with their shipped calibration (fitted on the three paper
+disks over 0.05-0.5 N·m; ``envs.model.family``).
+
 MuJoCo's points (``scripts/peer_mujoco.py``: a 2-D flex per mesh size, wall time from rest to
 rest per torque, scored against the same reference) are drawn when ``--mujoco`` names an
 existing file (default ``out/peer_mujoco.json``; skipped when it is absent).
@@ -45,8 +50,10 @@ from envs.accuracy import (  # noqa: E402
     pareto_front,
     psm_curve,
 )
+from envs.accuracy.members import Member  # noqa: E402
 from envs.scene import Scene  # noqa: E402
 from envs.solver import simulate  # noqa: E402
+from envs.solver.simulate import simulate_ramp  # noqa: E402
 
 SCENE = "paper-r070"
 TORQUES_NM = (0.1, 0.25, 0.5)
@@ -61,7 +68,41 @@ TIME_LIMIT_S = {"newton": 30.0, "slsqp": 20.0, "nelder-mead": 10.0}
 Y_CLIP = 300.0  # [%] errors above are drawn at the top of the chart
 NEWTON_REPEATS = 3  # timing repeats (median) of the Newton ramps up to N = 80
 STYLE = {"newton": ("tab:blue", "o"), "slsqp": ("tab:orange", "s"),
-         "nelder-mead": ("tab:red", "D"), "fem": ("k", "P")}
+         "nelder-mead": ("tab:red", "D"), "fem": ("k", "P"),
+         "fan s=1": ("0.45", "v"), "rings: springs": ("tab:cyan", "^"),
+         "rings: cst": ("tab:brown", "*")}
+FAMILY = (Member(20, 1), Member(40, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"),
+          Member(24, 4, "hybrid"), Member(32, 6, "hybrid"), Member(20, 3, "calibrated", "cst"),
+          Member(20, 4, "calibrated", "cst"), Member(24, 4, "calibrated", "cst"),
+          Member(24, 6, "calibrated", "cst"), Member(32, 6, "calibrated", "cst"),
+          Member(48, 8, "calibrated", "cst"))
+
+
+def _family_method(member: Member) -> str:
+    if member.n_rings == 1:
+        return "fan s=1"
+    return "rings: cst" if member.element == "cst" else "rings: springs"
+
+
+def family_point(base: Scene, member: Member, ref_angles: np.ndarray) -> dict:
+    """A member of the family at its own scales: error and wall time per torque of its ramp
+    (median of 3)."""
+    scene = member.scene(base)
+    times, out = [], None
+    for _ in range(3):
+        t0 = time.perf_counter()
+        out = simulate_ramp(scene, TORQUES_NM, member.n_triangles, n_rings=member.n_rings,
+                            element=member.element)
+        times.append((time.perf_counter() - t0) / len(TORQUES_NM))
+    angles = np.array([float(np.mean(g.jaw_angles_rad)) for g in out])
+    rms, mx = _closing_error(base.gripper.rest_angle_rad, ref_angles, angles)
+    failed = sum(not g.converged for g in out)
+    return {"method": _family_method(member), "member": member.label,
+            "n_triangles": member.n_triangles, "n_rings": member.n_rings,
+            "time_per_torque_s": float(np.median(times)),
+            "compiled_per_torque_s": float(np.mean([g.solve_time_s for g in out])),
+            "rms_rel_error": rms, "max_rel_error": mx, "all_converged": failed == 0,
+            "n_failed": failed}
 MUJOCO_STYLE = ("tab:purple", "X")
 
 
@@ -97,13 +138,19 @@ def draw_chart(points: list[dict], front: list[int], title: str, path: Path,
             ax.plot(p["time_per_torque_s"], y, mk, color=col,
                     mfc=col if p["all_converged"] else "none", ms=7)
             lab = (f"r/{p['rings']}" if method in ("fem", "mujoco")
+                   else f"{p['n_triangles']}x{p['n_rings']}" if p.get("n_rings")
                    else str(p["n_triangles"]))
             if y >= Y_CLIP:
                 lab += " (off scale)"
             ax.annotate(lab, (p["time_per_torque_s"], y), textcoords="offset points",
                         xytext=(4, 3), fontsize=6, color=col)
         label = {"fem": "FEM (vs r/24)",
-                 "mujoco": "MuJoCo 2-D flex, to rest (labels: mesh r/rings)"}.get(method, method)
+                 "mujoco": "MuJoCo 2-D flex, to rest (labels: mesh r/rings)",
+                 "newton": "fan, newton (scale fitted here)",
+                 "fan s=1": "fan, paper's s = 1 (labels N x M)",
+                 "rings: springs": "rings: springs + area, hybrid scales (no fit)",
+                 "rings: cst": "rings: CST, shipped scale (fit on paper disks)",
+                 }.get(method, method)
         ax.plot([], [], mk, color=col, label=label)
     fx = [points[i]["time_per_torque_s"] for i in front]
     fy = [100 * points[i]["rms_rel_error"] for i in front]
@@ -188,6 +235,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{method:12s} N={n:4d}: {1e3 * p['time_per_torque_s']:9.2f} ms/torque, "
                   f"RMS {100 * rms:8.2f} %, max {100 * mx:8.2f} %"
                   f"{'' if p['all_converged'] else f'  ({curve.n_failed} not converged)'}")
+    for member in FAMILY:
+        p = family_point(base, member, ref_angles)
+        points.append(p)
+        print(f"{member.label:28s}: {1e3 * p['time_per_torque_s']:9.2f} ms/torque, RMS "
+              f"{100 * p['rms_rel_error']:8.2f} %, max {100 * p['max_rel_error']:8.2f} %")
     for rings in FEM_RINGS:
         fr = fem_reference(base, TORQUES_NM, mesh_size_m=r / rings)
         ok = len(fr.torques_nm) == len(TORQUES_NM)
@@ -226,7 +278,7 @@ def main(argv: list[str] | None = None) -> int:
     for i in front:
         p = points[i]
         lab = (f"fem r/{p['rings']}" if p["method"] == "fem"
-               else f"{p['method']} N={p['n_triangles']}")
+               else p.get("member") or f"{p['method']} N={p['n_triangles']}")
         print(f"  {lab:16s} {1e3 * p['time_per_torque_s']:9.2f} ms  "
               f"{100 * p['rms_rel_error']:7.3f} %")
     print(f"wrote {out / 'speed_accuracy.png'} and .json in "
