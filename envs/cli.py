@@ -23,6 +23,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     from .scene import Scene
     from .solver import simulate
+    from .solver.warmup import announce_compile
     from .validation import check_n_triangles, check_output_file, check_range
 
     # every option before any work: a bad --plot must not cost a solve
@@ -30,6 +31,7 @@ def _simulate(args: argparse.Namespace) -> int:
     check_range("--torque", args.torque, 0.0, math.inf)
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene = Scene.preset(args.scene)
+    announce_compile()
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
     # report the solve of the answer shown, as a user's next call would see it
     t0 = time.perf_counter()
@@ -68,10 +70,12 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from .solver.warmup import announce_compile
     from .validation import check_output_dir
 
     out = check_output_dir("--out", args.out)
     out.mkdir(parents=True, exist_ok=True)
+    announce_compile()
     try:
         from optim.cli import run_demo
     except ImportError:

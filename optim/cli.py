@@ -206,6 +206,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
     cli_option("--seed", check_seed, args.seed)
     cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     check_output_dir("--out", args.out)
+    from envs.solver.warmup import announce_compile
+
+    announce_compile()
     result, _ = run_optimize(args.method, scene=args.scene, budget=args.budget, seed=args.seed,
                              out=args.out, dask=args.dask, workers=args.workers,
                              strain_limit=args.strain_limit, n_triangles=args.triangles,

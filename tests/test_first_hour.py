@@ -213,3 +213,19 @@ def test_rl_training_objects_are_observable_for_the_forceps():
     for _ in range(500):
         observe(*dist.sample(rng))
     assert dist.youngs_modulus_range_pa[1] >= 29e6  # the forceps' own TPU is drawn too
+
+
+def test_compile_notice_only_when_the_kernels_are_not_cached(tmp_path, monkeypatch, capsys):
+    """A warm cache prints nothing; a cold one (no cache index files) names the wait."""
+    import envs.solver.warmup as warmup
+
+    envs.simulate(envs.Scene.preset("paper-r070"), 0.2, 20)  # the kernels are cached now
+    assert warmup.kernels_cached()
+    assert not warmup.announce_compile()
+    assert capsys.readouterr().err == ""
+    fake = tmp_path / "solver" / "warmup.py"
+    fake.parent.mkdir()
+    monkeypatch.setattr(warmup, "__file__", str(fake))
+    assert not warmup.kernels_cached()
+    assert warmup.announce_compile()
+    assert "compiling the solver's kernels" in capsys.readouterr().err
