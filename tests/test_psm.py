@@ -40,7 +40,7 @@ def test_cst_fit_is_poisson_aware_and_positive():
     assert abs(a[0] - b[0]) > 1e-3 * a[0]
 
 
-@pytest.mark.parametrize("n", [3, 2, 501])
+@pytest.mark.parametrize("n", [3, 2, 20001])
 def test_bad_triangle_counts_raise(n):
     with pytest.raises(ValueError, match="n_triangles"):
         spring_stiffness(n, 0.07)

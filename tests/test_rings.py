@@ -286,3 +286,14 @@ def test_calibrated_cst_member_is_within_its_shipped_errors():
     assert np.sqrt(np.mean(err**2)) < 0.02
     with pytest.raises(ValueError, match="calibration"):
         cst_disk(scene.disk, 21, 3)
+
+
+def test_family_members_accept_fine_contours_the_spring_fan_does_not():
+    """N = 1000 is refused for the springs-only fan (it mostly fails there) and solved by the
+    constant-strain mesh with 2 rings."""
+    with pytest.raises(ValueError, match="500"):
+        simulate(Scene.preset("paper-r070"), 0.2, 1000)
+    res = simulate(Scene.preset("paper-r070"), 0.2, 1000, n_rings=2, element="cst")
+    assert res.converged, res.message
+    with pytest.raises(ValueError, match="n_triangles"):
+        simulate(Scene.preset("paper-r070"), 0.2, 2001, n_rings=2, element="cst")

@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from envs.validation import check_n_triangles, check_range
+from envs.model.defaults import MIN_TRIANGLES, MODEL_MAX_TRIANGLES
+from envs.validation import check_integer, check_range
 
 from .defaults import STIFFNESS_RULES
 
@@ -78,7 +79,9 @@ def spring_stiffness(
     ValueError
         For an unknown rule, ``N`` out of range, or a rule giving a non-positive stiffness.
     """
-    n = check_n_triangles(n_triangles)
+    # the rule is defined on every fan the model allows; which N a solve should use is the
+    # public entry points' business (MAX_TRIANGLES)
+    n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MODEL_MAX_TRIANGLES)
     check_range("radius_m", radius_m, 0.0, math.inf, low_open=True)
     if rule not in STIFFNESS_RULES:
         raise ValueError(f"stiffness rule {rule!r} is unknown; allowed: {STIFFNESS_RULES}")

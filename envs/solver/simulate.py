@@ -17,7 +17,13 @@ from dataclasses import replace
 import numpy as np
 
 from envs import check
-from envs.model.defaults import DEFAULT_N_TRIANGLES, DEFAULT_PHASE_RAD, STIFFNESS_RULES
+from envs.model.defaults import (
+    DEFAULT_N_TRIANGLES,
+    DEFAULT_PHASE_RAD,
+    MAX_TRIANGLES_FAMILY,
+    MIN_TRIANGLES,
+    STIFFNESS_RULES,
+)
 from envs.model.problem import ELEMENTS, stiffness_unit
 from envs.model.rings import MAX_RINGS
 from envs.scene import Scene
@@ -190,9 +196,12 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
     check_range("phase_rad", phase_rad)
     check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
-    n = check_n_triangles(n_triangles)
     m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
     check_choice("element", element, ELEMENTS)
+    # the springs-only fan stops converging reliably past MAX_TRIANGLES; the ring and
+    # constant-strain members go further
+    n = (check_n_triangles(n_triangles) if m == 1 and element == "spring"
+         else check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY))
     if (m > 1 or element != "spring") and method != "newton":
         raise ValueError(f"n_rings = {m} and element = {element!r} need method = 'newton' (the "
                          f"baselines solve the spring fan), got method = {method!r}")
@@ -223,7 +232,8 @@ def simulate(
     torque_nm
         Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
     n_triangles
-        Number of fan triangles ``N`` (4 to ``MAX_TRIANGLES`` = 500).
+        Number of contour points ``N``: 4 to ``MAX_TRIANGLES`` = 500 for the springs-only fan,
+        to ``MAX_TRIANGLES_FAMILY`` = 2000 with rings or constant-strain triangles.
     method
         ``"newton"`` (default), ``"slsqp"`` or ``"nelder-mead"``.
     stiffness_rule
