@@ -23,21 +23,32 @@ def _simulate(args: argparse.Namespace) -> int:
 
     from .scene import Scene
     from .solver import simulate
+    from .solver.simulate import check_model
     from .solver.warmup import announce_compile
-    from .validation import check_n_triangles, check_output_file, check_range
+    from .validation import check_output_file, check_range
 
     # every option before any work: a bad --plot must not cost a solve
-    cli_option("--triangles", check_n_triangles, args.triangles)
+    cli_option("--triangles/--rings/--element", check_model, args.triangles, args.rings,
+               args.element)
     check_range("--torque", args.torque, 0.0, math.inf)
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene = Scene.preset(args.scene)
+    if args.calibrated:
+        from .model.family import cst_disk
+
+        if args.element != "cst":
+            raise ValueError("--calibrated applies the shipped scale of a constant-strain "
+                             f"member: it needs --element cst, got --element {args.element}")
+        scene = Scene(scene.gripper, cli_option("--calibrated", cst_disk, scene.disk,
+                                                args.triangles, args.rings))
     announce_compile()
+    model = {"stiffness_rule": args.rule, "n_rings": args.rings, "element": args.element}
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
     # report the solve of the answer shown, as a user's next call would see it
     t0 = time.perf_counter()
-    first = simulate(scene, args.torque, args.triangles, args.method, stiffness_rule=args.rule)
+    first = simulate(scene, args.torque, args.triangles, args.method, **model)
     first_wall_s = time.perf_counter() - t0
-    res = simulate(scene, args.torque, args.triangles, args.method, stiffness_rule=args.rule)
+    res = simulate(scene, args.torque, args.triangles, args.method, **model)
     load_s = max(0.0, first_wall_s - first.solve_time_s)
     if args.json:
         data = res.to_dict()
@@ -46,7 +57,8 @@ def _simulate(args: argparse.Namespace) -> int:
         print(json.dumps(data, indent=2))
     else:
         r, left = (math.degrees(a) for a in res.jaw_angles_rad)
-        print(f"scene {args.scene}, N = {args.triangles}, T_a = {args.torque:g} N·m, "
+        print(f"scene {args.scene}, N = {args.triangles}, M = {args.rings} ({args.element}"
+              f"{', shipped scale' if args.calibrated else ''}), T_a = {args.torque:g} N·m, "
               f"method {args.method}")
         print(f"  converged      : {res.converged} ({res.message})")
         print(f"  jaw angles     : right {r:.4f} deg, left {left:.4f} deg")
@@ -94,7 +106,9 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .model.defaults import MAX_TRIANGLES, STIFFNESS_RULES
+    from .model.defaults import MAX_TRIANGLES, MAX_TRIANGLES_FAMILY, STIFFNESS_RULES
+    from .model.problem import ELEMENTS
+    from .model.rings import MAX_RINGS
     from .scene import PRESETS
     from .solver import METHODS
 
@@ -103,7 +117,17 @@ def build_parser() -> argparse.ArgumentParser:
     sim = sub.add_parser("simulate", help="solve one grasp")
     sim.add_argument("--scene", default="paper-r070", choices=sorted(PRESETS))
     sim.add_argument("--triangles", type=int, default=20,
-                     help=f"number of fan triangles N, in [4, {MAX_TRIANGLES}] (default 20)")
+                     help=f"contour points N, in [4, {MAX_TRIANGLES}] for the springs-only fan, "
+                     f"[4, {MAX_TRIANGLES_FAMILY}] with rings or --element cst (default 20)")
+    sim.add_argument("--rings", type=int, default=1,
+                     help=f"rings M of the point mesh, in [1, {MAX_RINGS}] (default 1: the "
+                     "paper's fan)")
+    sim.add_argument("--element", default="spring", choices=ELEMENTS,
+                     help="spring: springs and the area energy (default); cst: constant-strain "
+                     "neo-Hookean triangles")
+    sim.add_argument("--calibrated", action="store_true",
+                     help="with --element cst: the member's shipped scale (fitted on the paper "
+                     "disks), e.g. --triangles 48 --rings 8")
     sim.add_argument("--torque", type=float, default=0.2, help="actuation torque T_a [N·m]")
     sim.add_argument("--method", default="newton", choices=METHODS)
     sim.add_argument("--rule", default="van_gelder", choices=STIFFNESS_RULES)

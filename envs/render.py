@@ -86,6 +86,53 @@ def spring_segments(points_m: np.ndarray, center_m: np.ndarray, radius_m: float)
     return np.concatenate([radial, contour]), strains
 
 
+def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.ndarray,
+                  radius_m: float, n_rings: int, phase_rad: float = math.pi / 2):
+    """Edges of a ring mesh (:mod:`envs.model.rings`) and their strains ``(L - L0) / L0``.
+
+    Parameters
+    ----------
+    points_m, interior_m
+        Contour points (N, 2) and interior points ((M - 1) N, 2), ring by ring from the hub
+        out [m] (``GraspResult.points_m``, ``.interior_points_m``).
+    center_m, radius_m
+        Disk centre and radius [m].
+    n_rings
+        Rings M (>= 2; the fan is :func:`spring_segments`).
+    phase_rad
+        Angle of the first point of every ring [rad].
+
+    Returns
+    -------
+    segments : numpy.ndarray
+        Shape (3 N M, 2, 2) minus the hub's own edges: every spring of the mesh.
+    strains : numpy.ndarray
+    """
+    from .model.rings import edge_ends, n_edge_types, ring_radius
+
+    pts = np.asarray(points_m, dtype=float)
+    inner = np.asarray(interior_m, dtype=float).reshape(-1, 2)
+    n, m = pts.shape[0], int(n_rings)
+    centre = np.asarray(center_m, dtype=float)
+    ang = phase_rad + 2 * math.pi * np.arange(n) / n
+    unit = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+
+    def point(k, i, rest):
+        if rest or k == 0:
+            return centre + radius_m * ring_radius(k, m) * unit[i]
+        return pts[i] if k == m else inner[(k - 1) * n + i]
+
+    segs, strains = [], []
+    for t in range(n_edge_types(m)):
+        for i in range(n):
+            ka, ia, kb, ib = edge_ends(t, i, n, m)
+            a, b = point(ka, ia, False), point(kb, ib, False)
+            rest = np.linalg.norm(point(kb, ib, True) - point(ka, ia, True))
+            segs.append((a, b))
+            strains.append(np.linalg.norm(b - a) / rest - 1.0)
+    return np.array(segs), np.array(strains)
+
+
 def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float) -> None:
     pts = np.concatenate([*fingers, center + radius * np.array([[-1, -1], [1, 1]])])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -192,9 +239,17 @@ def draw_grasp(
         ax.add_patch(Polygon(pts, closed=True, facecolor="tab:orange", alpha=0.15,
                              edgecolor="0.2", linewidth=2.4, zorder=1, label="deformed disk"))
         if show_springs:
-            segs, strains = spring_segments(pts, center, d.radius_m)
+            rings = int(getattr(result, "n_rings", 1))
+            if rings > 1:
+                # a ring mesh: every edge (for the constant-strain element, the triangles'
+                # edge strains), the hub's ring drawn at rest
+                segs, strains = mesh_segments(pts, result.interior_points_m, center,
+                                              d.radius_m, rings)
+                widths = np.full(len(segs), 0.8)
+            else:
+                segs, strains = spring_segments(pts, center, d.radius_m)
+                widths = np.r_[np.full(len(pts), 1.0), np.full(len(pts), 1.8)]
             lim = strain_limit if strain_limit else max(float(np.max(np.abs(strains))), 1e-6)
-            widths = np.r_[np.full(len(pts), 1.0), np.full(len(pts), 1.8)]
             lines = LineCollection(segs, cmap=cmap, norm=Normalize(-lim, lim),
                                    linewidths=widths, zorder=2)
             lines.set_array(strains)

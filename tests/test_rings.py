@@ -297,3 +297,35 @@ def test_family_members_accept_fine_contours_the_spring_fan_does_not():
     assert res.converged, res.message
     with pytest.raises(ValueError, match="n_triangles"):
         simulate(Scene.preset("paper-r070"), 0.2, 2001, n_rings=2, element="cst")
+
+
+def test_cli_solves_a_calibrated_ring_member(capsys):
+    """``psm-grasp simulate --rings M --element cst --calibrated``: the member with its shipped
+    scale, checked; a member without a shipped scale is refused before any solve."""
+    from envs.cli import main
+
+    assert main(["simulate", "--triangles", "20", "--rings", "3", "--element", "cst",
+                 "--calibrated", "--json"]) == 0
+    out = capsys.readouterr().out
+    assert '"n_rings": 3' in out and '"converged": true' in out
+    assert main(["simulate", "--triangles", "21", "--rings", "3", "--element", "cst",
+                 "--calibrated"]) != 0
+    assert "no shipped calibration" in capsys.readouterr().err
+
+
+def test_drawing_a_ring_grasp_shows_its_mesh():
+    """The drawing of a ring member has every edge of its mesh, unstrained at rest and with the
+    strains of the solved state otherwise (the largest equals the result's peak spring strain)."""
+    from envs.render import mesh_segments
+
+    scene = Scene.preset("paper-r070")
+    res = simulate(scene, 0.2, 20, n_rings=3, element="cst")
+    prm, x = _rest(20, 3, scene=scene)
+    r, c = scene.disk.radius_m, scene.disk.center_m
+    rest_pts = x[:40].reshape(-1, 2) * r + c
+    rest_inner = x[42:].reshape(-1, 2) * r + c
+    segs, strains = mesh_segments(rest_pts, rest_inner, c, r, 3)
+    assert segs.shape == (3 * 3 * 20, 2, 2)
+    assert np.abs(strains).max() < 1e-12
+    _, strains = mesh_segments(res.points_m, res.interior_points_m, c, r, 3)
+    assert np.abs(strains).max() == pytest.approx(res.peak_strain, rel=1e-9)

@@ -32,7 +32,7 @@ from envs.validation import check_choice, check_integer, check_n_triangles, chec
 from .pipeline import BatchSolution, row_message, solve_columns
 from .result import GraspResult
 
-__all__ = ["METHODS", "simulate", "simulate_ramp", "grasp_result"]
+__all__ = ["METHODS", "simulate", "simulate_ramp", "grasp_result", "check_model"]
 
 METHODS = ("newton", "slsqp", "nelder-mead")
 WARM_OPENING_RAD = 1e-3
@@ -188,6 +188,19 @@ def _continuation(prob: _Problem, first_step: float = 0.125, min_step: float = 1
     return replace(last, iterations=iterations, solve_time_s=spent)
 
 
+def check_model(n_triangles, n_rings=1, element="spring") -> tuple[int, int]:
+    """Validate a member of the model family: ``(N, M)`` for contour points, rings and element.
+
+    The springs-only fan takes N up to ``MAX_TRIANGLES`` (it stops converging reliably
+    beyond); ring and constant-strain members up to ``MAX_TRIANGLES_FAMILY``.
+    """
+    m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
+    check_choice("element", element, ELEMENTS)
+    n = (check_n_triangles(n_triangles) if m == 1 and element == "spring"
+         else check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY))
+    return n, m
+
+
 def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
                   n_rings=1, element="spring") -> tuple[int, int]:
     if not isinstance(scene, Scene):
@@ -196,12 +209,7 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
     check_range("phase_rad", phase_rad)
     check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
-    m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
-    check_choice("element", element, ELEMENTS)
-    # the springs-only fan stops converging reliably past MAX_TRIANGLES; the ring and
-    # constant-strain members go further
-    n = (check_n_triangles(n_triangles) if m == 1 and element == "spring"
-         else check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY))
+    n, m = check_model(n_triangles, n_rings, element)
     if (m > 1 or element != "spring") and method != "newton":
         raise ValueError(f"n_rings = {m} and element = {element!r} need method = 'newton' (the "
                          f"baselines solve the spring fan), got method = {method!r}")
