@@ -61,8 +61,9 @@ def fem_measures(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     from envs.fem import fem_grasp
 
     results = fem_grasp(scene.with_changes(stiffness_scale=1.0), list(PAPER_TORQUES_NM))
-    # rim nodes of the P2 mesh: two per rim edge, 6 k edges on the outer ring of k rings
-    rim_nodes = 2 * 6 * 12
+    # rim nodes of the P2 mesh: 6 k^2 elements on k rings, 6 k rim edges, two nodes each
+    rings = round((results[0].n_elements / 6) ** 0.5)
+    rim_nodes = 2 * 6 * rings
     strain = np.array([r.peak_strain if r.converged else np.nan for r in results])
     contact = np.array([sum(r.contact_node_counts) / rim_nodes for r in results])
     return strain, contact

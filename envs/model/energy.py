@@ -42,6 +42,7 @@ from .rings import (
 
 __all__ = [
     "bulk_modulus_2d",
+    "lame_per_e",
     "area_energy",
     "area_slope",
     "area_curvature",
@@ -93,6 +94,13 @@ def spring_hessian(dx, dy, k, rest, psd):
 def bulk_modulus_2d(youngs_modulus, poisson_ratio):
     """Plane-strain 2-D bulk modulus ``lambda + mu = E / (2 (1 + nu) (1 - 2 nu))`` [Pa]."""
     return youngs_modulus / (2.0 * (1.0 + poisson_ratio) * (1.0 - 2.0 * poisson_ratio))
+
+
+def lame_per_e(poisson_ratio):
+    """Plane-strain Lame moduli ``(lambda / E, mu / E)`` of a Poisson ratio (a float or an
+    array, elementwise)."""
+    nu = poisson_ratio
+    return nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), 1.0 / (2.0 * (1.0 + nu))
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -241,21 +249,17 @@ def _cst_triangle(x, n, m, prm, t, i):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def mesh_energy(x, n, prm):
-    """Total energy of the disk's point mesh (springs, area energy) and the two finger joints
-    [scaled]; ``prm`` is the kernels' copy with the ring table (:mod:`envs.model.rings`)."""
-    m = int(prm[P_RINGS])
+def _element_energy(x, n, m, prm):
+    """Elastic energy of the mesh's elements: constant-strain triangles when ``P_MU > 0``,
+    else every edge's spring (the area energy is added by :func:`mesh_energy`)."""
     e = 0.0
     if prm[P_MU] > 0.0:
-        # the constant-strain neo-Hookean member: the triangles instead of springs and area
         for t in range(n_tri_types(m)):
             for i in range(n):
                 ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0 = _cst_triangle(x, n, m, prm, t,
                                                                                i)
                 e += cst_energy(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, prm[P_MU],
                                 prm[P_LAM])
-        for j in range(2):
-            e += joint_energy(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
         return e
     ne = n_edge_types(m)
     for i in range(n):
@@ -263,9 +267,19 @@ def mesh_energy(x, n, prm):
             xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
             k, rest = edge_constants(prm, t, i, n, m)
             e += spring_energy(xb - xa, yb - ya, k, rest)
+    return e
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def mesh_energy(x, n, prm):
+    """Total energy of the disk's point mesh (springs and area energy, or constant-strain
+    triangles) and the two finger joints [scaled]; ``prm`` is the kernels' copy with the ring
+    table (:mod:`envs.model.rings`)."""
+    m = int(prm[P_RINGS])
+    e = _element_energy(x, n, m, prm)
     for j in range(2):
         e += joint_energy(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
-    if prm[P_KA] > 0.0:
+    if prm[P_KA] > 0.0 and prm[P_MU] == 0.0:
         for t in range(n_tri_types(m)):
             for i in range(n):
                 xa, ya, xb, yb, xc, yc = tri_xy(x, n, m, prm, t, i)
@@ -297,15 +311,8 @@ def _cst_gradient_all(x, n, m, prm, grad):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def mesh_gradient(x, n, prm, grad):
-    """Add the gradient of :func:`mesh_energy` to ``grad`` (state order)."""
-    m = int(prm[P_RINGS])
-    if prm[P_MU] > 0.0:
-        _cst_gradient_all(x, n, m, prm, grad)
-        for j in range(2):
-            grad[2 * n + j] += joint_gradient(x[2 * n + j], prm[P_TAU], prm[P_KAPPA],
-                                              prm[P_TH0])
-        return
+def _spring_gradient_all(x, n, m, prm, grad):
+    """Add the gradient of every edge's spring."""
     for t in range(n_edge_types(m)):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)
@@ -315,9 +322,19 @@ def mesh_gradient(x, n, prm, grad):
             f = spring_force(dx, dy, k, rest)
             _add2(grad, point_dof(n, m, ka, ia), -(f * dx), -(f * dy))
             _add2(grad, point_dof(n, m, kb, ib), f * dx, f * dy)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def mesh_gradient(x, n, prm, grad):
+    """Add the gradient of :func:`mesh_energy` to ``grad`` (state order)."""
+    m = int(prm[P_RINGS])
+    if prm[P_MU] > 0.0:
+        _cst_gradient_all(x, n, m, prm, grad)
+    else:
+        _spring_gradient_all(x, n, m, prm, grad)
     for j in range(2):
         grad[2 * n + j] += joint_gradient(x[2 * n + j], prm[P_TAU], prm[P_KAPPA], prm[P_TH0])
-    if prm[P_KA] > 0.0:
+    if prm[P_KA] > 0.0 and prm[P_MU] == 0.0:
         for t in range(n_tri_types(m)):
             for i in range(n):
                 ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)

@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ..validation import check_range
+from .energy import lame_per_e
 
 __all__ = ["CAUCHY_SHEAR_PER_E", "CST_SCALES", "hybrid_scales", "hybrid_disk", "cst_disk"]
 
@@ -50,8 +51,7 @@ def hybrid_scales(poisson_ratio: float) -> tuple[float, float]:
         ``(s, c_A)``; E cancels out.
     """
     nu = check_range("poisson_ratio", poisson_ratio, 0.25, 0.5, high_open=True)
-    lam = nu / ((1.0 + nu) * (1.0 - 2.0 * nu))  # per E
-    mu = 1.0 / (2.0 * (1.0 + nu))
+    lam, mu = lame_per_e(nu)
     return mu / CAUCHY_SHEAR_PER_E, (lam - mu) / (lam + mu)
 
 

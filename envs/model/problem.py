@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
-from .energy import bulk_modulus_2d
+from .energy import bulk_modulus_2d, lame_per_e
 from .geometry import bar_distance, closed_angle_of, rest_points_into
 from .layout import (
     N_KERNEL_PARAMS,
@@ -239,9 +239,7 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     prm[:, P_LAM] = 0.0
     if element == "cst":
         # Lame moduli per E (the unit s E t r^2 of the energy makes s the calibration scale)
-        nu = scene[:, S_POISSON]
-        prm[:, P_MU] = 1.0 / (2.0 * (1.0 + nu))
-        prm[:, P_LAM] = nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+        prm[:, P_LAM], prm[:, P_MU] = lame_per_e(scene[:, S_POISSON])
     return prm
 
 
