@@ -154,14 +154,18 @@ def _check_row(s, prm, n, ck):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop):
-    """Points [m] and forces [N, N·m] of one scaled answer."""
+def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, interior, face, corner, stop):
+    """Points [m] (the contour; a ring mesh's interior points, which follow the angles in the
+    state) and forces [N, N·m] of one scaled answer."""
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
     yc = s[S_DISTANCE] + r
     for i in range(n):
         points[i, 0] = x[2 * i] * r
         points[i, 1] = x[2 * i + 1] * r + yc
+    for p in range(interior.shape[0]):
+        interior[p, 0] = x[2 * n + 2 + 2 * p] * r
+        interior[p, 1] = x[2 * n + 3 + 2 * p] * r + yc
     for j in range(2):
         stop[j] = lam_stop[j] * force_unit * r
         for i in range(n):
@@ -201,22 +205,17 @@ def _public_status(raw, passed, inverted):
 
 
 @njit(cache=True, error_model="numpy")
-def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face, corner, stop,
-                totals, edges, metrics, ck, verdict):
+def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, interior, face,
+                corner, stop, totals, edges, metrics, ck, verdict):
     state_metrics(x, n, kernel_copy(prm, n), metrics)
     # energy in J: the scaled energy is in units of s E t r^2
     metrics[M_ENERGY] *= stiffness_unit(s) * s[S_RADIUS] ** 2
-    _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, face, corner, stop)
+    _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, interior, face, corner, stop)
     _corner_summary(corner, totals, edges)
     _check_row(s, prm, n, ck)
     if prm[P_RINGS] == 1 and prm[P_MU] == 0.0:
         check.check_one(ck, points, x[2 * n : 2 * n + 2], face, corner, stop, verdict)
     else:
-        r = s[S_RADIUS]
-        interior = np.empty(((x.shape[0] - 2 * n - 2) // 2, 2))
-        for p in range(interior.shape[0]):
-            interior[p, 0] = x[2 * n + 2 + 2 * p] * r
-            interior[p, 1] = x[2 * n + 3 + 2 * p] * r + s[S_DISTANCE] + r
         check.check_mesh_one(ck, points, interior, x[2 * n : 2 * n + 2], face, corner, stop,
                              verdict)
     return _public_status(int(info[I_STATUS]), verdict[check.OUT_PASSED] > 0.0,
@@ -224,12 +223,13 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, face
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face, corner,
-                 stop, totals, edges, metrics, ck, verdict, status):
+def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, interior,
+                 face, corner, stop, totals, edges, metrics, ck, verdict, status):
     for b in prange(scene.shape[0]):
         status[b] = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b],
-                                lam_stop[b], infos[b], points[b], face[b], corner[b], stop[b],
-                                totals[b], edges[b], metrics[b], ck[b], verdict[b])
+                                lam_stop[b], infos[b], points[b], interior[b], face[b],
+                                corner[b], stop[b], totals[b], edges[b], metrics[b], ck[b],
+                                verdict[b])
 
 
 def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
@@ -287,6 +287,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     """
     b = prm.shape[0]
     points = np.empty((b, n, 2))
+    interior = np.empty((b, (xs.shape[1] - 2 * n - 2) // 2, 2))
     face = np.empty((b, 2, n))
     corner = np.empty((b, 2, N_CORNERS, n))
     stop = np.empty((b, 2))
@@ -298,17 +299,14 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     status = np.empty(b, dtype=np.int64)
     if b == 1:
         status[0] = _finish_one(scene[0], prm[0], n, xs[0], lam_face[0], lam_corner[0],
-                                lam_stop[0], infos[0], points[0], face[0], corner[0], stop[0],
-                                totals[0], edges[0], metrics[0], ck[0], verdict[0])
+                                lam_stop[0], infos[0], points[0], interior[0], face[0],
+                                corner[0], stop[0], totals[0], edges[0], metrics[0], ck[0],
+                                verdict[0])
     else:
-        _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, face,
-                     corner, stop, totals, edges, metrics, ck, verdict, status)
+        _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, interior,
+                     face, corner, stop, totals, edges, metrics, ck, verdict, status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
     passed = verdict[:, check.OUT_PASSED] > 0.0
-    # interior points of a ring mesh (they follow the angles in the state), in SI
-    r = scene[:, S_RADIUS][:, None, None]
-    interior = xs[:, 2 * n + 2 :].reshape(b, -1, 2) * r
-    interior[:, :, 1] += (scene[:, S_DISTANCE][:, None] + scene[:, S_RADIUS][:, None])
     return BatchSolution(
         status=status, converged=status == OK, folded=(inverted > 0) & passed,
         iterations=infos[:, I_ITERATIONS].astype(np.int64),
