@@ -252,6 +252,18 @@ def test_float32_and_numpy_scalars_give_the_python_float_answer():
         assert a.kkt == b.kkt
 
 
+def test_ramp_until_a_strain_stops_at_the_first_step_that_reaches_it():
+    torques = np.linspace(0.1, 2.0, 20)
+    full = simulate_ramp(R070, torques, 20)
+    strains = [r.peak_strain for r in full]
+    first = next(i for i, s in enumerate(strains) if s >= 0.1)
+    cut = simulate_ramp(R070, torques, 20, until_peak_strain=0.1)
+    assert len(cut) == first + 1 < len(full)
+    assert cut[-1].jaw_angles_rad == pytest.approx(full[first].jaw_angles_rad, abs=1e-12)
+    with pytest.raises(ValueError, match="until_peak_strain"):
+        simulate_ramp(R070, torques, 20, until_peak_strain=0.0)
+
+
 def test_ramp_rejects_decreasing_torques():
     with pytest.raises(ValueError, match="non-decreasing"):
         simulate_ramp(R070, [0.2, 0.1])

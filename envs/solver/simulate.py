@@ -291,6 +291,7 @@ def simulate_ramp(
     time_limit_s: float = 30.0,
     n_rings: int = 1,
     element: str = "spring",
+    until_peak_strain: float | None = None,
 ) -> list[GraspResult]:
     """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
 
@@ -302,6 +303,10 @@ def simulate_ramp(
     ----------
     torques_nm
         Non-decreasing actuation torques [N·m].
+    until_peak_strain
+        If given, in (0, 10]: stop after the first converged step whose ``peak_strain``
+        reaches it (the remaining torques are not solved, so the list may be shorter); a
+        ramp "to 40 % strain" without knowing the torque that gives it.
     Other parameters
         As in :func:`simulate`.
     """
@@ -317,7 +322,11 @@ def simulate_ramp(
         check_range(f"torques_nm[{i}]", t, 0.0, math.inf)
     if np.any(np.diff(torques) < 0):
         raise ValueError("torques_nm must be non-decreasing (a loading ramp)")
+    stop = math.inf if until_peak_strain is None else check_range(
+        "until_peak_strain", until_peak_strain, 0.0, 10.0, low_open=True)
     if method != "newton":
+        if until_peak_strain is not None:
+            raise ValueError(f"until_peak_strain needs method = 'newton', got {method!r}")
         return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
                          phase_rad=phase_rad, time_limit_s=time_limit_s) for t in torques]
     base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), m, element)
@@ -332,4 +341,6 @@ def simulate_ramp(
             res = _solve_newton(prob)
         out.append(res)
         prev = res
+        if res.converged and res.peak_strain >= stop:
+            break
     return out
