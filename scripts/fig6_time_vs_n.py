@@ -6,6 +6,8 @@ N = 4 ... 500 (MAX_TRIANGLES). For the baselines, one solve from rest under a ti
 up to N = 60 and Nelder-Mead (the paper's method) up to N = 8 only, since it does not converge
 within any affordable limit. The FEM cost per torque of the reference ramps (default and coarse
 mesh) is drawn for comparison. The PSM uses the stiffness scale fitted on the FEM at N = 20.
+Members of the model family (:data:`FAMILY`: rings with the nh-quad or constant-strain element)
+are timed from rest for N = 8 ... 2000 beside the fan (wall and compiled time per solve).
 
 It also runs :func:`envs.accuracy.choose_n_triangles` on the three paper disks (torques 0.05 to
 0.5 N·m, reference N = 160) for tolerances of 1 % (the default), 2 % and 5 %, and reports the
@@ -52,17 +54,25 @@ SLSQP_LIMIT_S = 20.0
 NM_LIMIT_S = 10.0
 CHOICE_RANGE_NM = (0.05, 0.5)
 CHOICE_TOLERANCES = (0.01, 0.02, 0.05)
+# members of the model family timed beside the paper's fan: (element, rings) over N_FAMILY
+FAMILY = (("nhquad", 2), ("nhquad", 3), ("cst", 3))
+N_FAMILY = (8, 12, 20, 32, 40, 48, 64, 100, 200, 500, 1000, 2000)
+FAMILY_STYLE = ("tab:green", "tab:olive", "tab:purple", "tab:brown")
 STYLE = {"newton": ("tab:blue", "o"), "newton-ramp": ("tab:cyan", "^"),
          "slsqp": ("tab:orange", "s"), "nelder-mead": ("tab:red", "D")}
 
 
-def _time_single(scene: Scene, n: int, method: str, repeats: int, limit: float) -> dict:
-    times, res = [], None
+def _time_single(scene: Scene, n: int, method: str, repeats: int, limit: float,
+                 n_rings: int = 1, element: str = "spring") -> dict:
+    times, compiled, res = [], [], None
     for _ in range(repeats):
         t0 = time.perf_counter()
-        res = simulate(scene, TORQUE_NM, n, method, time_limit_s=limit)
+        res = simulate(scene, TORQUE_NM, n, method, time_limit_s=limit, n_rings=n_rings,
+                       element=element)
         times.append(time.perf_counter() - t0)
-    return {"n_triangles": n, "method": method, "time_s": float(np.median(times)),
+        compiled.append(res.solve_time_s)
+    return {"n_triangles": n, "method": method, "n_rings": n_rings, "element": element,
+            "time_s": float(np.median(times)), "compiled_s": float(np.median(compiled)),
             "times_s": times, "converged": bool(res.converged), "message": res.message,
             "iterations": int(res.iterations),
             "kkt_force_residual_rel": res.kkt.force_residual_rel if res.kkt else None,
@@ -95,6 +105,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"newton      N={n:5d}: {1e3 * row['time_s']:9.2f} ms from rest "
               f"({'ok' if row['converged'] else 'FAILED: ' + row['message'][:50]}), ramp "
               f"{1e3 * ramp.time_per_solve_s:8.2f} ms/torque ({ramp.n_failed} failed)")
+    for element, m in FAMILY:
+        # the family's shipped calibration changes the scale, not the cost: the paper disk as is
+        for n in N_FAMILY:
+            row = _time_single(base, n, "newton", args.repeats, 30.0, m, element)
+            row["method"] = f"{element} M={m}"
+            rows.append(row)
+            print(f"{element:6s} M={m} N={n:5d}: {1e3 * row['time_s']:9.2f} ms wall, "
+                  f"{1e3 * row['compiled_s']:9.2f} ms compiled "
+                  f"({'ok' if row['converged'] else 'FAILED: ' + row['message'][:50]})")
     for n in N_SLSQP:
         row = _time_single(scene, n, "slsqp", 1, SLSQP_LIMIT_S)
         rows.append(row)
@@ -150,13 +169,22 @@ def main(argv: list[str] | None = None) -> int:
             col2, mk2 = STYLE["newton-ramp"]
             rt = np.array([r["ramp_time_per_torque_s"] for r in sel])
             ax.plot(ns, rt, mk2 + "--", color=col2, ms=5, label="newton, per torque of a ramp")
+    for (element, m), col in zip(FAMILY, FAMILY_STYLE, strict=False):
+        sel = [r for r in rows if r["method"] == f"{element} M={m}"]
+        ns = np.array([r["n_triangles"] for r in sel])
+        ts = np.array([r["time_s"] for r in sel])
+        ok = np.array([r["converged"] for r in sel])
+        ax.plot(ns, ts, "-", color=col, alpha=0.6)
+        ax.plot(ns[ok], ts[ok], "v", color=col, label=f"family: {element}, {m} rings")
+        if (~ok).any():
+            ax.plot(ns[~ok], ts[~ok], "v", color=col, mfc="none", ms=9)
     for label, cost, ls in (("FEM r/12 (per torque of a ramp)", fem_cost["default"], "-"),
                             ("FEM r/6 (per torque of a ramp)", fem_cost["coarse_r_over_6"], ":")):
         ax.axhline(cost, color="k", ls=ls, lw=1, label=label)
     ax.axhline(NM_LIMIT_S, color="tab:red", ls="--", lw=0.6)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("number of triangles N")
+    ax.set_xlabel("contour points N (the fan's triangles)")
     ax.set_ylabel("wall time [s]")
     ax.set_title(f"{SCENE}, T = {TORQUE_NM} N·m; hollow: failed the independent KKT check "
                  "(tol 1e-8) or hit the time limit", fontsize=8)
