@@ -1,7 +1,9 @@
 """Where each solver fails: a grid of N x torque x radius for Newton, SLSQP, Nelder-Mead and FEM.
 
 Every PSM cell is one independent solve from rest (``envs.solver.simulate``, as the design
-environment does) of a paper disk whose stiffness scale was fitted on the FEM at N = 20. For each
+environment does) of a paper disk whose stiffness scale was fitted on the FEM at N = 20 (the
+fan) or of the preset disk (members of the model family, :data:`FAMILY_METHODS`: ring meshes
+with the nh-quad element, N up to 2000). For each
 cell the script records whether the result passed the independent KKT check (``converged``), the
 largest relative KKT residual (force or moment) and the wall time. The baselines get small grids
 and time limits (SLSQP 10 s, Nelder-Mead 5 s). The FEM (physical modulus, no scale) is solved as
@@ -49,6 +51,11 @@ GRIDS = {
     "nelder-mead": (4, 8),
     "fem": (6, 12),  # rings of the FEM mesh
 }
+# members of the model family (method key -> element, rings), on the preset disks as they are
+# (their shipped calibration changes the scale, not where a solver fails)
+FAMILY_METHODS = {"nhquad-2": ("nhquad", 2), "nhquad-3": ("nhquad", 3)}
+FAMILY_GRID = (8, 12, 20, 32, 40, 48, 64, 100, 200, 500, 1000, 2000)
+GRIDS.update({key: FAMILY_GRID for key in FAMILY_METHODS})
 TORQUES_BY_METHOD = {"nelder-mead": (0.1, 0.5)}
 NEAR_MISS = 1e-5  # a failed cell whose KKT residual is below this is a near miss of the 1e-8 check
 TIME_LIMIT_S = {"newton": 30.0, "slsqp": 10.0, "nelder-mead": 5.0}
@@ -56,7 +63,11 @@ TIME_LIMIT_S = {"newton": 30.0, "slsqp": 10.0, "nelder-mead": 5.0}
 
 def _psm_cell(scene: Scene, method: str, n: int, torque: float) -> dict:
     t0 = time.perf_counter()
-    res = simulate(scene, torque, n, method, time_limit_s=TIME_LIMIT_S[method])
+    if method in FAMILY_METHODS:
+        element, rings = FAMILY_METHODS[method]
+        res = simulate(scene, torque, n, n_rings=rings, element=element)
+    else:
+        res = simulate(scene, torque, n, method, time_limit_s=TIME_LIMIT_S[method])
     wall = time.perf_counter() - t0
     kkt = res.kkt
     resid = max(kkt.force_residual_rel, kkt.moment_residual_rel) if kkt else math.nan
@@ -102,8 +113,9 @@ def main(argv: list[str] | None = None) -> int:
                 cols = [_fem_cells(scene, rings, torques) for rings in ns]
                 table = [[cols[j][i] for j in range(len(ns))] for i in range(len(torques))]
             else:
+                sc = Scene.preset(name) if method in FAMILY_METHODS else scene
                 for t in torques:
-                    table.append([_psm_cell(scene, method, n, t) for n in ns])
+                    table.append([_psm_cell(sc, method, n, t) for n in ns])
             cells[method][name] = table
             nfold = sum(c.get("folded", False) for row in table for c in row)
             nfail = sum(not c["converged"] for row in table for c in row) - nfold
