@@ -6,6 +6,8 @@ paper's procedure: calibrate with many elements, then coarsen) and once at ``N =
 calibrated models are then checked on cases not used in the fit: the held-out torques
 :data:`envs.accuracy.HELDOUT_TORQUES_NM` (midpoints and two extrapolated torques) of the same
 disk, and the two other paper disks (r = 0.05 and 0.10) with the scale fitted on r = 0.07.
+Members of the model family (:data:`FAMILY`, ring meshes with the nh-quad element and their
+shipped calibration, not refitted here) are drawn beside the fan.
 
 Writes ``out/fig4_jaw_angle.png`` and ``out/fig4_jaw_angle.json``.
 
@@ -37,7 +39,9 @@ from envs.accuracy import (  # noqa: E402
     jsonable,
     psm_curve,
 )
+from envs.accuracy.members import Member  # noqa: E402
 from envs.scene import Scene  # noqa: E402
+from envs.solver import simulate_ramp  # noqa: E402
 
 SCENE = "paper-r070"
 OTHER_SCENES = ("paper-r050", "paper-r100")
@@ -45,6 +49,19 @@ N_PLOT = (4, 12, 20)
 N_CAL_FINE = 60
 DENSE_TORQUES_NM = tuple(np.round(np.linspace(0.0125, 0.75, 60), 10))
 COLOURS = {4: "tab:red", 12: "tab:green", 20: "tab:blue"}
+# members of the model family drawn beside the fan, with their shipped calibration (not refitted)
+FAMILY = (Member(40, 2, "calibrated", "nhquad"), Member(48, 3, "calibrated", "nhquad"))
+FAMILY_COLOURS = ("tab:purple", "tab:brown")
+
+
+def family_curve(member: Member, scene: Scene, torques) -> dict:
+    """Closing curve of a family member along a ramp (NaN where a step did not converge)."""
+    res = simulate_ramp(member.scene(scene), sorted(torques), member.n_triangles,
+                        n_rings=member.n_rings, element=member.element)
+    ok = np.array([r.converged for r in res])
+    angles = np.array([0.5 * sum(r.jaw_angles_rad) for r in res])
+    return {"label": member.label, "torques_nm": np.array(sorted(torques)),
+            "jaw_angles_rad": np.where(ok, angles, np.nan), "converged": ok}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -105,6 +122,19 @@ def main(argv: list[str] | None = None) -> int:
                   f"max {100 * rep.max_rel_error:.2f} %, failed {rep.n_failed}")
         held[label] = entry
 
+    family = {}
+    for member in FAMILY:
+        on_fem = family_curve(member, scene, fem.torques_nm)
+        closing_fem = th0 - np.asarray(fem.jaw_angles_rad)
+        rel = (th0 - on_fem["jaw_angles_rad"]) / closing_fem - 1.0
+        family[member.label] = {"dense": family_curve(member, scene, DENSE_TORQUES_NM),
+                                "relative_errors": rel,
+                                "rms_rel_error": float(np.sqrt(np.nanmean(rel ** 2))),
+                                "max_rel_error": float(np.nanmax(np.abs(rel)))}
+        print(f"{member.label} (shipped calibration): RMS "
+              f"{100 * family[member.label]['rms_rel_error']:.2f} %, max "
+              f"{100 * family[member.label]['max_rel_error']:.2f} %")
+
     # figure: jaw angle between the fingers and the relative closing-angle error
     fig = Figure(figsize=(11, 4.6))
     ax, ax2 = fig.subplots(1, 2)
@@ -133,6 +163,12 @@ def main(argv: list[str] | None = None) -> int:
                  label=f"N = {n}, s fitted at N = {N_CAL_FINE}")
         ax2.plot(ft, 100 * np.asarray(cal[n].fit.relative_errors), "s--", color=COLOURS[n],
                  mfc="none", label=f"N = {n}, s fitted at N = {n}")
+    for (label, fam), col in zip(family.items(), FAMILY_COLOURS, strict=False):
+        d = fam["dense"]
+        ax.plot(d["torques_nm"], np.degrees(2 * d["jaw_angles_rad"]), "-", color=col, lw=1.5,
+                label=f"family {label}")
+        ax2.plot(ft, 100 * fam["relative_errors"], "v-", color=col,
+                 label=f"{label} (shipped calibration)")
     ax.set_xlabel("actuation torque $T_a$ [N·m]")
     ax.set_ylabel("angle between the fingers [deg]")
     ax.set_title(f"{SCENE}: PSM with s = {cal_fine.scale:.3f} (fitted at N = {N_CAL_FINE})",
@@ -159,6 +195,7 @@ def main(argv: list[str] | None = None) -> int:
         "calibration_per_n": {str(n): cal[n] for n in N_PLOT},
         "errors": rows,
         "heldout": held,
+        "family": family,
         "dense_curves": {str(n): {"torques_nm": curves[n].torques_nm,
                                   "jaw_angles_rad": curves[n].jaw_angles_rad,
                                   "converged": curves[n].converged} for n in N_PLOT},

@@ -9,6 +9,9 @@ each disk is checked on the held-out torques :data:`envs.accuracy.HELDOUT_TORQUE
 Isolated Newton failures are retried at a torque 0.1 % away (``envs.accuracy.psm_curve``); the
 JSON records how many torques needed it (``n_retried``) and how many still failed.
 
+A third panel draws the model family: nh-quad ring meshes (M = 2, 3, 4) with their shipped
+calibration (one scale per M, fitted once on the paper disks, not refitted here) against N.
+
 Writes ``out/fig5_error_vs_n.png`` and ``out/fig5_error_vs_n.json``.
 
 Usage::
@@ -38,13 +41,35 @@ from envs.accuracy import (  # noqa: E402
     fem_reference,
     jsonable,
 )
+from envs.accuracy.members import Member  # noqa: E402
 from envs.scene import Scene  # noqa: E402
+from envs.solver import simulate_ramp  # noqa: E402
 
 N_CAL = 60
 N_SWEEP = (4, 6, 8, 10, 12, 16, 20, 24, 32, 40, 48, 60, 80, 100, 120, 160, 200)
 N_REFIT = (8, 10, 12, 16, 20, 24, 32, 40)
 XATOL = 1e-3  # tolerance on log(s): the scale to 0.1 %
 COLOURS = {"paper-r050": "tab:blue", "paper-r070": "tab:green", "paper-r100": "tab:red"}
+# the model family: nh-quad ring meshes with their shipped calibration (one scale per M)
+FAMILY_RINGS = (2, 3, 4)
+N_FAMILY = (12, 16, 20, 24, 32, 40, 48, 64, 80, 100, 128, 160, 200)
+FAMILY_MARKERS = {2: "o", 3: "s", 4: "^"}
+
+
+def family_errors(member: Member, scene: Scene, fem) -> dict:
+    """RMS and max closing-angle error of a family member against the FEM ramp."""
+    t0 = time.perf_counter()
+    res = simulate_ramp(member.scene(scene), fem.torques_nm, member.n_triangles,
+                        n_rings=member.n_rings, element=member.element)
+    th0 = scene.gripper.rest_angle_rad
+    psm = np.array([0.5 * sum(r.jaw_angles_rad) if r.converged else np.nan for r in res])
+    rel = (th0 - psm) / (th0 - np.asarray(fem.jaw_angles_rad)) - 1.0
+    return {"n_triangles": member.n_triangles, "n_rings": member.n_rings,
+            "rms_rel_error": float(np.sqrt(np.nanmean(rel ** 2))),
+            "max_rel_error": float(np.nanmax(np.abs(rel))),
+            "n_failed": int(sum(not r.converged for r in res)),
+            "compiled_s_per_torque": float(np.mean([r.solve_time_s for r in res])),
+            "wall_s": time.perf_counter() - t0}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -87,11 +112,18 @@ def main(argv: list[str] | None = None) -> int:
         held = cal20.errors_on(scene, fem_held)
         print(f"  N=20 calibration on held-out torques: RMS {100 * held.rms_rel_error:.2f} %, "
               f"max {100 * held.max_rel_error:.2f} %, failed {held.n_failed}")
+        family = {m: [family_errors(Member(n, m, "calibrated", "nhquad"), scene, fem)
+                      for n in (N_FAMILY[::3] if args.quick else N_FAMILY)]
+                  for m in FAMILY_RINGS}
+        for m, reps in family.items():
+            print(f"  nh-quad M={m}: RMS by N " + ", ".join(
+                f"{r['n_triangles']}: {100 * r['rms_rel_error']:.2f} %" for r in reps))
         data[name] = {"scene": scene, "fem": fem, "fem_heldout": fem_held, "calibration": cal,
-                      "fixed": fixed, "per_n": per_n, "cal20": cal20, "heldout20": held}
+                      "fixed": fixed, "per_n": per_n, "cal20": cal20, "heldout20": held,
+                      "family": family}
 
-    fig = Figure(figsize=(11, 4.6))
-    ax, ax2 = fig.subplots(1, 2)
+    fig = Figure(figsize=(16, 4.6))
+    ax, ax2, ax3 = fig.subplots(1, 3)
     for name, d in data.items():
         col = COLOURS[name]
         r = d["scene"].disk.radius_m
@@ -109,7 +141,13 @@ def main(argv: list[str] | None = None) -> int:
         ax2.plot(pn, [100 * d["per_n"][n].rms_rel_error for n in pn], "s--", color=col,
                  mfc="none", label=f"r = {r:.2f}: s fitted at each N")
         ax2.plot(ns, 100 * rms, "o-", color=col, alpha=0.5, label=f"r = {r:.2f}: s fixed")
-    for a in (ax, ax2):
+        for m, reps in d["family"].items():
+            ax3.plot([q["n_triangles"] for q in reps], [100 * q["rms_rel_error"] for q in reps],
+                     FAMILY_MARKERS[m] + "-", color=col, ms=4, label=f"r = {r:.2f}, M = {m}")
+    ax3.set_title("model family: nh-quad rings, shipped calibration (no fit per disk)",
+                  fontsize=9)
+    ax3.set_ylabel("closing-angle error vs FEM [%] (RMS over torques)")
+    for a in (ax, ax2, ax3):
         a.set_xscale("log")
         a.set_yscale("log")
         a.axhline(2.0, color="0.4", ls="--", lw=0.8)
@@ -136,6 +174,7 @@ def main(argv: list[str] | None = None) -> int:
                 "per_n_calibrations": {str(n): c for n, c in d["per_n"].items()},
                 "n20_calibration": d["cal20"],
                 "n20_heldout_errors": d["heldout20"],
+                "family_nhquad": {str(m): reps for m, reps in d["family"].items()},
             }
             for name, d in data.items()
         },
