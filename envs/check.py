@@ -77,6 +77,8 @@ __all__ = [
     "CK_REST_CONTOUR",
     "CK_AREA_STIFF",
     "CK_REST_AREA",
+    "CK_QUAD",
+    "CK_SPACING",
     "N_CK",
     "OUT_PASSED",
     "OUT_FORCE_RES",
@@ -126,7 +128,9 @@ CK_CRATIO = 19  # contour stiffness ratio (the contour ring's springs)
 CK_MU = 20  # constant-strain neo-Hookean triangles: s mu t [N/m] (0: springs and area energy)
 CK_LAM = 21  # and s lambda t [N/m]
 CK_PHASE = 22  # angle of the first point of every ring [rad]
-N_CK = 23
+CK_QUAD = 23  # nh-quad: s lambda t [N/m] of the volumetric energy of each quad (0: none)
+CK_SPACING = 24  # ring radii: 0 geometric from the hub, 1 evenly spaced
+N_CK = 25
 
 # output vector layout
 OUT_PASSED = 0
@@ -634,11 +638,14 @@ def check_one(prm, points, angles, face, corner, stop, out):
 
 @njit(**_FLAGS)
 def _ring_radius(prm, k):
-    """Rest radius of ring k of a ring mesh [m]: geometric from the hub (k = 0) to the rim."""
+    """Rest radius of ring k of a ring mesh [m]: from the hub (k = 0) to the rim, geometric or
+    evenly spaced."""
     m = prm[CK_RINGS]
     r, hub = prm[CK_RADIUS], prm[CK_HUB]
     if m == 1:
         return 0.0 if k == 0 else r  # the fan: centre and contour
+    if prm[CK_SPACING] == 1.0:
+        return hub + (r - hub) * k / m
     return r * (hub / r) ** ((m - k) / m)
 
 
@@ -757,6 +764,32 @@ def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
 
 
 @njit(**_FLAGS)
+def _quad_forces(prm, points, interior, k, i, force):
+    """Forces of the volumetric energy ``kappa A0 / 2 (ln(A / A0))^2`` of the quad between
+    rings k - 1 and k and angles i, i + 1 (the nh-quad element), ``kappa = prm[CK_QUAD]``. Its
+    corners counter-clockwise are a = (k - 1, i), b = (k, i), c = (k, i + 1), d = (k - 1, i + 1)
+    and its area the shoelace sum, whose gradient over a corner is (y_next - y_prev,
+    x_prev - x_next) / 2. Returns the largest force [N]."""
+    qax, qay, _ = _ring_corner(prm, points, interior, k - 1, i, True)
+    qbx, qby, _ = _ring_corner(prm, points, interior, k, i, True)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, k, i + 1, True)
+    qdx, qdy, _ = _ring_corner(prm, points, interior, k - 1, i + 1, True)
+    pax, pay, ra = _ring_corner(prm, points, interior, k - 1, i, False)
+    pbx, pby, rb = _ring_corner(prm, points, interior, k, i, False)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, k, i + 1, False)
+    pdx, pdy, rd = _ring_corner(prm, points, interior, k - 1, i + 1, False)
+    a0 = 0.5 * ((qax * qby - qbx * qay) + (qbx * qcy - qcx * qby) + (qcx * qdy - qdx * qcy)
+                + (qdx * qay - qax * qdy))
+    area = 0.5 * ((pax * pby - pbx * pay) + (pbx * pcy - pcx * pby) + (pcx * pdy - pdx * pcy)
+                  + (pdx * pay - pax * pdy))
+    slope = prm[CK_QUAD] * a0 * math.log(area / a0) / area  # NaN when folded
+    big = _area_push(force, ra, slope, 0.5 * (pby - pdy), 0.5 * (pdx - pbx))
+    big = _npmax(big, _area_push(force, rb, slope, 0.5 * (pcy - pay), 0.5 * (pax - pcx)))
+    big = _npmax(big, _area_push(force, rc, slope, 0.5 * (pdy - pby), 0.5 * (pbx - pdx)))
+    return _npmax(big, _area_push(force, rd, slope, 0.5 * (pay - pcy), 0.5 * (pcx - pax)))
+
+
+@njit(**_FLAGS)
 def _ring_forces(prm, points, interior, force):
     """Spring and area forces of a ring mesh: between rings k - 1 and k each quad (i, i + 1)
     is cut by the diagonal (k - 1, i) - (k, i + 1) for even i and (k - 1, i + 1) - (k, i) for
@@ -781,6 +814,8 @@ def _ring_forces(prm, points, interior, force):
                                                  k - 1, i + 1, force))
                 big = _npmax(big, _mesh_triangle(prm, points, interior, k, i, k, i + 1,
                                                  k - 1, i + 1, force))
+            if prm[CK_QUAD] > 0.0:
+                big = _npmax(big, _quad_forces(prm, points, interior, k, i, force))
     return big
 
 
@@ -842,7 +877,8 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
         Rings of the point mesh (1: the fan; ring meshes are checked by
         :func:`check_mesh_one`).
     element
-        ``"spring"`` or ``"cst"`` (constant-strain neo-Hookean triangles).
+        ``"spring"``, ``"cst"`` (constant-strain neo-Hookean triangles) or ``"nhquad"``
+        (those triangles without their volumetric term, which acts per quad; even rings).
 
     Returns
     -------
@@ -882,9 +918,12 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     vals[CK_UNIT] = k_unit
     vals[CK_CRATIO] = getattr(d, "contour_stiffness_ratio", 1.0)
     vals[CK_PHASE] = math.pi / 2
-    if element == "cst":
+    if element in ("cst", "nhquad"):
         vals[CK_MU] = k_unit / (2 * (1 + nu))
         vals[CK_LAM] = k_unit * nu / ((1 + nu) * (1 - 2 * nu))
+    if element == "nhquad":
+        vals[CK_QUAD], vals[CK_LAM] = vals[CK_LAM], 0.0
+        vals[CK_SPACING] = 1.0
     return np.array(vals, dtype=np.float64)
 
 

@@ -83,7 +83,8 @@ def test_band_order_covers_every_point_within_the_band(m):
 
 @pytest.mark.parametrize(("n", "m", "element"), [(10, 2, "spring"), (16, 4, "spring"),
                                                  (10, 2, "cst"), (12, 1, "cst"),
-                                                 (16, 3, "cst")])
+                                                 (16, 3, "cst"), (10, 2, "nhquad"),
+                                                 (15, 4, "nhquad")])
 def test_energy_gradient_and_band_hessian_are_exact(n, m, element):
     """Gradient by central differences; the banded Newton matrix times a vector against
     differences of the gradient (springs and area energy, or constant-strain triangles)."""
@@ -144,7 +145,7 @@ def test_rest_state_is_an_equilibrium_of_the_mesh():
 
 
 @pytest.mark.parametrize(("m", "element"), [(2, "spring"), (4, "spring"), (3, "cst"),
-                                              (1, "cst")])
+                                              (1, "cst"), (2, "nhquad"), (4, "nhquad")])
 def test_ring_grasp_is_a_checked_equilibrium(m, element):
     """A ring mesh grasp converges and the independent check (its own mesh, forces from the
     triangles' shares of each spring, or its own constant-strain stresses) passes; the

@@ -14,7 +14,15 @@ Terms
 * area (each fan triangle centre, ``q_i``, ``q_i+1``, when ``k_A > 0``): ``k_A A0 / 2
   (ln(A / A0))^2`` with ``A`` the signed area (counter-clockwise positive) and ``A0`` its rest
   value; infinite for ``A <= 0``, so a solver that keeps the energy finite keeps every triangle
-  unfolded (CONVENTIONS.md, model family).
+  unfolded (CONVENTIONS.md, model family);
+* constant-strain neo-Hookean triangle (``P_MU > 0``): the FEM reference's energy on each
+  linear triangle of the mesh;
+* nh-quad (``P_MU > 0``, ``P_LAM = 0``, ``P_QUAD > 0``): each triangle's neo-Hookean energy
+  without its volumetric ``lambda`` term, which acts once per quad instead, as the area energy
+  of the quad with ``k_A = lambda / E``: ``lambda / 2 (ln J_q)^2`` on the quad's area ratio
+  ``J_q``. Per triangle, that term locks the coarse mesh (two constraints per point pair for
+  ``nu`` near 1/2); per quad it is one constraint a point, and its stiffening no longer grows
+  with ``nu``.
 """
 
 from __future__ import annotations
@@ -24,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .layout import P_KA, P_KAPPA, P_LAM, P_MU, P_RINGS, P_TAU, P_TH0
+from .layout import P_KA, P_KAPPA, P_LAM, P_MU, P_QUAD, P_RINGS, P_TAU, P_TH0
 from .rings import (
     edge_constants,
     edge_ends,
@@ -34,6 +42,9 @@ from .rings import (
     n_state,
     n_tri_types,
     point_dof,
+    quad_corners,
+    quad_rest_area,
+    quad_xy,
     rest_xy,
     tri_corners,
     tri_rest_area,
@@ -53,6 +64,7 @@ __all__ = [
     "joint_energy",
     "joint_gradient",
     "tri_area",
+    "quad_area",
     "mesh_energy",
     "mesh_gradient",
     "folded_triangles",
@@ -149,6 +161,16 @@ def tri_area(xa, ya, xb, yb, xc, yc):
     corner a is ``((yb - yc), (xc - xb)) / 2`` (cyclically for b, c) and its second derivative
     ``d2A / dx_u dy_v = +1/2`` when v follows u (a -> b -> c -> a), ``-1/2`` when it precedes."""
     return 0.5 * ((xb - xa) * (yc - ya) - (xc - xa) * (yb - ya))
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def quad_area(xa, ya, xb, yb, xc, yc, xd, yd):
+    """Signed area of the quad (a, b, c, d) (counter-clockwise positive; the shoelace sum,
+    equal to its two triangles' areas whichever diagonal cuts it). Its gradient over a corner
+    is ``(y_next - y_prev, x_prev - x_next) / 2`` and its second derivatives follow the
+    triangle's rule between neighbouring corners (opposite corners: 0)."""
+    return 0.5 * ((xa * yb - xb * ya) + (xb * yc - xc * yb) + (xc * yd - xd * yc)
+                  + (xd * ya - xa * yd))
 
 
 
@@ -249,6 +271,33 @@ def _cst_triangle(x, n, m, prm, t, i):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _quad_energy_all(x, n, m, prm):
+    """Volumetric energy of every quad of a ring mesh (the nh-quad element)."""
+    e = 0.0
+    for k in range(1, m + 1):
+        a0 = quad_rest_area(prm, k)
+        for i in range(n):
+            xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
+            e += area_energy(quad_area(xa, ya, xb, yb, xc, yc, xd, yd), prm[P_QUAD], a0)
+    return e
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _quad_gradient_all(x, n, m, prm, grad):
+    """Add the gradient of :func:`_quad_energy_all`."""
+    for k in range(1, m + 1):
+        a0 = quad_rest_area(prm, k)
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic, kd, id_ = quad_corners(k, i, n)
+            xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
+            f = 0.5 * area_slope(quad_area(xa, ya, xb, yb, xc, yc, xd, yd), prm[P_QUAD], a0)
+            _add2(grad, point_dof(n, m, ka, ia), f * (yb - yd), f * (xd - xb))
+            _add2(grad, point_dof(n, m, kb, ib), f * (yc - ya), f * (xa - xc))
+            _add2(grad, point_dof(n, m, kc, ic), f * (yd - yb), f * (xb - xd))
+            _add2(grad, point_dof(n, m, kd, id_), f * (ya - yc), f * (xc - xa))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _element_energy(x, n, m, prm):
     """Elastic energy of the mesh's elements: constant-strain triangles when ``P_MU > 0``,
     else every edge's spring (the area energy is added by :func:`mesh_energy`)."""
@@ -260,6 +309,8 @@ def _element_energy(x, n, m, prm):
                                                                                i)
                 e += cst_energy(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, prm[P_MU],
                                 prm[P_LAM])
+        if prm[P_QUAD] > 0.0:
+            e += _quad_energy_all(x, n, m, prm)
         return e
     ne = n_edge_types(m)
     for i in range(n):
@@ -330,6 +381,8 @@ def mesh_gradient(x, n, prm, grad):
     m = int(prm[P_RINGS])
     if prm[P_MU] > 0.0:
         _cst_gradient_all(x, n, m, prm, grad)
+        if prm[P_QUAD] > 0.0:
+            _quad_gradient_all(x, n, m, prm, grad)
     else:
         _spring_gradient_all(x, n, m, prm, grad)
     for j in range(2):

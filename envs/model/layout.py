@@ -25,7 +25,11 @@ P_A0      rest area of a fan triangle ``sin(2 pi / N) / 2``
 P_RINGS   rings M of the disk's point mesh (1: the paper's fan; :mod:`envs.model.rings`)
 P_MU      element energy: 0 for springs and the area energy, else the shear modulus ``mu / E``
           of the constant-strain neo-Hookean triangle that replaces them
-P_LAM     its Lame modulus ``lambda / E`` (plane strain)
+P_LAM     its Lame modulus ``lambda / E`` (plane strain; 0 for the nh-quad element, whose
+          volumetric part acts per quad)
+P_QUAD    volumetric stiffness ``lambda / E`` of the area energy per quad of a ring mesh (the
+          nh-quad element; 0: none)
+P_SPACING ring spacing of a ring mesh: 0 geometric from the hub, 1 even (:mod:`envs.model.rings`)
 ========  ==================================================================================
 
 The kernels keep a longer private copy: the solver's slots P_GAUGE (stiffness of the rotation
@@ -42,14 +46,18 @@ import numpy as np
 # parameter vector
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
 P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0, P_RINGS = range(9, 18)
-P_MU, P_LAM = 18, 19
-N_PARAMS = 20
-P_GAUGE = 20  # solver copy only: gauge spring stiffness
-P_POLICY = 21  # solver copy only: contact policy of this attempt
-P_GREF = 22  # solver copy only: the gauge spring's anchor (point 0's tangential displacement)
-P_GMAX = 23  # solver copy only: the gauge stiffness at the start of the attempt
-P_GPROX = 24  # solver copy only: the gauge's mode (GAUGE_* below)
-N_KERNEL_PARAMS = 25  # the ring table follows
+P_MU, P_LAM, P_QUAD, P_SPACING = 18, 19, 20, 21
+N_PARAMS = 22
+P_GAUGE = 22  # solver copy only: gauge spring stiffness
+P_POLICY = 23  # solver copy only: contact policy of this attempt
+P_GREF = 24  # solver copy only: the gauge spring's anchor (point 0's tangential displacement)
+P_GMAX = 25  # solver copy only: the gauge stiffness at the start of the attempt
+P_GPROX = 26  # solver copy only: the gauge's mode (GAUGE_* below)
+N_KERNEL_PARAMS = 27  # the ring table follows
+
+# ring spacing of a ring mesh (slot P_SPACING)
+SPACING_GEOMETRIC = 0.0
+SPACING_EVEN = 1.0
 
 # modes of the gauge spring (slot P_GPROX)
 GAUGE_AT_REST = 0.0  # holds point 0 at rest; tested for holding up a saddle (fast attempt)

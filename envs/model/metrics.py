@@ -22,7 +22,7 @@ from .rings import (
     n_tri_types,
     point_xy,
     rest_xy,
-    ring_radius,
+    ring_rho,
     tri_corners,
 )
 
@@ -71,7 +71,7 @@ def _mesh_log_strain(x, n, m, prm):
     next to it)."""
     peak = 0.0
     for t in range(n_tri_types(m)):
-        if m > 1 and ring_radius(t // 2, m) < 2.0 * HUB_RADIUS:
+        if m > 1 and ring_rho(prm, t // 2) < 2.0 * HUB_RADIUS:
             continue
         for i in range(n):
             ka, ia, kb, ib, kc, ic = tri_corners(t, i, n, m)

@@ -39,8 +39,10 @@ from .layout import (
     P_LMAX,
     P_MU,
     P_PHASE,
+    P_QUAD,
     P_RHO,
     P_RINGS,
+    P_SPACING,
     P_TAU,
     P_TH0,
     P_THMIN,
@@ -58,6 +60,8 @@ from .layout import (
     S_TORSION,
     S_WIDTH,
     S_YOUNG,
+    SPACING_EVEN,
+    SPACING_GEOMETRIC,
 )
 from .rings import (
     N_RING_COLS,
@@ -204,9 +208,10 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
         Rings ``M`` of the point mesh (1: the paper's fan; :mod:`envs.model.rings`). Ring
         meshes take the area rule on every edge (``stiffness_rule`` must be ``"van_gelder"``).
     element
-        ``"spring"`` (springs and the area energy, CONVENTIONS.md) or ``"cst"`` (the
+        ``"spring"`` (springs and the area energy, CONVENTIONS.md), ``"cst"`` (the
         constant-strain neo-Hookean triangle of the FEM's material instead, scaled by the
-        disk's ``stiffness_scale``).
+        disk's ``stiffness_scale``) or ``"nhquad"`` (those triangles without their volumetric
+        term, which acts once per quad; evenly spaced rings; ``n_rings >= 2``).
     """
     return pack_rows(cols.rows() if isinstance(cols, SceneColumns) else cols, n_triangles,
                      stiffness_rule, phase_rad, n_rings, element)
@@ -220,11 +225,15 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
         raise ValueError(f"element must be one of {ELEMENTS}, got {element!r}")
     n = int(n_triangles)
     m = int(n_rings)
+    if element == "nhquad" and m < 2:
+        raise ValueError(f"n_rings must be 2 to 16 for element 'nhquad' (its volumetric term "
+                         f"acts on the quads between rings), got {m}")
+    spacing = SPACING_EVEN if element == "nhquad" else SPACING_GEOMETRIC
     if m > 1:
         if stiffness_rule != "van_gelder":
             raise ValueError(f"stiffness_rule must be 'van_gelder' for a ring mesh (n_rings = "
                              f"{m}), got {stiffness_rule!r}")
-        k_int, k_ext = ring_unit_stiffness(n, m)
+        k_int, k_ext = ring_unit_stiffness(n, m, spacing)
         k_int_rows, k_ext_rows = np.full(scene.shape[0], k_int), np.full(scene.shape[0], k_ext)
     elif stiffness_rule == "van_gelder":
         k_int, k_ext = _unit_stiffness(n)
@@ -237,23 +246,32 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     prm[:, P_RINGS] = m
     prm[:, P_MU] = 0.0
     prm[:, P_LAM] = 0.0
-    if element == "cst":
+    prm[:, P_QUAD] = 0.0
+    prm[:, P_SPACING] = spacing
+    if element in ("cst", "nhquad"):
         # Lame moduli per E (the unit s E t r^2 of the energy makes s the calibration scale)
         prm[:, P_LAM], prm[:, P_MU] = lame_per_e(scene[:, S_POISSON])
+    if element == "nhquad":
+        # the volumetric term moves from the triangles to the quads
+        prm[:, P_QUAD] = prm[:, P_LAM]
+        prm[:, P_LAM] = 0.0
     return prm
 
 
-#: Element energies of the model family: springs (and the area energy) or the
-#: constant-strain neo-Hookean triangle.
-ELEMENTS = ("spring", "cst")
+#: Element energies of the model family: springs (and the area energy), the constant-strain
+#: neo-Hookean triangle, or nh-quad (those triangles' deviatoric part and a volumetric term
+#: per quad, :mod:`envs.model.energy`).
+ELEMENTS = ("spring", "cst", "nhquad")
 
 
 @functools.lru_cache(maxsize=256)
-def ring_unit_stiffness(n: int, m: int) -> tuple[float, float]:
+def ring_unit_stiffness(n: int, m: int, spacing: float = SPACING_GEOMETRIC
+                        ) -> tuple[float, float]:
     """Area-rule stiffness (per ``s E t``) of the contour springs of an ``m``-ring mesh and the
     largest radial one (the force scale of the solver's tolerances)."""
     prm = np.zeros(N_KERNEL_PARAMS + ring_table_size(n, m))
     prm[P_RINGS] = m
+    prm[P_SPACING] = spacing
     fill_ring_table(prm, n)
     table = prm[N_KERNEL_PARAMS:N_KERNEL_PARAMS + (m + 1) * N_RING_COLS].reshape(m + 1, -1)
     outer = table[m]

@@ -15,6 +15,7 @@ from ..model.energy import (
     cst_hessian_column,
     mesh_energy,
     mesh_gradient,
+    quad_area,
     spring_hessian,
     tri_area,
 )
@@ -28,6 +29,7 @@ from ..model.layout import (
     P_LAM,
     P_MU,
     P_PHASE,
+    P_QUAD,
     P_RINGS,
 )
 from ..model.rings import (
@@ -36,6 +38,9 @@ from ..model.rings import (
     edge_xy,
     n_edge_types,
     n_tri_types,
+    quad_corners,
+    quad_rest_area,
+    quad_xy,
     tri_corners,
     tri_rest_area,
     tri_xy,
@@ -184,6 +189,49 @@ def _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
                 _tri_pair(ab, bb, dd, nb, pb, pc, gxb, gyb, gxc, gyc, curv, half)
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _quad_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
+    """Hessian (band order) of the volumetric energy of every quad (the nh-quad element).
+
+    As :func:`_area_hessian` on the quad's area: ``E'' g g^T`` over its four corners plus
+    ``E' d2A``, the bilinear coupling of neighbouring corners (opposite corners have none).
+    """
+    nb = ab.shape[0]
+    m = int(prm[P_RINGS])
+    for k in range(1, m + 1):
+        a0 = quad_rest_area(prm, k)
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic, kd, id_ = quad_corners(k, i, n)
+            xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
+            area = quad_area(xa, ya, xb, yb, xc, yc, xd, yd)
+            curv = area_curvature(area, prm[P_QUAD], a0)
+            slope = area_slope(area, prm[P_QUAD], a0)
+            if psd:
+                curv = max(curv, 0.0)
+                slope = 0.0
+            curv *= sign
+            half = 0.5 * slope * sign
+            # corners a, b, c, d counter-clockwise: gradient (y_next - y_prev, x_prev - x_next)/2
+            ps = (_band_of(bidx, n, m, ka, ia), _band_of(bidx, n, m, kb, ib),
+                  _band_of(bidx, n, m, kc, ic), _band_of(bidx, n, m, kd, id_))
+            gs = ((0.5 * (yb - yd), 0.5 * (xd - xb)), (0.5 * (yc - ya), 0.5 * (xa - xc)),
+                  (0.5 * (yd - yb), 0.5 * (xb - xd)), (0.5 * (ya - yc), 0.5 * (xc - xa)))
+            for u in range(4):
+                pu = ps[u]
+                if pu < 0:
+                    continue
+                gxu, gyu = gs[u]
+                _add_point(ab, pu, curv * gxu * gxu, curv * gyu * gyu, curv * gxu * gyu)
+                for v in range(u + 1, 4):
+                    pv = ps[v]
+                    if pv < 0:
+                        continue
+                    gxv, gyv = gs[v]
+                    # v follows u (+), precedes it (the pair d, a: -), or is opposite (0)
+                    hs = half if v == u + 1 else (-half if v - u == 3 else 0.0)
+                    _tri_pair(ab, bb, dd, nb, pu, pv, gxu, gyu, gxv, gyv, curv, hs)
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _cst_block(cols, tu0, tu1, tv0, tv1, r, rp):
     """Entry (r, r') of the 2x2 block between corners u and v of a constant-strain triangle:
@@ -251,6 +299,8 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
     mesh_gradient(x, n, prm, grad)
     if want_hess and prm[P_MU] > 0.0:
         _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd)
+        if prm[P_QUAD] > 0.0:
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, psd)
         for j in range(2):
             dd[j, j] += prm[P_KAPPA]
     elif want_hess:
@@ -318,6 +368,9 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
         # constant-strain triangles: their exact Hessian out, the tangent at rest in
         _cst_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
         _cst_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
+        if prm[P_QUAD] > 0.0:
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
     for t in range(n_edge_types(m) if prm[P_MU] == 0.0 else 0):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)

@@ -37,8 +37,10 @@ from envs.model.layout import (
     P_LAM,
     P_MU,
     P_PHASE,
+    P_QUAD,
     P_RHO,
     P_RINGS,
+    P_SPACING,
     P_THMIN,
     S_CONTOUR_RATIO,
     S_DISTANCE,
@@ -151,6 +153,9 @@ def _check_row(s, prm, n, ck):
     # constant-strain triangles: Lame moduli times s t [N/m] (0: springs)
     ck[check.CK_MU] = prm[P_MU] * k_unit
     ck[check.CK_LAM] = prm[P_LAM] * k_unit
+    # nh-quad: the volumetric modulus of the quads, and the ring spacing the mesh was built with
+    ck[check.CK_QUAD] = prm[P_QUAD] * k_unit
+    ck[check.CK_SPACING] = prm[P_SPACING]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -254,7 +259,7 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     n_rings
         Rings ``M`` of the point mesh (1: the paper's fan).
     element
-        ``"spring"`` or ``"cst"`` (:func:`envs.model.problem.pack_params`).
+        ``"spring"``, ``"cst"`` or ``"nhquad"`` (:func:`envs.model.problem.pack_params`).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols

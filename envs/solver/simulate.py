@@ -194,8 +194,8 @@ def check_model(n_triangles, n_rings=1, element="spring") -> tuple[int, int]:
     The springs-only fan takes N up to ``MAX_TRIANGLES`` (it stops converging reliably
     beyond); ring and constant-strain members up to ``MAX_TRIANGLES_FAMILY``.
     """
-    m = check_integer("n_rings", n_rings, 1, MAX_RINGS)
     check_choice("element", element, ELEMENTS)
+    m = check_integer("n_rings", n_rings, 2 if element == "nhquad" else 1, MAX_RINGS)
     n = (check_n_triangles(n_triangles) if m == 1 and element == "spring"
          else check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY))
     return n, m
@@ -254,8 +254,10 @@ def simulate(
         Rings ``M`` of the point mesh, 1 to 16 (1: the paper's fan; more: interior rings and a
         rigid hub, :mod:`envs.model.rings`; Newton only).
     element
-        ``"spring"`` (springs and the area energy) or ``"cst"`` (constant-strain neo-Hookean
-        triangles of the disk's E and nu, scaled by its ``stiffness_scale``; Newton only).
+        ``"spring"`` (springs and the area energy), ``"cst"`` (constant-strain neo-Hookean
+        triangles of the disk's E and nu, scaled by its ``stiffness_scale``) or ``"nhquad"``
+        (those triangles' deviatoric part and a volumetric term per quad, evenly spaced rings,
+        ``n_rings >= 2``); Newton only.
 
     Returns
     -------
