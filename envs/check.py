@@ -555,8 +555,11 @@ def _finger(prm, p, theta, j, face, corner, stop, force, acc):
 def _verdict(prm, face, corner, force, spring_max, acc, out):
     """Relative residuals, the accumulated extremes and the failure bits, into ``out``."""
     r = prm[CK_RADIUS]
-    # floor: the spring force of a 1e-6 strain, so that an unloaded disk is judged absolutely
-    f_floor = 1e-6 * prm[CK_KEXT] * r
+    # floor: the spring force of a 1e-4 strain, so that an unloaded disk is judged absolutely
+    # (FORCE_TOL of it: 1e-12 of a unit strain's force, the solver's own tolerance). Lower, it
+    # judged roundoff: on a ring mesh with 40 points the coordinates' rounding (1e-16 of the
+    # disk's distance from the origin, over cells r / 20 wide) alone gives strains of 1e-14
+    f_floor = 1e-4 * prm[CK_KEXT] * r
     f_face = 0.0
     for j in range(2):
         for i in range(face.shape[1]):

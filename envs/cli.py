@@ -21,6 +21,7 @@ def cli_option(option: str, check, *args):
 def _simulate(args: argparse.Namespace) -> int:
     import time
 
+    from .model.defaults import DEFAULT_ELEMENT
     from .scene import Scene
     from .solver import simulate
     from .solver.simulate import check_model
@@ -28,27 +29,24 @@ def _simulate(args: argparse.Namespace) -> int:
     from .validation import check_output_file, check_range
 
     # every option before any work: a bad --plot must not cost a solve
-    cli_option("--triangles/--rings/--element", check_model, args.triangles, args.rings,
-               args.element)
+    if args.calibrated and args.uncalibrated:
+        raise ValueError("--calibrated and --uncalibrated exclude each other")
+    calibrated = True if args.calibrated else (False if args.uncalibrated else None)
+    element = args.element or (DEFAULT_ELEMENT if args.method == "newton" else "spring")
+    spec = cli_option("--triangles/--rings/--element/--calibrated", check_model,
+                      args.triangles, args.rings, element, calibrated)
     check_range("--torque", args.torque, 0.0, math.inf)
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene = Scene.preset(args.scene)
-    if args.calibrated:
-        from .model.family import cst_disk
-
-        if args.element != "cst":
-            raise ValueError("--calibrated applies the shipped scale of a constant-strain "
-                             f"member: it needs --element cst, got --element {args.element}")
-        scene = Scene(scene.gripper, cli_option("--calibrated", cst_disk, scene.disk,
-                                                args.triangles, args.rings))
     announce_compile()
-    model = {"stiffness_rule": args.rule, "n_rings": args.rings, "element": args.element}
+    model = {"stiffness_rule": args.rule, **spec.kwargs()}
+    n_tri = model.pop("n_triangles")
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
     # report the solve of the answer shown, as a user's next call would see it
     t0 = time.perf_counter()
-    first = simulate(scene, args.torque, args.triangles, args.method, **model)
+    first = simulate(scene, args.torque, n_tri, args.method, **model)
     first_wall_s = time.perf_counter() - t0
-    res = simulate(scene, args.torque, args.triangles, args.method, **model)
+    res = simulate(scene, args.torque, n_tri, args.method, **model)
     load_s = max(0.0, first_wall_s - first.solve_time_s)
     if args.json:
         data = res.to_dict()
@@ -57,9 +55,9 @@ def _simulate(args: argparse.Namespace) -> int:
         print(json.dumps(data, indent=2))
     else:
         r, left = (math.degrees(a) for a in res.jaw_angles_rad)
-        print(f"scene {args.scene}, N = {args.triangles}, M = {args.rings} ({args.element}"
-              f"{', shipped scale' if args.calibrated else ''}), T_a = {args.torque:g} N·m, "
-              f"method {args.method}")
+        print(f"scene {args.scene}, N = {spec.n_triangles}, M = {spec.n_rings} ({spec.element}"
+              f"{f', shipped scale x{spec.scale:.4f}' if spec.scale != 1.0 else ''}), "
+              f"T_a = {args.torque:g} N·m, method {args.method}")
         print(f"  converged      : {res.converged} ({res.message})")
         print(f"  jaw angles     : right {r:.4f} deg, left {left:.4f} deg")
         print(f"  contacts       : right {res.n_contacts[0]}, left {res.n_contacts[1]}")
@@ -99,7 +97,7 @@ def _demo(args: argparse.Namespace) -> int:
     from .solver import simulate
 
     scene = Scene.preset("paper-r070")
-    res = simulate(scene, 0.2, 20)
+    res = simulate(scene, 0.2, 20, element="spring")
     grasp_figure(scene, res, path=out / "grasp.png")
     print(f"wrote {out / 'grasp.png'} (converged: {res.converged})")
     return 0
@@ -107,7 +105,7 @@ def _demo(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from .model.defaults import MAX_TRIANGLES, MAX_TRIANGLES_FAMILY, STIFFNESS_RULES
-    from .model.problem import ELEMENTS
+    from .model.family import ELEMENTS
     from .model.rings import MAX_RINGS
     from .scene import PRESETS
     from .solver import METHODS
@@ -116,18 +114,21 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     sim = sub.add_parser("simulate", help="solve one grasp")
     sim.add_argument("--scene", default="paper-r070", choices=sorted(PRESETS))
-    sim.add_argument("--triangles", type=int, default=20,
+    sim.add_argument("--element", default=None, choices=ELEMENTS,
+                     help="nhquad (default: the default model, 40 points, 2 rings, within 2 %% "
+                     "RMS of the FEM); spring: springs and the area energy (the paper's fan: "
+                     "20 points, 1 ring); cst: constant-strain neo-Hookean triangles")
+    sim.add_argument("--triangles", type=int, default=None,
                      help=f"contour points N, in [4, {MAX_TRIANGLES}] for the springs-only fan, "
-                     f"[4, {MAX_TRIANGLES_FAMILY}] with rings or --element cst (default 20)")
-    sim.add_argument("--rings", type=int, default=1,
-                     help=f"rings M of the point mesh, in [1, {MAX_RINGS}] (default 1: the "
-                     "paper's fan)")
-    sim.add_argument("--element", default="spring", choices=ELEMENTS,
-                     help="spring: springs and the area energy (default); cst: constant-strain "
-                     "neo-Hookean triangles")
+                     f"[4, {MAX_TRIANGLES_FAMILY}] otherwise (default 40 for nhquad, 20 else)")
+    sim.add_argument("--rings", type=int, default=None,
+                     help=f"rings M of the point mesh, in [1, {MAX_RINGS}] (default 2 for "
+                     "nhquad, 1 otherwise: the paper's fan)")
     sim.add_argument("--calibrated", action="store_true",
-                     help="with --element cst: the member's shipped scale (fitted on the paper "
-                     "disks), e.g. --triangles 48 --rings 8")
+                     help="require the member's shipped scale (fitted on the paper disks; by "
+                     "default it is applied where the member has one)")
+    sim.add_argument("--uncalibrated", action="store_true",
+                     help="the member without its shipped scale (the disk's own scale only)")
     sim.add_argument("--torque", type=float, default=0.2, help="actuation torque T_a [N·m]")
     sim.add_argument("--method", default="newton", choices=METHODS)
     sim.add_argument("--rule", default="van_gelder", choices=STIFFNESS_RULES)

@@ -26,9 +26,10 @@ from .evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from .model.defaults import DEFAULT_N_TRIANGLES, PAPER_TORSION_STIFFNESS_NM_PER_RAD
+from .model.defaults import DEFAULT_ELEMENT, PAPER_TORSION_STIFFNESS_NM_PER_RAD
+from .model.family import ModelSpec, resolve_model
 from .scene import Design, SoftDisk
-from .validation import check_n_triangles, check_range
+from .validation import check_range
 
 __all__ = [
     "OBS_FIELDS",
@@ -183,8 +184,9 @@ def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
     return disk, limit, observe(disk, limit)
 
 
-def _check_settings(bounds, distribution, weights, n_triangles):
-    """The env settings, validated at construction (not at the first step); defaults for None."""
+def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element, calibrated):
+    """The env settings, validated at construction (not at the first step); defaults for None.
+    The last is the model member (:class:`envs.model.family.ModelSpec`)."""
     checked = []
     for name, value, kind in (("bounds", bounds, DesignBounds),
                               ("distribution", distribution, ObjectDistribution),
@@ -193,7 +195,8 @@ def _check_settings(bounds, distribution, weights, n_triangles):
             raise ValueError(f"{name} must be None or a {kind.__name__}, got "
                              f"{type(value).__name__}")
         checked.append(kind() if value is None else value)
-    return (*checked, check_n_triangles(n_triangles))
+    return (*checked, resolve_model(n_triangles, n_rings,
+                                    DEFAULT_ELEMENT if element is None else element, calibrated))
 
 
 def _spaces() -> tuple[spaces.Box, spaces.Box]:
@@ -210,7 +213,7 @@ def _info_value(v: np.ndarray):
 
 
 def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float,
-                  n_triangles: int, torsion: float, cache: dict) -> np.ndarray:
+                  model: ModelSpec, torsion: float, cache: dict) -> np.ndarray:
     """Off-screen frame (uint8 H x W x 3) of a design on a disk; re-solves with simulate()."""
     from matplotlib.figure import Figure
 
@@ -232,10 +235,11 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
         draw_design(fig.add_subplot(), design, disk.radius_m,
                     title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
         return figure_rgb_array(fig)
-    key = (tuple(design.tolist()), disk, n_triangles, torsion)
+    key = (tuple(design.tolist()), disk, model, torsion)
     if cache.get("key") != key:
         cache.clear()
-        cache["key"], cache["result"] = key, simulate(scene, chosen.torque_nm, n_triangles)
+        cache["key"], cache["result"] = key, simulate(scene, chosen.torque_nm,
+                                                      **model.kwargs())
     fig = grasp_figure(scene, cache["result"], strain_limit=strain_limit, dpi=80)
     return figure_rgb_array(fig)
 
@@ -248,9 +252,10 @@ class GripperDesignEnv(gym.Env):
     soft 2-D disk with a radius, a stiffness and a strain limit); the agent answers with one
     design (finger length, rest angle, joint offset, finger width, actuation torque and where the
     object sits), the grasp is solved with the point-spring model of the disk (quasi-static,
-    frictionless contact, ``N`` fan triangles) and the episode ends. It is a contextual bandit:
-    one step is one grasp. The physics is :func:`envs.evaluate.evaluate_designs`; this class is
-    only the Gymnasium adapter (the same function evaluates populations for optimizers).
+    frictionless contact, a member of the model family) and the episode ends. It is a
+    contextual bandit: one step is one grasp. The physics is
+    :func:`envs.evaluate.evaluate_designs`; this class is only the Gymnasium adapter (the same
+    function evaluates populations for optimizers).
 
     Frame: x to the right, y up, the gripper's symmetry axis is the y axis, the finger joints are
     at ``(+-d_3, 0)``, the disk centre at ``(0, d_1 + r)``.
@@ -351,8 +356,11 @@ class GripperDesignEnv(gym.Env):
     - `bounds`: :class:`~envs.evaluate.DesignBounds` of the action mapping (relative units).
     - `distribution`: :class:`ObjectDistribution` of the objects drawn at reset.
     - `weights`: :class:`~envs.evaluate.RewardWeights`.
-    - `n_triangles`: number of fan triangles `N` of the disk model (default 20), an integer in
-      `[4, MAX_TRIANGLES]` (:data:`envs.model.defaults`).
+    - `n_triangles`, `n_rings`, `element`, `calibrated`: the member of the model family that
+      solves each grasp, as in :func:`envs.simulate` (default: the default model, nh-quad with
+      `N = 40` contour points, 2 rings and its shipped calibration, within 2 % RMS and 4 % max
+      of the FEM closing angle; `element="spring"` is the paper's fan with `N = 20`, about 5x
+      cheaper and 30-40 % off the FEM at `s = 1`). `self.model` holds the resolved member.
     - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` [N·m/rad] (default: the paper
       gripper's 0.073).
 
@@ -377,15 +385,18 @@ class GripperDesignEnv(gym.Env):
         bounds: DesignBounds | None = None,
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
-        n_triangles: int = DEFAULT_N_TRIANGLES,
+        n_triangles: int | None = None,
         torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        n_rings: int | None = None,
+        element: str | None = None,
+        calibrated: bool | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
         self.render_mode = render_mode
-        self.bounds, self.distribution, self.weights, self.n_triangles = _check_settings(
-            bounds, distribution, weights, n_triangles)
+        self.bounds, self.distribution, self.weights, self.model = _check_settings(
+            bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
@@ -396,6 +407,16 @@ class GripperDesignEnv(gym.Env):
         self._last_design: np.ndarray | None = None
         self._render_cache: dict = {}
         self._figure = None
+
+    @property
+    def n_triangles(self) -> int:
+        """Contour points ``N`` of the model member (setting it keeps the member's rings and
+        element and validates the new member)."""
+        return self.model.n_triangles
+
+    @n_triangles.setter
+    def n_triangles(self, value) -> None:
+        self.model = resolve_model(value, self.model.n_rings, self.model.element)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
@@ -415,7 +436,7 @@ class GripperDesignEnv(gym.Env):
         out = evaluate_designs(
             design[None, :], self._disk, strain_limits=self._strain_limit,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
-            n_triangles=self.n_triangles, weights=self.weights,
+            weights=self.weights, **self.model.kwargs(),
         )
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
@@ -433,7 +454,7 @@ class GripperDesignEnv(gym.Env):
         if self._disk is None:
             raise ResetNeeded("call reset() before render()")
         frame = _render_frame(self._last_design, self._disk, self._strain_limit,
-                              self.n_triangles, self.torsion_stiffness_nm_per_rad,
+                              self.model, self.torsion_stiffness_nm_per_rad,
                               self._render_cache)
         if self.render_mode == "rgb_array":
             return frame
@@ -494,7 +515,8 @@ class GripperDesignVectorEnv(VectorEnv):
         Number of sub-environments.
     render_mode
         ``None`` or ``"rgb_array"`` (``render()`` returns one frame per sub-env).
-    bounds, distribution, weights, n_triangles, torsion_stiffness_nm_per_rad
+    bounds, distribution, weights, n_triangles, torsion_stiffness_nm_per_rad, n_rings, element,
+    calibrated
         As for :class:`GripperDesignEnv`.
     max_episode_steps
         ``None`` (the registered value) or an integer >= 1; see ``truncated`` above.
@@ -513,8 +535,11 @@ class GripperDesignVectorEnv(VectorEnv):
         bounds: DesignBounds | None = None,
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
-        n_triangles: int = DEFAULT_N_TRIANGLES,
+        n_triangles: int | None = None,
         torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        n_rings: int | None = None,
+        element: str | None = None,
+        calibrated: bool | None = None,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
     ) -> None:
@@ -529,8 +554,8 @@ class GripperDesignVectorEnv(VectorEnv):
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
-        self.bounds, self.distribution, self.weights, self.n_triangles = _check_settings(
-            bounds, distribution, weights, n_triangles)
+        self.bounds, self.distribution, self.weights, self.model = _check_settings(
+            bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
@@ -546,6 +571,16 @@ class GripperDesignVectorEnv(VectorEnv):
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._last_designs: list[np.ndarray | None] = [None] * n
         self._render_caches: list[dict] = [{} for _ in range(n)]
+
+    @property
+    def n_triangles(self) -> int:
+        """Contour points ``N`` of the model member (setting it keeps the member's rings and
+        element and validates the new member)."""
+        return self.model.n_triangles
+
+    @n_triangles.setter
+    def n_triangles(self, value) -> None:
+        self.model = resolve_model(value, self.model.n_rings, self.model.element)
 
     # --- helpers -------------------------------------------------------------------------------
 
@@ -579,7 +614,7 @@ class GripperDesignVectorEnv(VectorEnv):
         out = evaluate_designs(
             designs, [self._disks[i] for i in rows.tolist()], strain_limits=self._limits[rows],
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
-            n_triangles=self.n_triangles, weights=self.weights,
+            weights=self.weights, **self.model.kwargs(),
         )
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
@@ -668,7 +703,7 @@ class GripperDesignVectorEnv(VectorEnv):
             raise ResetNeeded("call reset() before render()")
         return tuple(
             _render_frame(self._last_designs[i], self._disks[i], float(self._limits[i]),
-                          self.n_triangles, self.torsion_stiffness_nm_per_rad,
+                          self.model, self.torsion_stiffness_nm_per_rad,
                           self._render_caches[i])
             for i in range(self.num_envs)
         )

@@ -31,13 +31,15 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from .model.defaults import (
-    DEFAULT_N_TRIANGLES,
+    DEFAULT_ELEMENT,
     DEFAULT_PHASE_RAD,
     DEFAULT_STRAIN_LIMIT,
     MAX_TRIANGLES,
+    MAX_TRIANGLES_FAMILY,
     MIN_TRIANGLES,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from .model.family import resolve_model
 from .model.geometry import bar_distance
 from .model.problem import REST_OK, SceneColumns, _clearance, rest_codes
 from .scene import (
@@ -304,6 +306,9 @@ def _design_table(designs) -> np.ndarray:
     return arr
 
 
+DISK_SCALE = 4  # column of the stiffness scale in :func:`_disk_table`
+
+
 def _disk_table(disks, batch: int) -> np.ndarray:
     """Columns: radius, Young's modulus, Poisson ratio, thickness, stiffness scale, contour
     stiffness ratio, area stiffness scale."""
@@ -432,13 +437,21 @@ def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndar
 
 
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limits: np.ndarray,
-                     kf: np.ndarray, weights: RewardWeights) -> dict[str, np.ndarray]:
-    """In-process evaluation of validated, normalized inputs (one row per design)."""
+                     kf: np.ndarray, weights: RewardWeights,
+                     model: tuple[int, str, float] = (1, "spring", 1.0)
+                     ) -> dict[str, np.ndarray]:
+    """In-process evaluation of validated, normalized inputs (one row per design);
+    ``model``: rings, element and the factor of the member's calibration on the disks'
+    stiffness scale."""
     batch = des.shape[0]
+    n_rings, element, model_scale = model
     out = _empty_output(batch)
     out["n_triangles"][:] = n_tri
     out["strain_limit"][:] = limits
     out["status"][:] = NOT_SOLVED
+    if model_scale != 1.0:
+        disk = disk.copy()
+        disk[:, DISK_SCALE] *= model_scale
     cols = _columns(des, disk, kf)
     valid = rest_codes(cols) == REST_OK
     out["valid_at_rest"][:] = valid
@@ -451,7 +464,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
                                                   where=finite)
     for n in np.unique(n_tri[valid]).tolist():
         rows = np.flatnonzero(valid & (n_tri == n))
-        sol = solve_columns(cols.take(rows), n, phase_rad=DEFAULT_PHASE_RAD)
+        sol = solve_columns(cols.take(rows), n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
+                            element=element)
         _fill_group(out, rows, sol, n)
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -480,9 +494,9 @@ def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndar
                         + out["penalty_gap"] + out["penalty_invalid"] + out["penalty_fail"])
 
 
-def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights
-                    ) -> dict[str, np.ndarray]:
-    return _evaluate_arrays(*chunk, weights=weights)
+def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
+                    model: tuple[int, str, float] = (1, "spring", 1.0)) -> dict[str, np.ndarray]:
+    return _evaluate_arrays(*chunk, weights=weights, model=model)
 
 
 def _check_start_method(executor) -> None:
@@ -510,11 +524,14 @@ def evaluate_designs(
     disks,
     *,
     torsion_stiffness_nm_per_rad=PAPER_TORSION_STIFFNESS_NM_PER_RAD,
-    n_triangles=DEFAULT_N_TRIANGLES,
+    n_triangles=None,
     weights: RewardWeights | None = None,
     strain_limits=None,
     executor=None,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
+    n_rings: int | None = None,
+    element: str | None = None,
+    calibrated: bool | None = None,
 ) -> dict[str, np.ndarray]:
     """Solve the grasp of every design and return its metrics and reward terms.
 
@@ -530,8 +547,14 @@ def evaluate_designs(
     torsion_stiffness_nm_per_rad
         Joint torsion spring ``k_f`` [N·m/rad], > 0; scalar or shape (B,).
     n_triangles
-        Number of fan triangles ``N``; scalar or shape (B,). Rows are grouped by N and each group
-        is solved with one call of :func:`envs.solver.pipeline.solve_columns`.
+        Contour points ``N``; scalar or shape (B,); ``None``: the member's default. Rows are
+        grouped by N and each group is solved with one call of
+        :func:`envs.solver.pipeline.solve_columns`.
+    n_rings, element, calibrated
+        The member of the model family every row is solved with, as in :func:`envs.simulate`
+        (:func:`envs.model.family.resolve_model`): by default the default model (nh-quad,
+        N = 40, M = 2, its shipped calibration); ``element="spring"`` is the paper's fan
+        (N = 20).
     weights
         Reward weights (default :class:`RewardWeights`).
     strain_limits
@@ -596,14 +619,23 @@ def evaluate_designs(
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
-    n_tri = _per_row("n_triangles", n_triangles, batch, MIN_TRIANGLES, MAX_TRIANGLES,
-                     low_open=False, integer=True)
+    n_each = np.asarray(n_triangles, dtype=object)
+    spec = resolve_model(None if n_each.ndim else n_triangles, n_rings,
+                         DEFAULT_ELEMENT if element is None else element, calibrated)
+    n_max = MAX_TRIANGLES if (spec.n_rings, spec.element) == (1, "spring") \
+        else MAX_TRIANGLES_FAMILY
+    n_tri = _per_row("n_triangles", spec.n_triangles if n_each.ndim == 0 else n_triangles,
+                     batch, MIN_TRIANGLES, n_max, low_open=False, integer=True)
+    if n_each.ndim and spec.element == "cst" and spec.scale != 1.0:
+        raise ValueError("a calibrated constant-strain member has one N (its scale depends on "
+                         "N): pass a scalar n_triangles")
+    model = (spec.n_rings, spec.element, spec.scale)
     limits = _per_row("strain_limits", DEFAULT_STRAIN_LIMIT if strain_limits is None
                       else strain_limits, batch, 0.0, 1.0, low_open=True)
     kf = _per_row("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, batch, 0.0,
                   math.inf, low_open=True)
     if executor is None:
-        return _evaluate_arrays(des, disk, n_tri, limits, kf, weights)
+        return _evaluate_arrays(des, disk, n_tri, limits, kf, weights, model)
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     if not callable(getattr(executor, "map", None)):
@@ -612,7 +644,7 @@ def evaluate_designs(
     starts = range(0, batch, int(chunk_size))
     chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, limits, kf))
               for s in starts]
-    fn = functools.partial(_evaluate_chunk, weights=weights)
+    fn = functools.partial(_evaluate_chunk, weights=weights, model=model)
     parts = [_result_of(p) for p in executor.map(fn, chunks)]
     if not parts:
         return _empty_output(0)

@@ -87,7 +87,8 @@ def spring_segments(points_m: np.ndarray, center_m: np.ndarray, radius_m: float)
 
 
 def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.ndarray,
-                  radius_m: float, n_rings: int, phase_rad: float = math.pi / 2):
+                  radius_m: float, n_rings: int, phase_rad: float = math.pi / 2,
+                  element: str = "spring"):
     """Edges of a ring mesh (:mod:`envs.model.rings`) and their strains ``(L - L0) / L0``.
 
     Parameters
@@ -99,6 +100,8 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
         Disk centre and radius [m].
     n_rings
         Rings M (>= 2; the fan is :func:`spring_segments`).
+    element
+        The member's element (its ring spacing: even for ``"nhquad"``).
     phase_rad
         Angle of the first point of every ring [rad].
 
@@ -108,8 +111,10 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
         Shape (3 N M, 2, 2) minus the hub's own edges: every spring of the mesh.
     strains : numpy.ndarray
     """
+    from .model.layout import SPACING_EVEN, SPACING_GEOMETRIC
     from .model.rings import edge_ends, n_edge_types, ring_radius
 
+    spacing = SPACING_EVEN if element == "nhquad" else SPACING_GEOMETRIC
     pts = np.asarray(points_m, dtype=float)
     inner = np.asarray(interior_m, dtype=float).reshape(-1, 2)
     n, m = pts.shape[0], int(n_rings)
@@ -119,7 +124,7 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
 
     def point(k, i, rest):
         if rest or k == 0:
-            return centre + radius_m * ring_radius(k, m) * unit[i]
+            return centre + radius_m * ring_radius(k, m, spacing) * unit[i]
         return pts[i] if k == m else inner[(k - 1) * n + i]
 
     segs, strains = [], []
@@ -244,7 +249,8 @@ def draw_grasp(
                 # a ring mesh: every edge (for the constant-strain element, the triangles'
                 # edge strains), the hub's ring drawn at rest
                 segs, strains = mesh_segments(pts, result.interior_points_m, center,
-                                              d.radius_m, rings)
+                                              d.radius_m, rings,
+                                              element=getattr(result, "element", "spring"))
                 widths = np.full(len(segs), 0.8)
             else:
                 segs, strains = spring_segments(pts, center, d.radius_m)

@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from envs.evaluate import DESIGN_FIELDS
 from envs.model.defaults import (
     DEFAULT_CONTOUR_STIFFNESS_RATIO,
-    DEFAULT_N_TRIANGLES,
+    PAPER_N_TRIANGLES,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
 from envs.render import draw_design, draw_grasp, grasp_figure
@@ -55,6 +55,14 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     return Design(**{k: design[k] for k in DESIGN_FIELDS}).to_scene(disk, torsion)
 
 
+def model_of(obj: dict[str, Any]) -> dict[str, Any]:
+    """The model member an optimization result was scored with, as keyword arguments of
+    :func:`envs.simulate` (results written before the model family: the paper's fan)."""
+    return {"n_triangles": int(obj.get("n_triangles", PAPER_N_TRIANGLES)),
+            "n_rings": int(obj.get("n_rings", 1)), "element": obj.get("element", "spring"),
+            "calibrated": bool(obj.get("calibrated", False))}
+
+
 def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title: str,
                        legend: bool = True) -> None:
     """Solve and draw a design's grasp; fall back to the bare design if it is invalid."""
@@ -66,7 +74,7 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
         row = np.array([design[k] for k in DESIGN_FIELDS])
         draw_design(ax, row, obj["radius_m"], title=title + " (invalid)")
         return
-    res = simulate(scene, design["torque_nm"], int(obj.get("n_triangles", DEFAULT_N_TRIANGLES)))
+    res = simulate(scene, design["torque_nm"], **model_of(obj))
     draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend)
 
 
@@ -126,8 +134,7 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
         row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)")
         return _save(fig, path)
-    n = int(obj.get("n_triangles", DEFAULT_N_TRIANGLES))
-    res = simulate(scene, result.best_design["torque_nm"], n)
+    res = simulate(scene, result.best_design["torque_nm"], **model_of(obj))
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
                        figsize=(6.0, 6.0))
     return _save(fig, path)

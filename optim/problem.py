@@ -26,12 +26,13 @@ from envs.evaluate import (
     evaluate_designs,
 )
 from envs.model.defaults import (
-    DEFAULT_N_TRIANGLES,
+    DEFAULT_ELEMENT,
     DEFAULT_STRAIN_LIMIT,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from envs.model.family import resolve_model
 from envs.scene import PRESETS, Scene, SoftDisk
-from envs.validation import check_n_triangles, check_range
+from envs.validation import check_range
 
 from .result import OptimResult, to_jsonable
 
@@ -152,8 +153,10 @@ class DesignProblem:
         Admissible strain of the object [-], in (0, 1].
     torsion_stiffness_nm_per_rad
         Joint torsion spring ``k_f`` [N·m/rad], > 0.
-    n_triangles
-        Fan triangles ``N`` of the disk model.
+    n_triangles, n_rings, element, calibrated
+        The member of the model family that solves each grasp, as in :func:`envs.simulate`
+        (default: the default model; ``element="spring"``: the paper's fan). ``self.model``
+        holds the resolved member.
     bounds
         Box mapping [-1, 1]^6 to physical designs (default :class:`~envs.evaluate.DesignBounds`).
     weights
@@ -178,13 +181,16 @@ class DesignProblem:
         strain_limit: float = DEFAULT_STRAIN_LIMIT,
         *,
         torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
-        n_triangles: int = DEFAULT_N_TRIANGLES,
+        n_triangles: int | None = None,
         bounds: DesignBounds | None = None,
         weights: RewardWeights | None = None,
         executor: Any = None,
         chunk_size: int | None = None,
         progress: ProgressHook | None = None,
         name: str | None = None,
+        n_rings: int | None = None,
+        element: str | None = None,
+        calibrated: bool | None = None,
     ) -> None:
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
@@ -193,7 +199,9 @@ class DesignProblem:
         self.torsion_stiffness_nm_per_rad = check_range(
             "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True)
-        self.n_triangles = check_n_triangles(n_triangles)
+        self.model = resolve_model(n_triangles, n_rings,
+                                   DEFAULT_ELEMENT if element is None else element, calibrated)
+        self.n_triangles = self.model.n_triangles
         self.bounds = DesignBounds() if bounds is None else bounds
         self.weights = RewardWeights() if weights is None else weights
         if executor is not None and not callable(getattr(executor, "map", None)):
@@ -279,7 +287,7 @@ class DesignProblem:
         return evaluate_designs(
             designs, self.disk, strain_limits=self.strain_limit,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
-            n_triangles=self.n_triangles, weights=self.weights, executor=self.executor,
+            weights=self.weights, executor=self.executor, **self.model.kwargs(),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
 
@@ -387,7 +395,7 @@ class DesignProblem:
             "contour_stiffness_ratio": d.contour_stiffness_ratio,
             "strain_limit": self.strain_limit,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
-            "n_triangles": self.n_triangles,
+            **self.model.kwargs(),
         }
 
     def result(self, method: str, seed: int, *, options: dict[str, Any] | None = None,

@@ -212,8 +212,8 @@ def train_policy(
         bounds=problem.bounds,
         distribution=training_distribution(problem),
         weights=problem.weights,
-        n_triangles=problem.n_triangles,
         torsion_stiffness_nm_per_rad=problem.torsion_stiffness_nm_per_rad,
+        **problem.model.kwargs(),
     ))
     threads = torch.get_num_threads()
     if torch_threads is not None:
@@ -265,8 +265,8 @@ def _as_problem(obj: Any, template: DesignProblem | None) -> DesignProblem:
     kwargs: dict[str, Any] = {}
     if template is not None:
         kwargs = {"torsion_stiffness_nm_per_rad": template.torsion_stiffness_nm_per_rad,
-                  "n_triangles": template.n_triangles, "bounds": template.bounds,
-                  "weights": template.weights, "executor": template.executor}
+                  "bounds": template.bounds, "weights": template.weights,
+                  "executor": template.executor, **template.model.kwargs()}
         if limit is None:
             limit = template.strain_limit
     if limit is None:

@@ -44,16 +44,17 @@ def warm_up(n_triangles: int) -> None:
     g, disk = PRESETS["paper-r070"]
     row = [g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m, 0.2,
            disk.distance_m]
-    evaluate_designs(np.array([row]), disk, n_triangles=n_triangles)  # solve_one
-    evaluate_designs(np.array([row, row]), disk, n_triangles=n_triangles)  # solve_batch
-    env = GripperDesignEnv(n_triangles=n_triangles)
+    evaluate_designs(np.array([row]), disk, n_triangles=n_triangles, element="spring")  # solve_one
+    evaluate_designs(np.array([row, row]), disk, n_triangles=n_triangles,
+        element="spring")  # solve_batch
+    env = GripperDesignEnv(n_triangles=n_triangles, element="spring")
     env.reset(seed=0)
     env.step(np.zeros(6))
 
 
 def bench_step_loop(n_steps: int, n_triangles: int, seed: int) -> dict:
     """``reset`` + ``step`` with a random action, ``n_steps`` times."""
-    env = GripperDesignEnv(n_triangles=n_triangles)
+    env = GripperDesignEnv(n_triangles=n_triangles, element="spring")
     env.action_space.seed(seed)
     actions = [env.action_space.sample() for _ in range(n_steps)]
     valid = converged = 0
@@ -77,7 +78,7 @@ def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
     """One ``evaluate_designs`` call on ``batch`` random designs."""
     designs = DesignBounds().sample(np.random.default_rng(seed), batch, paper_disk())
     t0 = time.perf_counter()
-    out = evaluate_designs(designs, paper_disk(), n_triangles=n_triangles)
+    out = evaluate_designs(designs, paper_disk(), n_triangles=n_triangles, element="spring")
     elapsed = time.perf_counter() - t0
     valid = out["valid_at_rest"]
     solved = int(valid.sum())
@@ -109,7 +110,7 @@ def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict 
         from envs.sb3_env import sb3_vec_env
 
         env = sb3_vec_env(num_envs, seed=seed, n_triangles=n_triangles,
-                          distribution=paper_distribution())
+                          distribution=paper_distribution(), element="spring")
     except ImportError:
         return None
     actions = np.random.default_rng(seed).uniform(

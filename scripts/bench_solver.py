@@ -29,7 +29,7 @@ ALL_N = [4, 8, 12, 20, 40, 60, 100, 200, 300, 500]  # up to MAX_TRIANGLES
 def _time(scene, torque, n, method, repeats, limit):
     times, last = [], None
     for _ in range(repeats):
-        last = simulate(scene, torque, n, method, time_limit_s=limit)
+        last = simulate(scene, torque, n, method, time_limit_s=limit, element="spring")
         times.append(last.solve_time_s)
     return statistics.median(times), last
 
@@ -52,7 +52,7 @@ def user_speed(scene, repeats: int) -> dict:
     """
     import envs
 
-    env = envs.GripperDesignEnv(n_triangles=20)
+    env = envs.GripperDesignEnv(n_triangles=20, element="spring")
     design = np.array([scene.gripper.finger_length_m, scene.gripper.rest_angle_rad,
                        scene.gripper.joint_offset_m, scene.gripper.finger_width_m, 0.2,
                        scene.disk.distance_m])
@@ -70,13 +70,14 @@ def user_speed(scene, repeats: int) -> dict:
         return 1e3 * (time.perf_counter() - t0)
 
     for _ in range(3):  # warm: compiled, caches filled
-        simulate(scene, 0.2, 20), simulate_ramp(scene, torques, 20), env_step()
+        simulate(scene, 0.2, 20, element="spring"), simulate_ramp(scene, torques, 20,
+            element="spring"), env_step()
     sim, sim_c, ramp, ramp_c, step, step_only = [], [], [], [], [], []
     for _ in range(repeats):  # interleaved, so that machine noise hits all alike
-        ms, res = _median_ms(lambda: simulate(scene, 0.2, 20), 1)
+        ms, res = _median_ms(lambda: simulate(scene, 0.2, 20, element="spring"), 1)
         sim.append(ms)
         sim_c.append(1e3 * res.solve_time_s)
-        ms, rs = _median_ms(lambda: simulate_ramp(scene, torques, 20), 1)
+        ms, rs = _median_ms(lambda: simulate_ramp(scene, torques, 20, element="spring"), 1)
         ramp.append(ms)
         ramp_c.append(1e3 * sum(r.solve_time_s for r in rs))
         step.append(_median_ms(env_step, 1)[0])
@@ -108,7 +109,7 @@ def main() -> None:
     args = ap.parse_args()
     ns = [n for n in ALL_N if not args.quick or n <= 200]
     scene = Scene.preset("paper-r070")
-    simulate(scene, 0.2, 20)  # compile
+    simulate(scene, 0.2, 20, element="spring")  # compile
     speed = user_speed(scene, 41 if not args.quick else 11)
     rows = []
     give_up = {"slsqp": False, "nelder-mead": False}
@@ -158,7 +159,7 @@ def main() -> None:
         for n in sweep_n:
             for t in torques:
                 t0 = time.perf_counter()
-                res = simulate(sc, float(t), n)
+                res = simulate(sc, float(t), n, element="spring")
                 sweep.append({"scene": name, "n": n, "torque_nm": float(t),
                               "converged": res.converged, "stable": res.stable,
                               "inverted": res.folded,

@@ -57,7 +57,8 @@ FAMILY_COLOURS = ("tab:purple", "tab:brown")
 def family_curve(member: Member, scene: Scene, torques) -> dict:
     """Closing curve of a family member along a ramp (NaN where a step did not converge)."""
     res = simulate_ramp(member.scene(scene), sorted(torques), member.n_triangles,
-                        n_rings=member.n_rings, element=member.element)
+                        n_rings=member.n_rings, element=member.element,
+                        calibrated=False)
     ok = np.array([r.converged for r in res])
     angles = np.array([0.5 * sum(r.jaw_angles_rad) for r in res])
     return {"label": member.label, "torques_nm": np.array(sorted(torques)),

@@ -60,7 +60,8 @@ def family_errors(member: Member, scene: Scene, fem) -> dict:
     """RMS and max closing-angle error of a family member against the FEM ramp."""
     t0 = time.perf_counter()
     res = simulate_ramp(member.scene(scene), fem.torques_nm, member.n_triangles,
-                        n_rings=member.n_rings, element=member.element)
+                        n_rings=member.n_rings, element=member.element,
+                        calibrated=False)
     th0 = scene.gripper.rest_angle_rad
     psm = np.array([0.5 * sum(r.jaw_angles_rad) if r.converged else np.nan for r in res])
     rel = (th0 - psm) / (th0 - np.asarray(fem.jaw_angles_rad)) - 1.0

@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     fem = fem_reference(base, PAPER_TORQUES_NM)
     fem_coarse = fem_reference(base, PAPER_TORQUES_NM, mesh_size_m=base.disk.radius_m / 6)
     scene = calibrate(base, fem, 20, xatol=1e-3).calibrated(base)
-    simulate(scene, TORQUE_NM, 20)  # load the compiled kernels before timing
+    simulate(scene, TORQUE_NM, 20, element="spring")  # load the compiled kernels before timing
     print(f"{SCENE}, T = {TORQUE_NM} N·m, s = {scene.disk.stiffness_scale:.4f}")
 
     rows = []

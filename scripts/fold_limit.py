@@ -30,7 +30,7 @@ def fold_limit(name: str, n: int, t_max: float, steps: int, area_scale: float = 
     scene = Scene.preset(name).with_changes(area_stiffness_scale=area_scale)
     torques = np.linspace(t_max / steps, t_max, steps)
     last, first_fold, failures = None, None, 0
-    for res in simulate_ramp(scene, torques, n):
+    for res in simulate_ramp(scene, torques, n, element="spring"):
         if res.folded:
             first_fold = res
             break

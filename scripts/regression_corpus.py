@@ -51,7 +51,7 @@ def design_inputs() -> tuple[np.ndarray, np.ndarray]:
 def evaluate_corpus_designs(designs: np.ndarray, radii: np.ndarray) -> dict[str, np.ndarray]:
     """Evaluate the corpus designs (each with its own disk) at N = 20."""
     disks = [envs.SoftDisk(float(r), 0.0) for r in radii]
-    return envs.evaluate_designs(designs, disks, n_triangles=20)
+    return envs.evaluate_designs(designs, disks, n_triangles=20, element="spring")
 
 
 def preset_cases() -> list[tuple[str, float, int]]:
@@ -66,7 +66,7 @@ def preset_cases() -> list[tuple[str, float, int]]:
 
 def simulate_case(name: str, torque_nm: float, n: int):
     """The simulate answer of one case."""
-    return envs.simulate(envs.Scene.preset(name), torque_nm, n)
+    return envs.simulate(envs.Scene.preset(name), torque_nm, n, element="spring")
 
 
 def main() -> None:

@@ -74,7 +74,8 @@ def member_errors(scene: Scene, ref, member: Member, fem=None) -> dict:
     and contact fraction ``fem``, their errors too)."""
     t0 = time.perf_counter()
     out = simulate_ramp(member.scene(scene), list(ref.torques_nm), member.n_triangles,
-                        n_rings=member.n_rings, element=member.element)
+                        n_rings=member.n_rings, element=member.element,
+                        calibrated=False)
     wall = time.perf_counter() - t0
     th0 = scene.gripper.rest_angle_rad
     fem_closing = th0 - np.asarray(ref.jaw_angles_rad)

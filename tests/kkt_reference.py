@@ -203,8 +203,8 @@ def kkt_check(
             min_force = min(min_force, stop_torques_nm[j])
             if abs(theta - theta_min) > GAP_TOL:
                 max_gap = max(max_gap, abs(theta - theta_min) * r)
-    # floor: the spring force of a 1e-6 strain, so that an unloaded disk is judged absolutely
-    f_floor = 1e-6 * k_ext * r
+    # floor: the spring force of a 1e-4 strain, so that an unloaded disk is judged absolutely
+    f_floor = 1e-4 * k_ext * r
     f_ref = max(max(spring_mag), float(np.max(np.abs(face_forces_n))), f_floor)
     f_ref = max(f_ref, float(np.max(np.abs(corner_forces), initial=0.0)))
     m_ref = max(max(contact_scale), torque_nm, f_floor * g.finger_length_m)

@@ -82,12 +82,14 @@ def preset_results():
         torques = (0.0, 0.05, 0.2, 1.0) if name in PAPER else (0.0, 1e-3, 5e-3)
         for n in (4, 8, 20, 60):
             for torque in torques:
-                out.append((f"{name} N={n} T={torque}", scene, simulate(scene, torque, n)))
+                out.append((f"{name} N={n} T={torque}", scene, simulate(scene, torque, n,
+                    element="spring")))
     # the other stiffness rule and a calibrated contour stiffness
     r070 = Scene.preset("paper-r070")
-    out.append(("cst_fit", r070, simulate(r070, 0.2, 20, stiffness_rule="cst_fit")))
+    out.append(("cst_fit", r070, simulate(r070, 0.2, 20, stiffness_rule="cst_fit",
+                                          element="spring")))
     stiff = r070.with_changes(contour_stiffness_ratio=3.0)
-    out.append(("contour x3", stiff, simulate(stiff, 0.5, 20)))
+    out.append(("contour x3", stiff, simulate(stiff, 0.5, 20, element="spring")))
     return out
 
 
@@ -109,7 +111,7 @@ def design_results():
         except ValueError:  # fingers overlap the disk at rest: not a grasp problem
             continue
         n = (4, 8, 20, 8)[k % 4]  # N = 60 is covered by the presets; it costs more here
-        out.append((f"design {k} N={n}", scene, simulate(scene, torque, n)))
+        out.append((f"design {k} N={n}", scene, simulate(scene, torque, n, element="spring")))
         if len(out) == 200:
             break
     assert len(out) == 200
@@ -120,7 +122,7 @@ def design_results():
 def grasp():
     """A converged squeeze of paper-r070 with three face contacts on each finger."""
     scene = Scene.preset("paper-r070")
-    res = simulate(scene, 0.2, 20)
+    res = simulate(scene, 0.2, 20, element="spring")
     assert res.converged and res.n_contacts == (3, 3)
     return scene, res
 

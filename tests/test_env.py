@@ -24,6 +24,7 @@ from envs import (
     evaluate_designs,
 )
 from envs.evaluate import METRIC_KEYS, _columns, _disk_table
+from envs.model.family import resolve_model
 from envs.model.problem import REST_OK, pack_params, rest_codes, scaled_params
 from envs.scene import PRESETS, Gripper
 
@@ -66,7 +67,7 @@ def assert_all_finite(out: dict) -> None:
 
 
 def test_outputs_have_documented_keys_shapes_and_paper_values():
-    out = evaluate_designs(paper_designs([0.1, 0.2]), DISK)
+    out = evaluate_designs(paper_designs([0.1, 0.2]), DISK, element="spring")
     assert list(out) == list(METRIC_KEYS)
     for key, (dtype, shape) in METRIC_KEYS.items():
         assert out[key].shape == (2, *shape), key
@@ -79,9 +80,13 @@ def test_outputs_have_documented_keys_shapes_and_paper_values():
     np.testing.assert_array_equal(out["reward"], total)
 
 
-def test_matches_simulate_on_the_paper_scene():
-    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, 20)
-    out = evaluate_designs(paper_designs([0.2]), DISK)
+@pytest.mark.parametrize("model", [{}, {"n_triangles": 20, "element": "spring"}])
+def test_matches_simulate_on_the_paper_scene(model):
+    """The batch and simulate solve the same member: the default model (nh-quad, its shipped
+    calibration) and the paper's fan."""
+    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, **model)
+    out = evaluate_designs(paper_designs([0.2]), DISK, **model)
+    assert out["n_triangles"][0] == res.n_triangles
     np.testing.assert_allclose(out["jaw_angles_rad"][0], res.jaw_angles_rad, rtol=1e-12)
     np.testing.assert_allclose(out["peak_strain"][0], res.peak_strain, rtol=1e-10)
     np.testing.assert_allclose(out["total_force_n"][0], res.total_force_n, rtol=1e-9)
@@ -123,13 +128,14 @@ def test_batched_and_single_evaluation_agree_exactly():
 def test_executor_chunks_and_per_row_n_agree_with_in_process():
     designs = paper_designs([0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8])
     n_tri = np.array([12, 20, 12, 20, 16, 20, 12])
-    ref = evaluate_designs(designs, DISK, n_triangles=n_tri)
+    ref = evaluate_designs(designs, DISK, n_triangles=n_tri, element="spring")
     with ThreadPoolExecutor(2) as pool:
-        chunked = evaluate_designs(designs, DISK, n_triangles=n_tri, executor=pool, chunk_size=3)
+        chunked = evaluate_designs(designs, DISK, n_triangles=n_tri, executor=pool, chunk_size=3,
+            element="spring")
     assert_outputs_equal(ref, chunked)
     for n in (12, 16, 20):
         rows = n_tri == n
-        alone = evaluate_designs(designs[rows], DISK, n_triangles=n)
+        alone = evaluate_designs(designs[rows], DISK, n_triangles=n, element="spring")
         for key in ref:
             np.testing.assert_array_equal(ref[key][rows], alone[key], err_msg=key)
 
@@ -144,7 +150,8 @@ def test_design_objects_and_per_row_disks():
 
 
 def test_contact_score_barely_depends_on_n():
-    out = evaluate_designs(paper_designs([0.2, 0.2]), DISK, n_triangles=np.array([20, 40]))
+    out = evaluate_designs(paper_designs([0.2, 0.2]), DISK, n_triangles=np.array([20, 40]),
+                           element="spring")
     assert out["converged"].all()
     assert abs(out["contact_score"][0] - out["contact_score"][1]) <= 0.1
 
@@ -200,7 +207,7 @@ def test_malformed_inputs_raise():
     with pytest.raises(ValueError):
         evaluate_designs(paper_designs([0.1]), [DISK, DISK])
     with pytest.raises(ValueError):
-        evaluate_designs(paper_designs([0.1]), DISK, n_triangles=3)
+        evaluate_designs(paper_designs([0.1]), DISK, n_triangles=3, element="spring")
     with pytest.raises(ValueError):
         evaluate_designs(paper_designs([0.1]), DISK, strain_limits=0.0)
 
@@ -387,7 +394,7 @@ def test_render_rgb_array_and_grasp_figure(tmp_path):
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
     assert frame.shape == before.shape and not np.array_equal(frame, before)
-    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, 20)
+    res = envs.simulate(Scene(GRIPPER, DISK), 0.2, 20, element="spring")
     grasp_figure(Scene(GRIPPER, DISK), res, tmp_path / "grasp.png")
     assert (tmp_path / "grasp.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -489,10 +496,11 @@ def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
 
     disk = SoftDisk(0.07, 0.0, stiffness_scale=1.7, contour_stiffness_ratio=2.5)
     design = np.array([0.2, 0.8, 0.025, 0.01, 0.3, 0.013])
+    model = resolve_model()  # the default member, calibrated: the scored one
     out = evaluate_designs(design[None, :], disk)
     assert out["converged"][0]
     cache: dict = {}
-    frame = _render_frame(design, disk, 0.15, 20, 0.073, cache)
+    frame = _render_frame(design, disk, 0.15, model, 0.073, cache)
     assert frame.ndim == 3 and frame.shape[2] == 3
     assert cache["result"].converged
     np.testing.assert_allclose(cache["result"].jaw_angles_rad, out["jaw_angles_rad"][0],
@@ -508,7 +516,7 @@ def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
 def test_evaluate_names_a_bad_mesh_size(value, match):
     designs = np.array([[0.2, 0.785, 0.025, 0.01, 0.2, 0.013]] * 2)
     with pytest.raises(ValueError, match=match):
-        evaluate_designs(designs, DISK, n_triangles=value)
+        evaluate_designs(designs, DISK, n_triangles=value, element="spring")
 
 
 def test_a_nan_row_is_reported_and_the_others_answered():
@@ -530,8 +538,8 @@ def test_a_nan_row_is_reported_and_the_others_answered():
 def test_envs_check_the_mesh_size_at_construction(value, match):
     # before: 20.7 ran N = 20 silently and 100000 failed only at the first step
     with pytest.raises(ValueError, match=match):
-        GripperDesignEnv(n_triangles=value)
+        GripperDesignEnv(n_triangles=value, element="spring")
     with pytest.raises(ValueError, match=match):
-        GripperDesignVectorEnv(2, n_triangles=value)
+        GripperDesignVectorEnv(2, n_triangles=value, element="spring")
     with pytest.raises(ValueError, match="weights must be None or a RewardWeights"):
         GripperDesignEnv(weights={"contact": 1.0})

@@ -61,8 +61,11 @@ def test_simulate_reports_solve_and_kernel_load_apart(capsys):
 
 
 @pytest.mark.parametrize("argv,match", [
-    (["--triangles", "0"], r"--triangles: n_triangles = 0 is outside the allowed range \[4, 500\]"),
-    (["--triangles", "600"], r"beyond N = 500 most solves fail"),
+    (["--triangles", "0", "--element", "spring"],
+     r"--triangles/--rings/--element: n_triangles = 0 is outside the allowed range \[4, 500\]"),
+    (["--triangles", "600", "--element", "spring"], r"beyond N = 500 most solves fail"),
+    (["--triangles", "2001"], r"n_triangles = 2001 is outside the allowed range \[4, 2000\]"),
+    (["--rings", "1", "--element", "nhquad"], r"n_rings = 1 is outside the allowed range"),
     (["--budget", "0"], r"--budget: budget must be an integer >= 1 .*got 0"),
     (["--strain-limit", "1.5"], r"--strain-limit: strain_limit = 1.5 is outside"),
 ])
@@ -126,7 +129,7 @@ def test_only_public_statuses_reach_results():
     high = np.array([0.30, 1.31, 0.05, 0.03, 1.0, 0.06])
     designs = low + rng.uniform(0, 1, (300, 6)) * (high - low)
     for n in (8, 60):
-        status = evaluate_designs(designs, DISK, n_triangles=n)["status"]
+        status = evaluate_designs(designs, DISK, n_triangles=n, element="spring")["status"]
         assert set(np.unique(status).tolist()) <= set(PUBLIC_STATUS), n
 
 
@@ -164,7 +167,7 @@ def test_grasp_drawing_has_a_legend_and_a_labelled_strain_scale():
     from envs.render import grasp_figure
 
     scene = Scene(GRIPPER, DISK)
-    fig = grasp_figure(scene, envs.simulate(scene, 0.2, 20))
+    fig = grasp_figure(scene, envs.simulate(scene, 0.2, 20, element="spring"))
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     for needed in ("contact, right", "contact, left", "rest (dashed)", "centre (pinned)"):
         assert needed in labels
@@ -219,7 +222,8 @@ def test_compile_notice_only_when_the_kernels_are_not_cached(tmp_path, monkeypat
     """A warm cache prints nothing; a cold one (no cache index files) names the wait."""
     import envs.solver.warmup as warmup
 
-    envs.simulate(envs.Scene.preset("paper-r070"), 0.2, 20)  # the kernels are cached now
+    envs.simulate(envs.Scene.preset("paper-r070"), 0.2, 20,
+        element="spring")  # the kernels are cached now
     assert warmup.kernels_cached()
     assert not warmup.announce_compile()
     assert capsys.readouterr().err == ""

@@ -347,15 +347,16 @@ def test_charted_grasp_is_the_scored_grasp_with_calibration_fields():
     from optim.charts import scene_of
 
     disk = SoftDisk(0.07, 0.013, stiffness_scale=1.7, contour_stiffness_ratio=2.5)
-    problem = DesignProblem(disk, n_triangles=20)
+    problem = DesignProblem(disk, n_triangles=20, element="spring")
     design = np.array([0.2, 0.8, 0.025, 0.01, 0.3, 0.013])
     out = problem.evaluate_physical(design[None, :])
     assert out["converged"][0]
     action = problem.bounds.unscale(design, disk)
     scene = scene_of(problem.design_dict(action), problem.object_info())
     assert scene.disk.contour_stiffness_ratio == 2.5
-    res = envs.simulate(scene, design[4], 20)
+    res = envs.simulate(scene, design[4], 20, element="spring")
     np.testing.assert_allclose(res.jaw_angles_rad, out["jaw_angles_rad"][0], rtol=0, atol=1e-12)
     # and the plain disk would have given another grasp (the test can fail)
-    plain = envs.simulate(scene.with_changes(contour_stiffness_ratio=1.0), design[4], 20)
+    plain = envs.simulate(scene.with_changes(contour_stiffness_ratio=1.0), design[4], 20,
+        element="spring")
     assert abs(plain.jaw_angles_rad[0] - res.jaw_angles_rad[0]) > 1e-4

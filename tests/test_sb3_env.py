@@ -137,12 +137,12 @@ def test_terminal_observation_chains_over_steps(vec):
 def test_env_kwargs_reach_the_evaluation():
     weights = RewardWeights(contact=2.0)
     env = sb3_vec_env(3, seed=0, n_triangles=12, weights=weights,
-                      torsion_stiffness_nm_per_rad=0.1)
+                      torsion_stiffness_nm_per_rad=0.1, element="spring")
     env.reset()
     actions = actions_for(3)
     _, rewards, _, infos = env.step(actions)
     ref = reference(actions, [o[0] for o in single_env_objects(0, 3)], n_triangles=12,
-                    weights=weights, torsion_stiffness_nm_per_rad=0.1)
+                    weights=weights, torsion_stiffness_nm_per_rad=0.1, element="spring")
     assert [info["n_triangles"] for info in infos] == [12, 12, 12]
     np.testing.assert_array_equal(rewards, ref["reward"].astype(np.float32))
     assert env.get_attr("weights") == [weights] * 3
@@ -168,8 +168,8 @@ def test_set_options_apply_to_the_next_reset_only(vec):
 
 
 def test_attributes_methods_and_wrapping(vec):
-    assert vec.get_attr("n_triangles") == [20] * N_ENVS
-    assert vec.get_attr("n_triangles", indices=[1, 4]) == [20, 20]
+    assert vec.get_attr("n_triangles") == [40] * N_ENVS  # the default model's
+    assert vec.get_attr("n_triangles", indices=[1, 4]) == [40, 40]
     assert vec.has_attr("distribution") and not vec.has_attr("no_such_attribute")
     vec.set_attr("n_triangles", 16)
     vec.reset()

@@ -38,7 +38,7 @@ def test_free_closing_before_contact_is_exact():
     g = R070.gripper
     t_touch = g.torsion_stiffness_nm_per_rad * (g.rest_angle_rad - _contact_angle(R070, 20))
     for torque in (0.0, 0.3 * t_touch, 0.9 * t_touch):
-        res = simulate(R070, torque, 20)
+        res = simulate(R070, torque, 20, element="spring")
         assert res.converged, res.message
         expected = g.rest_angle_rad - torque / g.torsion_stiffness_nm_per_rad
         assert res.jaw_angles_rad == pytest.approx((expected, expected), abs=1e-12)
@@ -50,7 +50,7 @@ def test_grazing_contact_onset():
     theta_c = _contact_angle(R070, 20)
     t_touch = g.torsion_stiffness_nm_per_rad * (g.rest_angle_rad - theta_c)
     for factor in (1 - 1e-9, 1 + 1e-9, 1 + 1e-6):
-        res = simulate(R070, t_touch * factor, 20)
+        res = simulate(R070, t_touch * factor, 20, element="spring")
         assert res.converged, res.message
         assert res.jaw_angles_rad[0] == pytest.approx(theta_c, abs=1e-7)
 
@@ -66,7 +66,7 @@ def test_rigid_limit_flat_edge_contact_closed_form():
         theta) - r
     scene = Scene(g, replace(R070.disk, radius_m=r, distance_m=d1, youngs_modulus_pa=1e9))
     torque = 0.1
-    res = simulate(scene, torque, 20, phase_rad=math.radians(9.0))
+    res = simulate(scene, torque, 20, phase_rad=math.radians(9.0), element="spring")
     assert res.converged and res.stable, res.message
     assert res.jaw_angles_rad == pytest.approx((theta, theta), abs=1e-5)
     joint, axis, _ = finger_frame(g, 0, res.jaw_angles_rad[0])
@@ -80,7 +80,7 @@ def test_rigid_limit_flat_edge_contact_closed_form():
 
 
 def test_symmetric_mesh_gives_mirror_symmetric_grasp():
-    res = simulate(R070, 0.2, 20)
+    res = simulate(R070, 0.2, 20, element="spring")
     assert res.converged and res.stable
     assert res.jaw_angles_rad[0] == pytest.approx(res.jaw_angles_rad[1], abs=1e-10)
     mirrored = res.points_m * np.array([-1.0, 1.0])
@@ -92,7 +92,7 @@ def test_symmetric_mesh_gives_mirror_symmetric_grasp():
 
 def test_asymmetric_equilibrium_is_physical_and_its_mirror_too():
     # a squeezed octagon rotates about its pin; the mirror image is an equilibrium as well
-    res = simulate(R070, 0.2, 8)
+    res = simulate(R070, 0.2, 8, element="spring")
     assert res.converged and res.stable
     n = 8
     order = [(n - i) % n for i in range(n)]
@@ -108,7 +108,7 @@ def test_asymmetric_equilibrium_is_physical_and_its_mirror_too():
 
 
 def test_kkt_check_rejects_a_tampered_answer():
-    res = simulate(R070, 0.2, 20)
+    res = simulate(R070, 0.2, 20, element="spring")
     pts = res.points_m.copy()
     pts[12] += 1e-6
     bad = kkt_check(
@@ -120,8 +120,8 @@ def test_kkt_check_rejects_a_tampered_answer():
 
 def test_newton_agrees_with_slsqp_on_small_meshes():
     for n in (12, 20):
-        a = simulate(R070, 0.2, n)
-        b = simulate(R070, 0.2, n, "slsqp", time_limit_s=20)
+        a = simulate(R070, 0.2, n, element="spring")
+        b = simulate(R070, 0.2, n, "slsqp", time_limit_s=20, element="spring")
         assert a.converged
         assert a.jaw_angles_rad == pytest.approx(b.jaw_angles_rad, abs=1e-6)
         np.testing.assert_allclose(a.points_m, b.points_m, atol=1e-6 * 0.07)
@@ -148,7 +148,7 @@ def test_random_scenes_converge_and_pass_independent_check():
         except ValueError:
             continue
         n = int(rng.choice([12, 16, 20, 24, 32]))
-        res = simulate(scene, rng.uniform(0.01, 0.5), n)
+        res = simulate(scene, rng.uniform(0.01, 0.5), n, element="spring")
         if res.folded:
             # crushed so hard that fan triangles fold over: flagged, never passed off as a grasp
             assert not res.converged and "inverted" in res.message
@@ -173,7 +173,7 @@ def test_large_squeeze_until_the_fan_folds(name):
     scene = Scene.preset(name)
     reached = 0.0
     for t in np.geomspace(0.05, 20.0, 16):
-        res = simulate(scene, t, 20)
+        res = simulate(scene, t, 20, element="spring")
         if res.inverted_triangles:
             assert res.folded  # an equilibrium: the check passed
             assert not res.converged and "inverted" in res.message
@@ -189,11 +189,11 @@ def test_large_squeeze_until_the_fan_folds(name):
 
 def test_ramp_is_monotone_and_matches_single_solves():
     torques = np.linspace(0.0, 0.5, 11)
-    ramp = simulate_ramp(R070, torques, 20)
+    ramp = simulate_ramp(R070, torques, 20, element="spring")
     angles = [r.jaw_gap_angle_rad for r in ramp]
     assert all(r.converged for r in ramp)
     assert np.all(np.diff(angles) < 0)
-    single = simulate(R070, 0.5, 20)
+    single = simulate(R070, 0.5, 20, element="spring")
     assert ramp[-1].jaw_angles_rad == pytest.approx(single.jaw_angles_rad, abs=1e-9)
 
 
@@ -201,10 +201,10 @@ def test_jaw_angle_converges_in_n_at_a_fitted_rate():
     # a light grasp: fine fans fold over early (N = 320 near 0.1 N·m on this disk); the error
     # falls unevenly (which points touch changes with N), so the fit is over the whole range
     torque = 0.06
-    fine = simulate(R070, torque, 320)
+    fine = simulate(R070, torque, 320, element="spring")
     assert fine.converged, fine.message
     ns = np.array([20, 40, 80, 160])
-    runs = [simulate(R070, torque, int(n)) for n in ns]
+    runs = [simulate(R070, torque, int(n), element="spring") for n in ns]
     assert all(r.converged for r in runs), [r.message for r in runs]
     err = np.array([abs(r.jaw_gap_angle_rad - fine.jaw_gap_angle_rad) for r in runs])
     rate = -np.polyfit(np.log(ns), np.log(err), 1)[0]
@@ -228,7 +228,7 @@ def test_jaw_angle_converges_in_n_at_a_fitted_rate():
     ],
 )
 def test_bad_solver_input_raises(kwargs, match):
-    args = {"torque_nm": 0.2, "n_triangles": 20}
+    args = {"torque_nm": 0.2, "n_triangles": 20, "element": "spring"}
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         simulate(R070, **args)
@@ -237,16 +237,16 @@ def test_bad_solver_input_raises(kwargs, match):
 @pytest.mark.parametrize("scene", [None, "paper-r070", 3.0])
 def test_simulate_names_a_scene_that_is_not_one(scene):
     with pytest.raises(ValueError, match="scene must be an envs.Scene"):
-        simulate(scene, 0.2, 20)
+        simulate(scene, 0.2, 20, element="spring")
 
 
 def test_float32_and_numpy_scalars_give_the_python_float_answer():
     # the check once computed in the torque's dtype: float32 torques failed it
     torques = np.linspace(0.05, 0.5, 7, dtype=np.float32)
     for t in torques:
-        a = simulate(R070, float(t), np.int64(20))
-        b = simulate(R070, t, 20)
-        c = simulate(R070, np.float64(t), 20)
+        a = simulate(R070, float(t), np.int64(20), element="spring")
+        b = simulate(R070, t, 20, element="spring")
+        c = simulate(R070, np.float64(t), 20, element="spring")
         assert a.converged and b.converged and c.converged
         assert a.jaw_angles_rad == b.jaw_angles_rad == c.jaw_angles_rad
         assert a.kkt == b.kkt
@@ -254,14 +254,14 @@ def test_float32_and_numpy_scalars_give_the_python_float_answer():
 
 def test_ramp_until_a_strain_stops_at_the_first_step_that_reaches_it():
     torques = np.linspace(0.1, 2.0, 20)
-    full = simulate_ramp(R070, torques, 20)
+    full = simulate_ramp(R070, torques, 20, element="spring")
     strains = [r.peak_strain for r in full]
     first = next(i for i, s in enumerate(strains) if s >= 0.1)
-    cut = simulate_ramp(R070, torques, 20, until_peak_strain=0.1)
+    cut = simulate_ramp(R070, torques, 20, until_peak_strain=0.1, element="spring")
     assert len(cut) == first + 1 < len(full)
     assert cut[-1].jaw_angles_rad == pytest.approx(full[first].jaw_angles_rad, abs=1e-12)
     with pytest.raises(ValueError, match="until_peak_strain"):
-        simulate_ramp(R070, torques, 20, until_peak_strain=0.0)
+        simulate_ramp(R070, torques, 20, until_peak_strain=0.0, element="spring")
 
 
 def test_ramp_rejects_decreasing_torques():
@@ -270,13 +270,13 @@ def test_ramp_rejects_decreasing_torques():
 
 
 def test_nelder_mead_baseline_reports_failure_honestly():
-    res = simulate(R070, 0.2, 8, "nelder-mead", time_limit_s=0.5)
+    res = simulate(R070, 0.2, 8, "nelder-mead", time_limit_s=0.5, element="spring")
     assert not res.converged and res.message
 
 
 def test_tip_corner_indentation_converges():
     # the tip corners bite into the contour between two points and press on whole edges
-    res = simulate(Scene.preset("forceps-f"), 0.01, 20)
+    res = simulate(Scene.preset("forceps-f"), 0.01, 20, element="spring")
     assert res.converged, res.message
     assert res.kkt.passed and res.kkt.max_penetration_m <= 1e-9 * 0.003
     assert res.corner_forces_n[:, 0].min() > 0  # both tip corners loaded
@@ -284,7 +284,7 @@ def test_tip_corner_indentation_converges():
 
 def test_light_tip_corner_contact_converges():
     # the disk lies beyond the finger tips: only the tip corners touch it
-    res = simulate(Scene.preset("forceps-f"), 0.005, 20)
+    res = simulate(Scene.preset("forceps-f"), 0.005, 20, element="spring")
     assert res.converged, res.message
     assert res.n_contacts == (0, 0) and min(res.corner_forces_n[:, 0]) > 0
 
@@ -297,7 +297,7 @@ def test_tip_corner_meeting_an_edge_outside_its_swept_band_converges():
                 rest_angle_rad=0.5286745051921705, joint_offset_m=0.031435695473990236,
                 finger_width_m=0.010201435557562994)
     scene = Scene(g, replace(R070.disk, distance_m=0.02967286960585693))
-    res = simulate(scene, 0.08342271429130343, 20)
+    res = simulate(scene, 0.08342271429130343, 20, element="spring")
     assert res.converged, res.message
     assert res.kkt.passed and res.kkt.max_penetration_m <= 1e-9 * 0.07
     assert res.corner_forces_n[:, 0].min() > 0.05  # both tip corners carry load
@@ -307,7 +307,7 @@ def test_tip_corner_meeting_an_edge_outside_its_swept_band_converges():
 def test_light_squeeze_of_a_fine_polygon_converges():
     # at light load a fine polygon turns almost freely about its pin; the contact polish used
     # to throw it around (plain Newton steps) and cycle between two contact sets
-    res = simulate(R070, 0.017944253018577248, 100)
+    res = simulate(R070, 0.017944253018577248, 100, element="spring")
     assert res.converged, res.message
     assert res.kkt.passed and res.kkt.force_residual_rel < 1e-8
     assert min(res.n_contacts) >= 1
@@ -317,7 +317,7 @@ def test_light_squeeze_of_a_fine_polygon_converges():
 def test_a_fold_is_reported_only_for_a_checked_equilibrium(name, torque, n):
     # crushed past the fold: the answer is either a folded equilibrium the independent check
     # confirms, or a failure saying so; never "equilibrium with inverted triangles" unchecked
-    res = simulate(Scene.preset(name), torque, n)
+    res = simulate(Scene.preset(name), torque, n, element="spring")
     assert not res.converged
     assert res.inverted_triangles > 0
     assert res.folded == ("inverted (folded)" in res.message)
@@ -328,7 +328,7 @@ def test_a_checked_fold_is_reported_as_a_fold_whatever_the_solver_claimed():
     # the solver's own claim does not decide the message: a folded state the independent check
     # confirms as an equilibrium is a fold, a state it rejects is not
     scene = Scene.preset("paper-r070")
-    res = simulate(scene, 1.6, 20)
+    res = simulate(scene, 1.6, 20, element="spring")
     assert res.folded
     n = res.n_triangles
     r = scene.disk.radius_m
@@ -362,9 +362,10 @@ def test_the_area_energy_keeps_the_fan_from_folding():
     # energy of the model family every step converges, checked, past 40 % strain, and every
     # triangle keeps a positive area
     torques = np.geomspace(0.05, 5.0, 24)
-    plain = simulate_ramp(R070, torques, 40)
+    plain = simulate_ramp(R070, torques, 40, element="spring")
     assert any(r.folded for r in plain)
-    guarded = simulate_ramp(R070.with_changes(area_stiffness_scale=0.01), torques, 40)
+    guarded = simulate_ramp(R070.with_changes(area_stiffness_scale=0.01), torques, 40,
+        element="spring")
     assert all(r.converged for r in guarded), [r.message for r in guarded if not r.converged]
     assert max(r.peak_strain for r in guarded) > 0.4
     for r in guarded:
@@ -378,8 +379,8 @@ def test_area_energy_changes_the_answer_and_the_check_sees_its_forces():
     # the check includes the area forces: the guarded answer passes it, and the same state
     # judged as the springs-only model (no area forces) does not
     scene = R070.with_changes(area_stiffness_scale=1.0)
-    res = simulate(scene, 1.0, 20)
-    plain = simulate(R070, 1.0, 20)
+    res = simulate(scene, 1.0, 20, element="spring")
+    plain = simulate(R070, 1.0, 20, element="spring")
     assert res.converged and plain.converged
     assert abs(res.jaw_angles_rad[0] - plain.jaw_angles_rad[0]) > 1e-3
     args = (1.0, 20, "van_gelder", res.points_m, res.jaw_angles_rad, res.contact_forces_n,
@@ -393,7 +394,7 @@ def test_energy_of_a_result_is_the_model_energy_in_joules(area_scale):
     from envs.model.stiffness import disk_spring_stiffness
 
     scene = R070.with_changes(area_stiffness_scale=area_scale)
-    res = simulate(scene, 0.3, 20)
+    res = simulate(scene, 0.3, 20, element="spring")
     d, g = scene.disk, scene.gripper
     k_int, k_ext = disk_spring_stiffness(d, 20)
     q = res.points_m - d.center_m

@@ -123,7 +123,7 @@ def psm_curve(
     order = np.argsort(torques, kind="stable")
     t0 = time.perf_counter()
     raw = simulate_ramp(scene, torques[order], n_triangles, method,
-                        stiffness_rule=stiffness_rule, time_limit_s=time_limit_s)
+                        stiffness_rule=stiffness_rule, time_limit_s=time_limit_s, element="spring")
     res: list[GraspResult] = [None] * len(torques)  # type: ignore[list-item]
     for k, i in enumerate(order):
         res[i] = raw[k]
@@ -134,7 +134,8 @@ def psm_curve(
                 continue
             for f in RETRY_FACTORS:
                 alt = simulate(scene, float(torques[i] * f), n_triangles, method,
-                               stiffness_rule=stiffness_rule, time_limit_s=time_limit_s)
+                               stiffness_rule=stiffness_rule, time_limit_s=time_limit_s,
+                                   element="spring")
                 if alt.converged:
                     res[i], retried[i] = alt, f
                     break

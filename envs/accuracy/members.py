@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..model.family import cst_disk, hybrid_disk
+from ..model.family import calibrated_disk, calibration_scale, hybrid_disk
 from ..scene import Scene
 from ..solver.simulate import simulate_ramp
 from ..validation import check_integer, check_range
@@ -41,11 +41,11 @@ class Member:
     scales
         ``"disk"``: the disk's own ``stiffness_scale`` and ``area_stiffness_scale`` (the
         paper's model for a preset); ``"hybrid"``: the spring member's scales derived from E
-        and nu (:func:`envs.model.family.hybrid_scales`); ``"calibrated"``: the constant-strain
-        member's shipped scale (:data:`envs.model.family.CST_SCALES`).
+        and nu (:func:`envs.model.family.hybrid_scales`); ``"calibrated"``: the member's
+        shipped scale (:func:`envs.model.family.calibration_scale`) times the disk's own.
     element
-        ``"spring"`` (springs and the area energy) or ``"cst"`` (constant-strain neo-Hookean
-        triangles).
+        ``"spring"`` (springs and the area energy), ``"cst"`` (constant-strain neo-Hookean
+        triangles) or ``"nhquad"`` (their deviatoric part, a volumetric term per quad).
     """
 
     n_triangles: int
@@ -59,17 +59,23 @@ class Member:
         if self.scales not in ("disk", "hybrid", "calibrated"):
             raise ValueError(f"scales must be 'disk', 'hybrid' or 'calibrated', got "
                              f"{self.scales!r}")
-        if self.element not in ("spring", "cst"):
-            raise ValueError(f"element must be 'spring' or 'cst', got {self.element!r}")
+        if self.element not in ("spring", "cst", "nhquad"):
+            raise ValueError(f"element must be 'spring', 'cst' or 'nhquad', got "
+                             f"{self.element!r}")
+        if self.element == "nhquad" and self.n_rings < 2:
+            raise ValueError(f"n_rings must be 2 to 16 for element 'nhquad', got "
+                             f"{self.n_rings}")
         if self.scales == "calibrated":
-            cst_disk(Scene.preset("paper-r070").disk, self.n_triangles, self.n_rings)
+            calibration_scale(self.n_triangles, self.n_rings, self.element)
 
     def scene(self, scene: Scene) -> Scene:
-        """The scene as this member models it (its disk's scales set)."""
+        """The scene as this member models it (its disk's scales set): solve it with
+        ``calibrated=False``, the member's scale is already on the disk."""
         if self.scales == "hybrid":
             return replace(scene, disk=hybrid_disk(scene.disk))
         if self.scales == "calibrated":
-            return replace(scene, disk=cst_disk(scene.disk, self.n_triangles, self.n_rings))
+            return replace(scene, disk=calibrated_disk(scene.disk, self.n_triangles,
+                                                       self.n_rings, self.element))
         return scene
 
     @property
@@ -80,8 +86,11 @@ class Member:
 #: Candidates of :func:`choose_model`, roughly by cost.
 DEFAULT_MEMBERS = (
     Member(20, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"), Member(24, 4, "hybrid"),
-    Member(20, 3, "calibrated", "cst"), Member(24, 4, "calibrated", "cst"),
-    Member(32, 6, "calibrated", "cst"), Member(48, 8, "calibrated", "cst"),
+    Member(20, 3, "calibrated", "cst"), Member(32, 2, "calibrated", "nhquad"),
+    Member(40, 2, "calibrated", "nhquad"), Member(24, 4, "calibrated", "cst"),
+    Member(48, 3, "calibrated", "nhquad"), Member(56, 4, "calibrated", "nhquad"),
+    Member(32, 6, "calibrated", "cst"), Member(80, 6, "calibrated", "nhquad"),
+    Member(48, 8, "calibrated", "cst"),
 )
 
 
@@ -131,7 +140,8 @@ def _row(scene: Scene, ref: ReferenceCurve, member: Member, tolerance: float) ->
 
     t0 = time.perf_counter()
     out = simulate_ramp(member.scene(scene), list(ref.torques_nm), member.n_triangles,
-                        n_rings=member.n_rings, element=member.element)
+                        n_rings=member.n_rings, element=member.element,
+                        calibrated=False)
     wall = (time.perf_counter() - t0) / len(out)
     failed = sum(not r.converged for r in out)
     th0 = scene.gripper.rest_angle_rad

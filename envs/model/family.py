@@ -21,16 +21,101 @@ The constant-strain neo-Hookean member (``element="cst"``) has the material's ow
 needs one scale only: linear triangles of a nearly incompressible material lock (are too
 stiff) on coarse meshes. :data:`CST_SCALES` ships that scale per member, fitted once against
 the FEM (:func:`cst_disk` applies it).
+
+The nh-quad member (``element="nhquad"``) moves the volumetric term from the triangles to the
+quads, which removes the locking; what is left is the stiffness of linear triangles in bending
+of a coarse ring layer, which depends on the ring count M, not on N or nu (measured): one
+scale per M, :data:`NHQUAD_SCALES`, below 1 and rising towards 1 as the rings refine.
+
+A shipped scale multiplies the disk's own ``stiffness_scale``: that field stays the user's
+material calibration (1 for the paper disks, 0.033 for the paper's TPU forceps), the member's
+scale corrects the discretization (:func:`calibration_scale`, :func:`calibrated_disk`).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
-from ..validation import check_range
+from ..validation import check_choice, check_integer, check_n_triangles, check_range
+from .defaults import (
+    DEFAULT_ELEMENT,
+    DEFAULT_MODEL_N_TRIANGLES,
+    DEFAULT_MODEL_RINGS,
+    MAX_TRIANGLES_FAMILY,
+    MIN_TRIANGLES,
+    PAPER_N_TRIANGLES,
+)
 from .energy import lame_per_e
+from .rings import MAX_RINGS
 
-__all__ = ["CAUCHY_SHEAR_PER_E", "CST_SCALES", "hybrid_scales", "hybrid_disk", "cst_disk"]
+__all__ = ["CAUCHY_SHEAR_PER_E", "CST_SCALES", "NHQUAD_SCALES", "hybrid_scales", "hybrid_disk",
+           "cst_disk", "calibration_scale", "calibrated_disk", "ModelSpec", "resolve_model",
+           "ELEMENTS"]
+
+#: Element energies of the model family: springs (and the area energy), the constant-strain
+#: neo-Hookean triangle, or nh-quad (those triangles' deviatoric part and a volumetric term
+#: per quad, :mod:`envs.model.energy`).
+ELEMENTS = ("spring", "cst", "nhquad")
+
+
+class ModelSpec(NamedTuple):
+    """A validated member of the model family: contour points ``N``, rings ``M``, element and
+    the factor on the disk's ``stiffness_scale`` (the member's shipped calibration, or 1)."""
+
+    n_triangles: int
+    n_rings: int
+    element: str
+    scale: float
+
+    def kwargs(self) -> dict:
+        """Keyword arguments that select this member in :func:`envs.simulate` and
+        :func:`envs.evaluate_designs`."""
+        return {"n_triangles": self.n_triangles, "n_rings": self.n_rings,
+                "element": self.element, "calibrated": self.scale != 1.0}
+
+
+def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
+                  calibrated=None) -> ModelSpec:
+    """Validate a member of the family, with the defaults filled in.
+
+    Parameters
+    ----------
+    n_triangles
+        Contour points ``N``: 4 to ``MAX_TRIANGLES`` = 500 for the springs-only fan (it stops
+        converging reliably beyond), to ``MAX_TRIANGLES_FAMILY`` = 2000 otherwise. ``None``:
+        40 for ``"nhquad"`` (the default model), the paper's 20 otherwise.
+    n_rings
+        Rings ``M``, 1 to 16 (2 to 16 for ``"nhquad"``). ``None``: 2 for ``"nhquad"``, 1 (the
+        paper's fan) otherwise.
+    element
+        One of :data:`ELEMENTS`; default ``"nhquad"`` (the default model); ``"spring"`` with
+        the other defaults is the paper's fan.
+    calibrated
+        ``None`` (default): the member's shipped scale where it has one
+        (:func:`calibration_scale`), else 1; ``True``: the shipped scale, a ValueError if
+        there is none; ``False``: 1 (the member as is, e.g. to reproduce the paper).
+    """
+    element = check_choice("element", element, ELEMENTS)
+    quad = element == "nhquad"
+    m = (DEFAULT_MODEL_RINGS if quad else 1) if n_rings is None else check_integer(
+        "n_rings", n_rings, 2 if quad else 1, MAX_RINGS)
+    if n_triangles is None:
+        n = DEFAULT_MODEL_N_TRIANGLES if quad else PAPER_N_TRIANGLES
+    elif m == 1 and element == "spring":
+        n = check_n_triangles(n_triangles)
+    else:
+        n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY)
+    if calibrated is None:
+        try:
+            scale = calibration_scale(n, m, element)
+        except ValueError:
+            scale = 1.0
+    elif isinstance(calibrated, bool):
+        scale = calibration_scale(n, m, element) if calibrated else 1.0
+    else:
+        raise ValueError(f"calibrated must be None, True or False, got {calibrated!r}")
+    return ModelSpec(n, m, element, scale)
 
 #: Plane shear (and Lame) modulus of the equilateral area-rule spring lattice, per ``s E``.
 CAUCHY_SHEAR_PER_E = 3.0 / 8.0
@@ -80,12 +165,54 @@ CST_SCALES = {
 }
 
 
+#: Calibration scale of the nh-quad members by ring count ``M -> (s, fitted over N, RMS on the
+#: paper disks, worst held-out disk RMS, largest held-out error)`` (errors in %, at the middle
+#: N of the fit). Provenance: ``scripts/calibrate_family.py --element nhquad`` (2026-11-24):
+#: least squares of the relative closing-angle error against the FEM (P2, r/12, plane strain)
+#: on the three paper disks over 0.05-0.5 N·m and the listed N at once; held out: r = 0.06 and
+#: 0.085 m, E = 50 and 300 kPa, nu = 0.30 (r = 0.07 m) and nu = 0.40 (r = 0.05 m), never fitted.
+#: The scale rises towards 1 and the error falls as the rings refine (the FEM is the limit).
+NHQUAD_SCALES = {
+    2: (0.8389, (32, 40, 48), 0.92, 1.49, 2.87),
+    3: (0.9046, (40, 48, 56), 0.78, 0.92, 2.36),
+    4: (0.9348, (48, 56, 64), 0.38, 0.63, 1.31),
+    6: (0.9642, (64, 80, 96), 0.35, 0.54, 1.48),
+}
+
+
+def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
+    """The shipped discretization scale of a member of the family.
+
+    Raises
+    ------
+    ValueError
+        For a member without one (the springs' members have the physics-derived
+        :func:`hybrid_scales` or the disk's own scale instead), naming what is shipped.
+    """
+    n, m = int(n_triangles), int(n_rings)
+    if element == "nhquad":
+        if m not in NHQUAD_SCALES:
+            raise ValueError(f"n_rings = {m} has no shipped nh-quad calibration; one of "
+                             f"{sorted(NHQUAD_SCALES)} (or fit one with "
+                             "scripts/calibrate_family.py)")
+        return NHQUAD_SCALES[m][0]
+    if element == "cst":
+        if (n, m) not in CST_SCALES:
+            raise ValueError(f"(n_triangles, n_rings) = {(n, m)} has no shipped calibration; "
+                             f"one of {sorted(CST_SCALES)} (or fit one with "
+                             "scripts/calibrate_family.py)")
+        return CST_SCALES[(n, m)][0]
+    raise ValueError(f"element {element!r} has no shipped calibration (only 'nhquad' and "
+                     "'cst'; the spring members take hybrid_scales)")
+
+
+def calibrated_disk(disk, n_triangles: int, n_rings: int, element: str):
+    """``disk`` as the calibrated member models it: its ``stiffness_scale`` times the member's
+    :func:`calibration_scale`."""
+    return replace(disk, stiffness_scale=disk.stiffness_scale
+                   * calibration_scale(n_triangles, n_rings, element))
+
+
 def cst_disk(disk, n_triangles: int, n_rings: int):
-    """``disk`` with the shipped calibration scale of the constant-strain member ``(N, M)``
-    (:data:`CST_SCALES`) as its ``stiffness_scale`` (its area scale is not used by that
-    member). Raises ValueError for a member without a shipped scale."""
-    key = (int(n_triangles), int(n_rings))
-    if key not in CST_SCALES:
-        raise ValueError(f"(n_triangles, n_rings) = {key} has no shipped calibration; one of "
-                         f"{sorted(CST_SCALES)} (or fit one with scripts/calibrate_family.py)")
-    return replace(disk, stiffness_scale=CST_SCALES[key][0])
+    """:func:`calibrated_disk` of the constant-strain member ``(N, M)``."""
+    return calibrated_disk(disk, n_triangles, n_rings, "cst")

@@ -19,6 +19,7 @@ from numba import njit
 
 from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
 from .energy import bulk_modulus_2d, lame_per_e
+from .family import ELEMENTS
 from .geometry import bar_distance, closed_angle_of, rest_points_into
 from .layout import (
     N_KERNEL_PARAMS,
@@ -258,10 +259,6 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
     return prm
 
 
-#: Element energies of the model family: springs (and the area energy), the constant-strain
-#: neo-Hookean triangle, or nh-quad (those triangles' deviatoric part and a volumetric term
-#: per quad, :mod:`envs.model.energy`).
-ELEMENTS = ("spring", "cst", "nhquad")
 
 
 @functools.lru_cache(maxsize=256)

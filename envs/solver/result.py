@@ -72,6 +72,11 @@ class GraspResult:
         has folded.
     n_rings : int
         Rings ``M`` of the point mesh (1: the paper's fan).
+    element : str
+        Element energy of the member solved (``"spring"``, ``"cst"`` or ``"nhquad"``).
+    model_scale : float
+        Factor the member's shipped calibration put on the disk's ``stiffness_scale`` (1:
+        none).
     interior_points_m : numpy.ndarray
         Interior points of a ring mesh, ``((M - 1) N, 2)``, ring by ring from the hub out
         (empty for the fan) [m].
@@ -108,6 +113,8 @@ class GraspResult:
     inverted_triangles: int = 0
     peak_log_strain: float = math.nan
     n_rings: int = 1
+    element: str = "spring"
+    model_scale: float = 1.0
     interior_points_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
@@ -154,6 +161,8 @@ class GraspResult:
             "torque_nm": self.torque_nm,
             "n_triangles": self.n_triangles,
             "n_rings": self.n_rings,
+            "element": self.element,
+            "model_scale": self.model_scale,
             "jaw_angles_rad": list(self.jaw_angles_rad),
             "peak_strain": self.peak_strain,
             "peak_log_strain": self.peak_log_strain,
