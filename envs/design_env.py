@@ -306,9 +306,11 @@ class GripperDesignEnv(gym.Env):
     - w_gap g / (1 + g) - [invalid] (w_invalid + w_violation v / (1 + v))
     - w_fail [not converged]*
 
-    - `c`: contact score, `(contacts on the right face + contacts on the left face) / N`, the
-      fraction of the contour in contact, nearly independent of `N`
-      (`w_contact = 1`, `c_max = 0.5`);
+    - `c`: contact score, `s (contacts on the right face + contacts on the left face) / N`,
+      the fraction of the contour in contact, nearly independent of `N`, times the grip share
+      `s`: the part of the actuation torque that grips the object, not taken by the torsion
+      springs or the joint stops (0 for fingers that merely touch it) (`w_contact = 1`,
+      `c_max = 0.5`);
     - `eps`: peak spring strain, `eps_max` the object's strain limit (`w_deform = 0.25`,
       `q_max = 4`);
     - `m`: number of fingers that do not touch the disk (`w_miss = 0.5`);

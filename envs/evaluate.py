@@ -84,6 +84,7 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
     "touching": (np.bool_, (2,)),
     "total_force_n": (np.float64, (2,)),
     "contact_score": (np.float64, ()),
+    "grip_share": (np.float64, ()),
     "peak_strain": (np.float64, ()),
     "peak_log_strain": (np.float64, ()),
     "max_displacement_ratio": (np.float64, ()),
@@ -359,17 +360,40 @@ def _empty_output(batch: int) -> dict[str, np.ndarray]:
     return {k: np.zeros((batch, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
 
 
-def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int) -> None:
+def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: np.ndarray
+               ) -> np.ndarray:
+    """Share of the actuation torque that grips the object, the smaller of the two fingers',
+    in [0, 1], shape (B,).
+
+    By a finger's moment balance the object receives ``T_a - k_f (theta_a0 - theta) - M_stop``:
+    what the torsion spring and the joint stop take does not grip. A design that tunes the
+    torque so that the spring stops the fingers just at the object (contact forces of 1e-7 N)
+    or that closes the jaws on their stops has a share near 0 (CMA-ES found such designs when
+    contact was counted by force > 0 alone); a squeeze with little travel keeps nearly all.
+    """
+    torque = cols.torque_nm[:, None]
+    grip = (torque - cols.torsion_stiffness_nm_per_rad[:, None]
+            * (cols.rest_angle_rad[:, None] - jaw_angles_rad) - stop_torques_nm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(torque > 0.0, grip / torque, 0.0)
+    return np.clip(share, 0.0, 1.0).min(axis=1)
+
+
+def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int,
+                cols: SceneColumns) -> None:
     """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
     what happened)."""
     n_contacts = np.count_nonzero(sol.face_forces_n > 0.0, axis=2).astype(np.int64)
     corner = sol.corner_totals_n.sum(axis=2)
+    grip = grip_share(cols, sol.jaw_angles_rad, sol.stop_torques_nm)
     metrics = {
         "jaw_angles_rad": sol.jaw_angles_rad,
         "n_contacts": n_contacts,
         "touching": (n_contacts > 0) | (corner > 0.0),
         "total_force_n": sol.face_forces_n.sum(axis=2) + corner,
-        "contact_score": n_contacts.sum(axis=1) / n,
+        # the fraction of the contour in contact, as far as the grip is carried by the object
+        "contact_score": grip * n_contacts.sum(axis=1) / n,
+        "grip_share": grip,
         "peak_strain": sol.peak_strain,
         "peak_log_strain": sol.peak_log_strain,
         "max_displacement_ratio": sol.max_displacement_ratio,
@@ -464,9 +488,10 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
                                                   where=finite)
     for n in np.unique(n_tri[valid]).tolist():
         rows = np.flatnonzero(valid & (n_tri == n))
-        sol = solve_columns(cols.take(rows), n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
+        group = cols.take(rows)
+        sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
                             element=element)
-        _fill_group(out, rows, sol, n)
+        _fill_group(out, rows, sol, n, group)
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
     if rows.size:
@@ -590,9 +615,13 @@ def evaluate_designs(
         - ``n_contacts`` (B, 2): contour points pressed by each face (positive force).
         - ``touching`` (B, 2): each finger touches the disk (face or corner contact).
         - ``total_force_n`` (B, 2): normal force of each finger on the disk [N].
-        - ``contact_score``: ``(n_contacts_right + n_contacts_left) / N``, the fraction of the
-          contour in contact (each point stands for an arc ``2 pi r / N``), so it barely
-          depends on N.
+        - ``contact_score``: ``grip_share (n_contacts_right + n_contacts_left) / N``, the
+          fraction of the contour in contact (each point stands for an arc ``2 pi r / N``, so
+          it barely depends on N) as far as the actuation grips the object.
+        - ``grip_share``: the share of the actuation torque that grips the object (not taken
+          by the torsion springs or the joint stops), the smaller finger's (:func:`grip_share`):
+          near 1 for a squeeze with little travel, 0 for fingers that merely touch the object
+          (such a design once scored contact with forces of 1e-7 N).
         - ``peak_strain``: max ``|L - L0| / L0`` over radial and contour springs [-].
         - ``peak_log_strain``: largest principal logarithmic strain ``max |ln lambda|`` over
           the fan triangles [-], the FEM reference's measure.

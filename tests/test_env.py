@@ -74,7 +74,7 @@ def test_outputs_have_documented_keys_shapes_and_paper_values():
         assert out[key].dtype == dtype, key
     assert out["converged"].all() and out["valid_at_rest"].all()
     np.testing.assert_array_equal(out["n_contacts"], [[3, 3], [3, 3]])
-    np.testing.assert_allclose(out["contact_score"], 0.3)
+    np.testing.assert_allclose(out["contact_score"], 0.3 * out["grip_share"])
     total = (out["reward_contact"] + out["reward_deform"] + out["penalty_miss"]
              + out["penalty_gap"] + out["penalty_invalid"] + out["penalty_fail"])
     np.testing.assert_array_equal(out["reward"], total)
@@ -543,3 +543,21 @@ def test_envs_check_the_mesh_size_at_construction(value, match):
         GripperDesignVectorEnv(2, n_triangles=value, element="spring")
     with pytest.raises(ValueError, match="weights must be None or a RewardWeights"):
         GripperDesignEnv(weights={"contact": 1.0})
+
+
+def test_fingers_that_merely_touch_score_no_contact():
+    """A torque tuned so that the torsion springs stop the fingers just at the object (contact
+    forces ~1e-7 N; CMA-ES found this design when contact was counted by force > 0 alone): the
+    grip share is ~0 and so is the contact score; a squeeze keeps most of its torque."""
+    touch = np.array([[0.4563, math.radians(28.01), 0.0031, 0.0076, 0.0185, 0.2323]])
+    out = evaluate_designs(touch, DISK)
+    assert out["converged"][0] and out["touching"][0].all()
+    assert out["n_contacts"][0].sum() > 0 and out["total_force_n"][0].max() < 1e-3
+    assert out["grip_share"][0] < 1e-3 and out["contact_score"][0] < 1e-4
+    squeeze = evaluate_designs(paper_designs([0.2]), DISK)
+    theta = squeeze["jaw_angles_rad"][0]
+    spring = 0.073 * (GRIPPER.rest_angle_rad - theta)  # no stop: the rest grips
+    assert squeeze["grip_share"][0] == pytest.approx(np.min(1 - spring / 0.2), rel=1e-12)
+    assert 0.5 < squeeze["grip_share"][0] < 1.0
+    assert squeeze["contact_score"][0] == pytest.approx(
+        squeeze["grip_share"][0] * squeeze["n_contacts"][0].sum() / 40, rel=1e-12)
