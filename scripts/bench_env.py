@@ -39,22 +39,21 @@ def paper_disk() -> SoftDisk:
     return PRESETS["paper-r070"][1]
 
 
-def warm_up(n_triangles: int) -> None:
+def warm_up(model: dict) -> None:
     """Compile (or load from the cache) every kernel the timed code uses."""
     g, disk = PRESETS["paper-r070"]
     row = [g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m, 0.2,
            disk.distance_m]
-    evaluate_designs(np.array([row]), disk, n_triangles=n_triangles, element="spring")  # solve_one
-    evaluate_designs(np.array([row, row]), disk, n_triangles=n_triangles,
-        element="spring")  # solve_batch
-    env = GripperDesignEnv(n_triangles=n_triangles, element="spring")
+    evaluate_designs(np.array([row]), disk, **model)  # solve_one
+    evaluate_designs(np.array([row, row]), disk, **model)  # solve_batch
+    env = GripperDesignEnv(**model)
     env.reset(seed=0)
     env.step(np.zeros(6))
 
 
-def bench_step_loop(n_steps: int, n_triangles: int, seed: int) -> dict:
+def bench_step_loop(n_steps: int, model: dict, seed: int) -> dict:
     """``reset`` + ``step`` with a random action, ``n_steps`` times."""
-    env = GripperDesignEnv(n_triangles=n_triangles, element="spring")
+    env = GripperDesignEnv(**model)
     env.action_space.seed(seed)
     actions = [env.action_space.sample() for _ in range(n_steps)]
     valid = converged = 0
@@ -74,11 +73,11 @@ def bench_step_loop(n_steps: int, n_triangles: int, seed: int) -> dict:
     }
 
 
-def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
+def bench_batch(batch: int, model: dict, seed: int) -> dict:
     """One ``evaluate_designs`` call on ``batch`` random designs."""
     designs = DesignBounds().sample(np.random.default_rng(seed), batch, paper_disk())
     t0 = time.perf_counter()
-    out = evaluate_designs(designs, paper_disk(), n_triangles=n_triangles, element="spring")
+    out = evaluate_designs(designs, paper_disk(), **model)
     elapsed = time.perf_counter() - t0
     valid = out["valid_at_rest"]
     solved = int(valid.sum())
@@ -101,7 +100,7 @@ def bench_batch(batch: int, n_triangles: int, seed: int) -> dict:
     }
 
 
-def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict | None:
+def bench_sb3(num_envs: int, n_steps: int, model: dict, seed: int) -> dict | None:
     """``n_steps`` steps of random actions through ``sb3_vec_env(num_envs)``, after a warm step.
 
     Returns None if stable-baselines3 is not installed.
@@ -109,8 +108,8 @@ def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict 
     try:
         from envs.sb3_env import sb3_vec_env
 
-        env = sb3_vec_env(num_envs, seed=seed, n_triangles=n_triangles,
-                          distribution=paper_distribution(), element="spring")
+        env = sb3_vec_env(num_envs, seed=seed, distribution=paper_distribution(),
+                          **model)
     except ImportError:
         return None
     actions = np.random.default_rng(seed).uniform(
@@ -135,7 +134,7 @@ def bench_sb3(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict 
     }
 
 
-def bench_make_vec(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> dict:
+def bench_make_vec(num_envs: int, n_steps: int, model: dict, seed: int) -> dict:
     """``n_steps`` steps of ``gymnasium.make_vec(ENV_ID, num_envs, "vector_entry_point",
     autoreset_mode=SAME_STEP)``: every step evaluates every sub-env's design."""
     import gymnasium as gym
@@ -144,7 +143,7 @@ def bench_make_vec(num_envs: int, n_steps: int, n_triangles: int, seed: int) -> 
     import envs
 
     vec = gym.make_vec(envs.ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point",
-                       autoreset_mode=AutoresetMode.SAME_STEP, n_triangles=n_triangles,
+                       autoreset_mode=AutoresetMode.SAME_STEP, **model,
                        distribution=paper_distribution())
     actions = np.random.default_rng(seed).uniform(
         -1.0, 1.0, size=(n_steps, num_envs, 6)).astype(np.float32)
@@ -177,22 +176,30 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--sb3-envs", type=int, default=256,
                         help="sub-envs of the stable-baselines3 VecEnv")
     parser.add_argument("--sb3-steps", type=int, default=40, help="its timed steps")
-    parser.add_argument("--n-triangles", type=int, default=20)
+    parser.add_argument("--n-triangles", type=int, default=None,
+                        help="contour points N (default: 20 for the fan, 40 for nhquad)")
+    parser.add_argument("--element", default="spring", choices=("spring", "nhquad", "cst"),
+                        help="spring: the paper's fan (default, the issue's N = 20 target); "
+                        "nhquad: the default model")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args(argv)
+    from envs.model.family import resolve_model
+
+    spec = resolve_model(args.n_triangles, None, args.element)
+    model = spec.kwargs()
 
     t0 = time.perf_counter()
-    warm_up(args.n_triangles)
+    warm_up(model)
     warm_s = time.perf_counter() - t0
-    loop = bench_step_loop(args.steps, args.n_triangles, args.seed)
-    batches = [bench_batch(b, args.n_triangles, args.seed) for b in args.batch_sizes]
-    sb3 = bench_sb3(args.sb3_envs, args.sb3_steps, args.n_triangles, args.seed)
-    mvec = bench_make_vec(args.sb3_envs, args.sb3_steps, args.n_triangles, args.seed)
+    loop = bench_step_loop(args.steps, model, args.seed)
+    batches = [bench_batch(b, model, args.seed) for b in args.batch_sizes]
+    sb3 = bench_sb3(args.sb3_envs, args.sb3_steps, model, args.seed)
+    mvec = bench_make_vec(args.sb3_envs, args.sb3_steps, model, args.seed)
     best = max(batches, key=lambda r: r["designs_per_s"])
     ratio = best["designs_per_s"] / loop["steps_per_s"]
     report = {
-        "n_triangles": args.n_triangles,
+        **model,
         "disk": "paper-r070",
         "numba_threads": numba.get_num_threads(),
         "numba_threading_layer": numba.threading_layer(),
@@ -211,11 +218,12 @@ def main(argv: list[str] | None = None) -> dict:
         },
     }
     args.out.mkdir(parents=True, exist_ok=True)
-    path = args.out / "bench_env.json"
+    path = args.out / ("bench_env.json" if spec.element == "spring"
+                       else f"bench_env_{spec.element}.json")
     path.write_text(json.dumps(report, indent=2))
 
     print(f"numba threads: {report['numba_threads']} ({report['numba_threading_layer']}), "
-          f"N = {args.n_triangles}, warm-up {warm_s:.1f} s")
+          f"{spec.element} N = {spec.n_triangles}, M = {spec.n_rings}, warm-up {warm_s:.1f} s")
     print(f"step loop (reset + step): {loop['steps_per_s']:9.1f} steps/s   "
           f"valid {loop['valid_fraction']:.2f}, converged "
           f"{loop['converged_fraction_of_valid']:.3f} of valid")

@@ -43,16 +43,18 @@ def _median_ms(fn, repeats: int) -> tuple[float, object]:
     return 1e3 * statistics.median(times), last
 
 
-def user_speed(scene, repeats: int) -> dict:
+def user_speed(scene, repeats: int, model: dict | None = None) -> dict:
     """Wall time as a user sees it beside the compiled solve, measured interleaved in one run.
 
-    ``simulate`` at N = 20 (target: wall <= 2x its compiled solve), ``simulate_ramp`` of 10
-    torques (wall <= 2x the sum of its solves) and one ``GripperDesign-v0`` reset + step of the
-    same design (a step <= 2x a ``simulate``; the reset is reported beside it).
+    ``simulate`` of a member (default: the paper's fan, N = 20; target: wall <= 2x its compiled
+    solve), ``simulate_ramp`` of 10 torques (wall <= 2x the sum of its solves) and one
+    ``GripperDesign-v0`` reset + step of the same design and member (a step <= 2x a
+    ``simulate``; the reset is reported beside it).
     """
     import envs
 
-    env = envs.GripperDesignEnv(n_triangles=20, element="spring")
+    model = {"n_triangles": 20, "element": "spring"} if model is None else model
+    env = envs.GripperDesignEnv(**model)
     design = np.array([scene.gripper.finger_length_m, scene.gripper.rest_angle_rad,
                        scene.gripper.joint_offset_m, scene.gripper.finger_width_m, 0.2,
                        scene.disk.distance_m])
@@ -70,14 +72,13 @@ def user_speed(scene, repeats: int) -> dict:
         return 1e3 * (time.perf_counter() - t0)
 
     for _ in range(3):  # warm: compiled, caches filled
-        simulate(scene, 0.2, 20, element="spring"), simulate_ramp(scene, torques, 20,
-            element="spring"), env_step()
+        simulate(scene, 0.2, **model), simulate_ramp(scene, torques, **model), env_step()
     sim, sim_c, ramp, ramp_c, step, step_only = [], [], [], [], [], []
     for _ in range(repeats):  # interleaved, so that machine noise hits all alike
-        ms, res = _median_ms(lambda: simulate(scene, 0.2, 20, element="spring"), 1)
+        ms, res = _median_ms(lambda: simulate(scene, 0.2, **model), 1)
         sim.append(ms)
         sim_c.append(1e3 * res.solve_time_s)
-        ms, rs = _median_ms(lambda: simulate_ramp(scene, torques, 20, element="spring"), 1)
+        ms, rs = _median_ms(lambda: simulate_ramp(scene, torques, **model), 1)
         ramp.append(ms)
         ramp_c.append(1e3 * sum(r.solve_time_s for r in rs))
         step.append(_median_ms(env_step, 1)[0])
@@ -91,7 +92,8 @@ def user_speed(scene, repeats: int) -> dict:
         "env_reset_step_ms": med(step), "env_step_ms": med(step_only),
         "env_step_over_simulate": med(step_only) / med(sim),
     }
-    print(f"simulate N=20: wall {out['simulate_wall_ms']:.3f} ms, compiled "
+    print(f"{model}:")
+    print(f"simulate: wall {out['simulate_wall_ms']:.3f} ms, compiled "
           f"{out['simulate_compiled_ms']:.3f} ms -> {out['simulate_ratio']:.2f}x (target <= 2)")
     print(f"simulate_ramp 10 torques: wall {out['ramp10_wall_ms']:.2f} ms, compiled "
           f"{out['ramp10_compiled_ms']:.2f} ms -> {out['ramp10_ratio']:.2f}x (target <= 2)")
@@ -111,6 +113,8 @@ def main() -> None:
     scene = Scene.preset("paper-r070")
     simulate(scene, 0.2, 20, element="spring")  # compile
     speed = user_speed(scene, 41 if not args.quick else 11)
+    # the default model (nh-quad, N = 40, M = 2, calibrated) as a user calls it
+    speed_default = user_speed(scene, 41 if not args.quick else 11, {})
     rows = []
     give_up = {"slsqp": False, "nelder-mead": False}
     for n in ns:
@@ -179,7 +183,8 @@ def main() -> None:
             print(f"  failed: {r['scene']} N={r['n']} T={r['torque_nm']:.3g}: {r['message'][:80]}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"user_speed": speed, "rows": rows, "ratios": ratios,
+    out.write_text(json.dumps({"user_speed": speed, "user_speed_default_model": speed_default,
+                               "rows": rows, "ratios": ratios,
                                "sweep": sweep,
                                "converged_fraction": ok / len(sweep),
                                "failed": len(sweep) - ok - len(folded),
