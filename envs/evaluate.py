@@ -34,6 +34,8 @@ from .model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_PHASE_RAD,
     DEFAULT_STRAIN_LIMIT,
+    FEM_DESIGN_RINGS,
+    FEM_MAX_RINGS,
     MAX_TRIANGLES,
     MAX_TRIANGLES_FAMILY,
     MIN_TRIANGLES,
@@ -52,7 +54,7 @@ from .scene import (
     relative_from_design,
 )
 from .solver.pipeline import BatchSolution, solve_columns
-from .solver.status import CHECK_FAILED, NOT_SOLVED
+from .solver.status import CHECK_FAILED, FEM_FAILED, NOT_SOLVED, OK
 from .validation import check_integer, check_range
 
 __all__ = [
@@ -70,6 +72,8 @@ __all__ = [
 ]
 
 DEFAULT_CHUNK_SIZE = 256
+FIDELITIES = ("psm", "fem")
+TORQUE_COLUMN = DESIGN_FIELDS.index("torque_nm")
 
 # Keys of the dict returned by evaluate_designs, with their dtype and trailing shape.
 METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
@@ -460,13 +464,57 @@ def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndar
     return out
 
 
+def _soft_disk(row: np.ndarray) -> SoftDisk:
+    """The disk of a row of :func:`_disk_table` (its placement comes from the design)."""
+    radius, young, nu, thick, scale, ratio, area = row.tolist()
+    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area)
+
+
+def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
+              kf: np.ndarray, cols: SceneColumns, fem_rings: int) -> None:
+    """Solve the rows with the finite-element reference and write the same metrics as
+    :func:`_fill_group` does for the point-spring model (same definitions, see
+    :func:`evaluate_designs`)."""
+    from .fem.designs import fem_design_grasps, fem_metrics
+
+    scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
+              for i in rows.tolist()]
+    fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings),
+                      disk[rows, 0])
+    n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
+    with np.errstate(invalid="ignore"):
+        grip = grip_share(cols, fem["jaw_angles_rad"], fem["stop_torques_nm"])
+        metrics = {
+            "jaw_angles_rad": fem["jaw_angles_rad"],
+            "n_contacts": n_contacts,
+            "touching": (n_contacts > 0) | (fem["tip_forces_n"] > 0.0),
+            "total_force_n": fem["total_force_n"],
+            "contact_score": grip * fem["contact_fraction"],
+            "grip_share": grip,
+            "peak_strain": fem["peak_strain"],
+            "peak_log_strain": fem["peak_log_strain"],
+            "max_displacement_ratio": fem["max_displacement_ratio"],
+        }
+    floats = np.column_stack([np.reshape(v, (rows.size, -1)) for k, v in metrics.items()
+                              if v.dtype.kind == "f"])
+    ok = fem["converged"] & np.isfinite(floats).all(axis=1)
+    out["status"][rows] = np.where(ok, OK, FEM_FAILED)
+    out["iterations"][rows] = fem["iterations"]
+    out["n_triangles"][rows] = fem["n_elements"]
+    out["stable"][rows] = ok  # Newton on the total energy with a descent line search
+    out["converged"][rows] = ok
+    for key, v in metrics.items():
+        out[key][rows[ok]] = v[ok]
+
+
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limits: np.ndarray,
                      kf: np.ndarray, weights: RewardWeights,
-                     model: tuple[int, str, float] = (1, "spring", 1.0)
+                     model: tuple[int, str, float] = (1, "spring", 1.0),
+                     fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS
                      ) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
     ``model``: rings, element and the factor of the member's calibration on the disks'
-    stiffness scale."""
+    stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``)."""
     batch = des.shape[0]
     n_rings, element, model_scale = model
     out = _empty_output(batch)
@@ -486,7 +534,12 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
         finite = np.isfinite(v)
         out["rest_violation"][~valid] = np.divide(v, 1.0 + v, out=np.ones_like(v),
                                                   where=finite)
-    for n in np.unique(n_tri[valid]).tolist():
+    if fidelity == "fem":
+        rows = np.flatnonzero(valid)
+        out["n_triangles"][:] = 0
+        if rows.size:
+            _fill_fem(out, rows, des, disk, kf, cols.take(rows), fem_rings)
+    for n in (np.unique(n_tri[valid]).tolist() if fidelity == "psm" else ()):
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
@@ -520,8 +573,10 @@ def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndar
 
 
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
-                    model: tuple[int, str, float] = (1, "spring", 1.0)) -> dict[str, np.ndarray]:
-    return _evaluate_arrays(*chunk, weights=weights, model=model)
+                    model: tuple[int, str, float] = (1, "spring", 1.0), fidelity: str = "psm",
+                    fem_rings: int = FEM_DESIGN_RINGS) -> dict[str, np.ndarray]:
+    return _evaluate_arrays(*chunk, weights=weights, model=model, fidelity=fidelity,
+                            fem_rings=fem_rings)
 
 
 def _check_start_method(executor) -> None:
@@ -553,10 +608,12 @@ def evaluate_designs(
     weights: RewardWeights | None = None,
     strain_limits=None,
     executor=None,
-    chunk_size: int = DEFAULT_CHUNK_SIZE,
+    chunk_size: int | None = None,
     n_rings: int | None = None,
     element: str | None = None,
     calibrated: bool | None = None,
+    fidelity: str = "psm",
+    fem_rings: int = FEM_DESIGN_RINGS,
 ) -> dict[str, np.ndarray]:
     """Solve the grasp of every design and return its metrics and reward terms.
 
@@ -596,7 +653,23 @@ def evaluate_designs(
         :class:`optim.executors.ProcessExecutor`. On one machine no executor beats the
         default: the in-process evaluation already runs the rows on every core.
     chunk_size
-        Rows per chunk when an executor is given, >= 1.
+        Rows per chunk when an executor is given, >= 1 (default 256 at ``fidelity="psm"``, 1
+        at ``"fem"``: one FEM grasp is worth shipping to a worker).
+    fidelity
+        ``"psm"`` (default): the point-spring model above. ``"fem"``: every design valid at
+        rest is solved with the package's finite-element reference instead
+        (:func:`envs.fem.fem_grasp`: quadratic triangles, neo-Hookean with the disk's physical
+        ``E`` and ``nu``, the disk's calibration scales ignored) on a structured mesh of
+        ``fem_rings`` rings (element size ``r / fem_rings``; the default 12 gives 864
+        quadratic triangles, ~3,500 unknowns, within ~0.5 % of the mesh-converged closing
+        angle), ramped from the open gripper to the design's torque. It costs 0.3-2 s per
+        design on one core (~10^4 times the point-spring model) and is cached on disk per
+        design (``$PSM_GRASP_CACHE/fem``, default ``out/cache/fem``), so a design is solved
+        once; with an executor the designs run in parallel (one per task by default). The
+        keys, their meaning and the reward are the same at both fidelities (see below);
+        ``n_triangles``, ``n_rings``, ``element`` and ``calibrated`` must be left ``None``.
+    fem_rings
+        Rings of the FEM mesh at ``fidelity="fem"``, in [2, 40].
 
     Returns
     -------
@@ -607,25 +680,34 @@ def evaluate_designs(
         - ``valid_at_rest``: the scene can be built (fingers clear of the disk at rest, ...).
         - ``converged``: as in :func:`envs.simulate`: the solver claimed an equilibrium, the
           independent check of :mod:`envs.check` confirmed it, no fan triangle is turned over
-          and every output is finite.
+          and every output is finite (FEM: Newton converged, no element inverted).
         - ``stable``, ``status``, ``iterations``: solver diagnostics; ``status`` is a public
           code of :mod:`envs.solver.status` (-1: not solved, 0: converged, 8: folded, 11: the
-          independent check failed, ...; message in ``STATUS_MESSAGES``).
+          independent check failed, 12: the FEM did not converge, ...; message in
+          ``STATUS_MESSAGES``); FEM: Newton iterations.
+        - ``n_triangles``: the model's contour points ``N`` (FEM: its quadratic triangles).
         - ``jaw_angles_rad`` (B, 2): right and left finger angles [rad].
-        - ``n_contacts`` (B, 2): contour points pressed by each face (positive force).
+        - ``n_contacts`` (B, 2): contour points pressed by each face (positive force; FEM:
+          rim nodes).
         - ``touching`` (B, 2): each finger touches the disk (face or corner contact).
         - ``total_force_n`` (B, 2): normal force of each finger on the disk [N].
         - ``contact_score``: ``grip_share (n_contacts_right + n_contacts_left) / N``, the
           fraction of the contour in contact (each point stands for an arc ``2 pi r / N``, so
-          it barely depends on N) as far as the actuation grips the object.
+          it barely depends on N) as far as the actuation grips the object. FEM: ``grip_share``
+          times the share of the rim's length whose nodes are in contact (each node with its
+          share of the rim), the same measure.
         - ``grip_share``: the share of the actuation torque that grips the object (not taken
           by the torsion springs or the joint stops), the smaller finger's (:func:`grip_share`):
           near 1 for a squeeze with little travel, 0 for fingers that merely touch the object
           (such a design once scored contact with forces of 1e-7 N).
-        - ``peak_strain``: max ``|L - L0| / L0`` over radial and contour springs [-].
+        - ``peak_strain``: max ``|L - L0| / L0`` over the springs (mesh edges) [-]; FEM:
+          the largest principal engineering strain ``max |lambda - 1|``, the largest length
+          change of any fibre (an edge's strain never exceeds it).
         - ``peak_log_strain``: largest principal logarithmic strain ``max |ln lambda|`` over
-          the fan triangles [-], the FEM reference's measure.
-        - ``max_displacement_ratio``: max contour-point displacement / r [-].
+          the triangles outside twice the hub radius [-]; FEM: the same over its quadrature
+          points outside twice the hub radius.
+        - ``max_displacement_ratio``: max contour-point displacement / r [-] (FEM: rim
+          nodes).
         - ``strain_limit``: the limit used [-].
         - ``finger_gap_m`` (B, 2): for a converged grasp, the distance from each finger that
           does not touch the disk to the undeformed disk [m] (0 for a touching finger).
@@ -645,6 +727,16 @@ def evaluate_designs(
     weights = RewardWeights() if weights is None else weights
     if not isinstance(weights, RewardWeights):
         raise ValueError(f"weights must be a RewardWeights, got {type(weights).__name__}")
+    if fidelity not in FIDELITIES:
+        raise ValueError(f"fidelity must be one of {FIDELITIES}, got {fidelity!r}")
+    if fidelity == "fem":
+        given = [name for name, v in (("n_triangles", n_triangles), ("n_rings", n_rings),
+                                      ("element", element), ("calibrated", calibrated))
+                 if v is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)} choose a point-spring member: leave them None "
+                             "with fidelity='fem' (its mesh is set by fem_rings)")
+        fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
@@ -663,17 +755,21 @@ def evaluate_designs(
                       else strain_limits, batch, 0.0, 1.0, low_open=True)
     kf = _per_row("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, batch, 0.0,
                   math.inf, low_open=True)
-    if executor is None:
-        return _evaluate_arrays(des, disk, n_tri, limits, kf, weights, model)
+    if chunk_size is None:
+        chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    if executor is None:
+        return _evaluate_arrays(des, disk, n_tri, limits, kf, weights, model, fidelity,
+                                fem_rings)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     _check_start_method(executor)
     starts = range(0, batch, int(chunk_size))
     chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, limits, kf))
               for s in starts]
-    fn = functools.partial(_evaluate_chunk, weights=weights, model=model)
+    fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
+                           fem_rings=fem_rings)
     parts = [_result_of(p) for p in executor.map(fn, chunks)]
     if not parts:
         return _empty_output(0)

@@ -14,7 +14,7 @@ from pathlib import Path
 from .result import FemResult
 
 #: Version tag of the discretisation and solver; part of the cache key.
-FEM_VERSION = "fem-2"
+FEM_VERSION = "fem-3"  # fem-3: contact fractions, stop torques, stretch strain
 
 
 def _cache_dir() -> Path:

@@ -112,6 +112,22 @@ def _neo_hookean(
     return w, p, a, True
 
 
+def _principal_stretches(fmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """In-plane principal stretches ``(lambda_max, lambda_min)`` of deformation gradients."""
+    c11 = fmat[0, 0] ** 2 + fmat[1, 0] ** 2
+    c22 = fmat[0, 1] ** 2 + fmat[1, 1] ** 2
+    c12 = fmat[0, 0] * fmat[0, 1] + fmat[1, 0] * fmat[1, 1]
+    mean = 0.5 * (c11 + c22)
+    rad = np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)
+    return np.sqrt(mean + rad), np.sqrt(np.maximum(mean - rad, 0.0))
+
+
+def _stretch_strain_magnitude(fmat: np.ndarray) -> np.ndarray:
+    """Largest in-plane principal engineering strain magnitude ``max |lambda_i - 1|``."""
+    hi, lo = _principal_stretches(fmat)
+    return np.maximum(np.abs(hi - 1.0), np.abs(lo - 1.0))
+
+
 def _log_strain_magnitude(fmat: np.ndarray) -> np.ndarray:
     """Largest in-plane principal logarithmic (Hencky) strain magnitude ``max |ln lambda_i|``."""
     c11 = fmat[0, 0] ** 2 + fmat[1, 0] ** 2

@@ -62,6 +62,17 @@ class FemResult:
         Radius of the rigid hub [m].
     hub_edge_peak_strain
         Same strain measure over the layer ``hub_radius_m < rho <= 2 hub_radius_m`` [-].
+    contact_fractions
+        Share of the rim's length whose nodes press on the right and left jaw's face (each node
+        counts with its share of the rim, the Simpson weights of the P2 rim edges) [-]: the
+        fraction of the contour in contact, the measure the point-spring model's ``N`` equal
+        arcs give.
+    stop_torques_nm
+        Torque the closed-jaw stop takes from each finger [N·m] (0 unless the jaws are on it).
+    peak_stretch_strain
+        Largest principal engineering strain ``max |lambda_i - 1|`` over the same quadrature
+        points as ``peak_strain`` [-]: the largest relative length change of any material fibre
+        (the FEM's counterpart of the point-spring model's largest spring strain).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -85,6 +96,9 @@ class FemResult:
     plane: str = "strain"
     hub_radius_m: float = math.nan
     hub_edge_peak_strain: float = math.nan
+    contact_fractions: tuple[float, float] = (math.nan, math.nan)
+    stop_torques_nm: tuple[float, float] = (0.0, 0.0)
+    peak_stretch_strain: float = math.nan
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:
@@ -125,5 +139,6 @@ class FemResult:
         kw["jaw_angles_rad"] = tuple(float(v) for v in kw["jaw_angles_rad"])
         kw["contact_forces_n"] = tuple(float(v) for v in kw["contact_forces_n"])
         kw["contact_node_counts"] = tuple(int(v) for v in kw["contact_node_counts"])
-        kw["tip_forces_n"] = tuple(float(v) for v in kw["tip_forces_n"])
+        for name in ("tip_forces_n", "contact_fractions", "stop_torques_nm"):
+            kw[name] = tuple(float(v) for v in kw[name])
         return cls(**kw, from_cache=from_cache)

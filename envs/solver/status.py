@@ -34,6 +34,8 @@ STATUS_MESSAGES = {
 }
 NOT_SOLVED = -1  # batch rows that were not solved (invalid at rest)
 CHECK_FAILED = 11  # the solver claimed an equilibrium the independent check rejected
+FEM_FAILED = 12  # evaluate_designs(fidelity="fem"): the finite-element grasp did not converge
 STATUS_MESSAGES[NOT_SOLVED] = "not solved: the design is invalid at rest"
 STATUS_MESSAGES[CHECK_FAILED] = "independent equilibrium check failed"
+STATUS_MESSAGES[FEM_FAILED] = "the finite-element grasp did not converge"
 PUBLIC_STATUS = tuple(sorted(set(STATUS_MESSAGES) - {BLOCKED}))

@@ -1,0 +1,73 @@
+"""The finite-element fidelity of the design evaluator: design rows -> FEM grasps -> metrics.
+
+:func:`envs.evaluate.evaluate_designs` with ``fidelity="fem"`` solves each design valid at rest
+here instead of with the point-spring model, and reports the same metric keys with the same
+meaning (:func:`fem_metrics`): the fraction of the contour in contact by rim length, the grip
+share of the actuation torque, the largest principal logarithmic strain outside the hub.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from envs.model.defaults import FEM_DESIGN_RINGS, FEM_MAX_RINGS
+from envs.scene import Scene
+
+from .grasp import fem_grasp
+from .result import FemResult
+
+__all__ = ["FEM_DESIGN_RINGS", "FEM_MAX_RINGS", "fem_design_grasps", "fem_metrics"]
+
+
+
+def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], rings: int,
+                      cache: bool = True) -> list[FemResult]:
+    """The FEM grasp of each scene at its torque, reached by ramping from the open gripper.
+
+    One :func:`~envs.fem.fem_grasp` per scene on a mesh of ``rings`` rings (element size
+    ``r / rings``), read from and written to its disk cache when ``cache``: a design is solved
+    once.
+    """
+    return [fem_grasp(scene, [float(t)], mesh_size_m=scene.disk.radius_m / rings,
+                      cache=cache)[0]
+            for scene, t in zip(scenes, torques_nm, strict=True)]
+
+
+def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray) -> dict[str, np.ndarray]:
+    """Arrays of the FEM grasps' metrics, in the evaluator's keys (see
+    :func:`envs.evaluate.evaluate_designs`); rows that did not converge hold NaN and
+    ``converged`` False.
+
+    ``contact_fraction`` (B,) is the share of the rim's length in contact with either face
+    (each rim node with its share of the rim), ``n_contacts`` (B, 2) the rim nodes in contact.
+    """
+    b = len(results)
+    nan2 = (math.nan, math.nan)
+    ok = np.array([r.converged for r in results], dtype=bool)
+
+    def column(get, width: int | None = None) -> np.ndarray:
+        shape = (b,) if width is None else (b, width)
+        out = np.full(shape, math.nan)
+        for i, r in enumerate(results):
+            if r.converged:
+                out[i] = get(r)
+        return out
+
+    return {
+        "converged": ok,
+        "iterations": np.array([r.newton_iterations for r in results], dtype=np.int64),
+        "n_elements": np.array([r.n_elements for r in results], dtype=np.int64),
+        "jaw_angles_rad": column(lambda r: r.jaw_angles_rad, 2),
+        "n_contacts": column(lambda r: r.contact_node_counts, 2),
+        "tip_forces_n": column(lambda r: r.tip_forces_n, 2),
+        "total_force_n": column(lambda r: r.contact_forces_n, 2),
+        "contact_fraction": column(lambda r: sum(r.contact_fractions)),
+        "stop_torques_nm": column(lambda r: r.stop_torques_nm if r.converged else nan2, 2),
+        "peak_strain": column(lambda r: r.peak_stretch_strain),
+        "peak_log_strain": column(lambda r: r.peak_strain),
+        "max_displacement_ratio": column(lambda r: r.max_displacement_m) / radius_m,
+        "message": np.array([r.message for r in results], dtype=object),
+    }
