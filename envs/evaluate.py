@@ -224,7 +224,7 @@ class RewardWeights:
     """Weights of the named reward terms of :func:`evaluate_designs`.
 
     ``reward = contact * min(contact_score, contact_cap)
-    - deform * min(peak_strain / strain_limit, deform_cap)
+    - deform * min(peak_log_strain / strain_limit, deform_cap)
     - miss * (fingers not touching) - gap * g / (1 + g)
     - [invalid at rest] * (invalid + violation * v / (1 + v))
     - fail * [not converged]``
@@ -244,7 +244,8 @@ class RewardWeights:
     contact
         Weight of the contact score (fraction of the contour in contact) [-].
     deform
-        Weight of the peak strain relative to the object's strain limit [-].
+        Weight of the peak strain (the largest principal logarithmic strain outside the hub,
+        the measure of the FEM reference) relative to the object's strain limit [-].
     miss
         Penalty per finger that does not touch the disk [-].
     gap
@@ -558,7 +559,10 @@ def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndar
                 w: RewardWeights) -> None:
     ok = out["converged"]
     score = np.minimum(out["contact_score"], w.contact_cap)
-    strain_ratio = np.minimum(out["peak_strain"] / out["strain_limit"], w.deform_cap)
+    # the principal log strain: the one strain measure that means the same at both
+    # fidelities (the FEM has no springs); scripts/fidelity.py measured the PSM-FEM rank
+    # agreement of the reward rise with it
+    strain_ratio = np.minimum(out["peak_log_strain"] / out["strain_limit"], w.deform_cap)
     out["reward_contact"][:] = np.where(ok, w.contact * score, 0.0)
     out["reward_deform"][:] = np.where(ok, 0.0 - w.deform * strain_ratio, 0.0)
     missing = np.count_nonzero(~out["touching"], axis=1)
@@ -640,8 +644,8 @@ def evaluate_designs(
     weights
         Reward weights (default :class:`RewardWeights`).
     strain_limits
-        Admissible strain of the object [-], in (0, 1]; scalar or shape (B,). Default
-        :data:`DEFAULT_STRAIN_LIMIT`.
+        Admissible strain of the object [-], in (0, 1], a limit on ``peak_log_strain``;
+        scalar or shape (B,). Default :data:`DEFAULT_STRAIN_LIMIT`.
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a

@@ -54,7 +54,8 @@ MIN_CHUNK_SIZE = 64
 # metric keys copied into OptimResult.best_metrics
 BEST_METRIC_KEYS = (
     "valid_at_rest", "converged", "stable", "n_contacts", "touching", "total_force_n",
-    "jaw_angles_rad", "contact_score", "peak_strain", "max_displacement_ratio", "strain_limit",
+    "jaw_angles_rad", "contact_score", "peak_strain", "peak_log_strain", "max_displacement_ratio",
+    "strain_limit",
     "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
     "reward",
 )
@@ -346,7 +347,7 @@ class DesignProblem:
             "x": x.copy(),
             "reward": reward.copy(),
             "contact_score": out["contact_score"].copy(),
-            "peak_strain": out["peak_strain"].copy(),
+            "peak_log_strain": out["peak_log_strain"].copy(),
             "feasible": self.feasible(out),
         })
         if self.progress is not None:
@@ -355,12 +356,12 @@ class DesignProblem:
     def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
         """Grasps that converged, touch with both fingers and respect the strain limit."""
         return (out["converged"] & np.all(out["touching"], axis=1)
-                & (out["peak_strain"] <= self.strain_limit))
+                & (out["peak_log_strain"] <= self.strain_limit))
 
     def archive(self) -> dict[str, np.ndarray]:
         """Every evaluated point: ``x`` (n, 6), ``reward``, ``contact_score``,
-        ``peak_strain``, ``feasible`` (n,), in evaluation order."""
-        keys = ("x", "reward", "contact_score", "peak_strain", "feasible")
+        ``peak_log_strain``, ``feasible`` (n,), in evaluation order."""
+        keys = ("x", "reward", "contact_score", "peak_log_strain", "feasible")
         if not self._archive:
             return {k: np.zeros((0, N_DESIGN) if k == "x" else (0,)) for k in keys}
         return {k: np.concatenate([a[k] for a in self._archive]) for k in keys}
@@ -372,13 +373,13 @@ class DesignProblem:
         rows = np.flatnonzero(arc["feasible"])
         if rows.size == 0:
             return []
-        obj = np.column_stack([-arc["contact_score"][rows], arc["peak_strain"][rows]])
+        obj = np.column_stack([-arc["contact_score"][rows], arc["peak_log_strain"][rows]])
         front = rows[pareto_mask(obj)]
         front = front[np.argsort(arc["contact_score"][front], kind="stable")]
         return [{
             "design": self.design_dict(arc["x"][i]),
             "contact_score": float(arc["contact_score"][i]),
-            "peak_strain": float(arc["peak_strain"][i]),
+            "peak_log_strain": float(arc["peak_log_strain"][i]),
             "reward": float(arc["reward"][i]),
         } for i in front.tolist()]
 

@@ -69,7 +69,7 @@ class OptimResult:
         The fixed object: disk fields in SI units, ``strain_limit`` and the scene name if any.
     pareto_front
         NSGA-II only: the non-dominated feasible designs (contact score up, peak strain down),
-        each ``{"design": {...}, "contact_score": ..., "peak_strain": ..., "reward": ...}``,
+        each ``{"design": {...}, "contact_score": ..., "peak_log_strain": ..., "reward": ...}``,
         sorted by contact score.
     options
         The method's options as used (population size, sigma0, ...).
@@ -165,6 +165,6 @@ class OptimResult:
         return (
             f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f} "
             f"(contact {m.get('contact_score', float('nan')):.3f}, "
-            f"peak strain {m.get('peak_strain', float('nan')):.4f}) after "
+            f"peak log strain {m.get('peak_log_strain', float('nan')):.4f}) after "
             f"{self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
         )

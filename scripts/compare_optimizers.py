@@ -104,7 +104,7 @@ def table_rows(runs: dict[str, list[OptimResult]], reference: float) -> list[dic
             "median_contact_score": float(np.median(
                 [r.best_metrics.get("contact_score", np.nan) for r in results])),
             "median_peak_strain": float(np.median(
-                [r.best_metrics.get("peak_strain", np.nan) for r in results])),
+                [r.best_metrics.get("peak_log_strain", np.nan) for r in results])),
             "median_wall_time_s": float(np.median([r.wall_time_s for r in results])),
             "median_evaluations_per_s": float(np.median([r.evaluations_per_s for r in results])),
         })
@@ -137,7 +137,7 @@ def union_front(results: list[OptimResult]) -> list[dict[str, Any]]:
     points = [p for r in results for p in r.pareto_front]
     if not points:
         return []
-    obj = np.array([[-p["contact_score"], p["peak_strain"]] for p in points])
+    obj = np.array([[-p["contact_score"], p["peak_log_strain"]] for p in points])
     keep = np.flatnonzero(pareto_mask(obj))
     return sorted((points[i] for i in keep), key=lambda p: p["contact_score"])
 
@@ -167,18 +167,18 @@ def draw(runs: dict[str, list[OptimResult]], curves: dict[str, dict[str, dict]],
     axes[1].set_title("best so far vs wall time", fontsize=10)
     ax = axes[2]
     for r in runs.get("nsga2", []):
-        ax.plot([p["peak_strain"] for p in r.pareto_front],
+        ax.plot([p["peak_log_strain"] for p in r.pareto_front],
                 [p["contact_score"] for p in r.pareto_front], ".", color="tab:olive",
                 alpha=0.35, markersize=4)
     if front:
-        s = [p["peak_strain"] for p in front]
+        s = [p["peak_log_strain"] for p in front]
         c = [p["contact_score"] for p in front]
         ax.step(s, c, where="post", color="tab:red")
         ax.plot(s, c, "o", color="tab:red", markersize=4, label="NSGA-II front (all seeds)")
     for method, results in runs.items():
         if method == "nsga2":
             continue
-        ax.plot([r.best_metrics.get("peak_strain", np.nan) for r in results],
+        ax.plot([r.best_metrics.get("peak_log_strain", np.nan) for r in results],
                 [r.best_metrics.get("contact_score", np.nan) for r in results], "*",
                 markersize=10, color=METHOD_COLOURS.get(method), label=f"best {method} designs")
     limit = next(iter(runs.values()))[0].object.get("strain_limit")

@@ -39,7 +39,8 @@ from envs.evaluate import DESIGN_FIELDS
 from tests.kkt_reference import kkt_check
 
 PAPER = ("paper-r050", "paper-r070", "paper-r100")
-RESIDUAL_ATOL = 1e-6 * FORCE_TOL  # the two checks differ by round-off (numpy's BLAS dot products)
+RESIDUAL_ATOL = 1e-4 * FORCE_TOL  # the two checks differ by round-off (numpy BLAS sums against
+# compiled loops: 2e-14 seen on a 4-point mesh), four orders below the tolerance they judge
 LENGTH_ATOL = 1e-5 * GAP_TOL  # in units of the radius
 
 
