@@ -1,4 +1,4 @@
-"""Command line: ``psm-grasp simulate | demo | optimize``."""
+"""Command line: ``psm-grasp simulate | demo | optimize | verify``."""
 
 from __future__ import annotations
 
@@ -144,7 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     except ImportError:
         add_optimize_parser = None
     if add_optimize_parser is not None:
+        from optim.cli import add_verify_parser
+
         add_optimize_parser(sub)
+        add_verify_parser(sub)
     return parser
 
 

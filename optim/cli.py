@@ -24,6 +24,7 @@ import numpy as np
 from envs.model.defaults import MAX_TRIANGLES, MAX_TRIANGLES_FAMILY
 from envs.model.family import ELEMENTS
 from envs.scene import PRESETS, Scene
+from envs.validation import check_integer
 
 from .optimize import METHODS, get_optimizer
 from .problem import (
@@ -35,10 +36,13 @@ from .problem import (
     paper_design,
 )
 from .result import OptimResult
+from .verify import DEFAULT_TOP, MAX_TOP
 
-__all__ = ["add_optimize_parser", "run_optimize", "run_demo", "paper_reference"]
+__all__ = ["add_optimize_parser", "add_verify_parser", "run_optimize", "run_demo",
+           "paper_reference", "verify_outputs"]
 
 DEMO_BUDGET = 2000
+DEMO_VERIFY_TOP = 3
 NO_GRASP_EXIT = 3  # exit code of `optimize` when the best design found is not a grasp
 DEMO_SCENE = "paper-r070"
 REFERENCE_TORQUES_NM = (0.05, 0.1, 0.2, 0.3, 0.5)
@@ -215,6 +219,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
     cli_option("--seed", check_seed, args.seed)
     cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     check_output_dir("--out", args.out)
+    if args.verify_top is not None:
+        check_integer("--verify-top", args.verify_top, 1, MAX_TOP)
     from envs.solver.warmup import announce_compile
 
     announce_compile()
@@ -223,8 +229,46 @@ def _optimize_command(args: argparse.Namespace) -> int:
                              strain_limit=args.strain_limit, n_triangles=args.triangles,
                              n_rings=args.rings, element=args.element,
                              progress=not args.no_progress)
+    if args.verify_top is not None:
+        verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json", args.verify_top)
     # a run that found no grasp is not a success, whatever files it wrote
     return 0 if result.extra["grasp_found"] else NO_GRASP_EXIT
+
+
+def verify_outputs(out: str | Path, result_name: str | None, top: int) -> dict:
+    """Run the FEM verification of a written run and print its table."""
+    from .verify import print_report, verify_run
+
+    report, paths = verify_run(out, top, result=result_name)
+    print_report(report, paths)
+    return report
+
+
+def _verify_command(args: argparse.Namespace) -> int:
+    from .verify import find_result
+
+    find_result(args.out_dir, args.result)  # a bad folder or file before any work
+    report = verify_outputs(args.out_dir, args.result, args.top)
+    return 0 if report["summary"]["all_fem_converged"] else 1
+
+
+def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``verify`` command to the ``psm-grasp`` sub-parsers."""
+    p = subparsers.add_parser(
+        "verify", help="re-score a run's best designs with the FEM",
+        description="Re-score the K best distinct designs of an optimization run (its "
+                    "*_result.json in OUT_DIR) with the model the run used and with the "
+                    "finite-element reference (same metrics and reward), and write verify.json "
+                    "and verify.png (both rewards and rankings) to OUT_DIR. Each FEM grasp "
+                    "takes 0.3-2 s and is cached (out/cache/fem).")
+    p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the run (psm-grasp optimize "
+                   "--out, or the demo's out)")
+    p.add_argument("--top", type=int, default=DEFAULT_TOP,
+                   help=f"designs to verify, in [1, {MAX_TOP}] (default %(default)s)")
+    p.add_argument("--result", default=None,
+                   help="the result file in OUT_DIR when it holds several")
+    p.set_defaults(func=_verify_command)
+    return p
 
 
 def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -263,6 +307,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--rings", type=int, default=None,
                    help="rings M of the disk mesh (default 2 for nhquad, 1 otherwise)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--verify-top", type=int, default=None, metavar="K",
+                   help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
+                   f"verify; K in [1, {MAX_TOP}])")
     p.set_defaults(func=_optimize_command)
     return p
 
@@ -271,12 +318,15 @@ def run_demo(out_dir: Path) -> int:
     """CMA-ES design of the gripper for the paper's r = 0.07 m disk (budget 2000, seed 0).
 
     Writes ``demo_result.json``, ``demo_convergence.png`` and ``demo_best_grasp.png`` to
-    ``out_dir`` and prints a short summary. Takes well under 2 minutes on 2 cores.
+    ``out_dir``, verifies its 3 best distinct designs with the FEM (``verify.json``,
+    ``verify.png``) and prints a short summary. Takes well under 2 minutes on 2 cores once the
+    kernels are compiled.
     """
     t0 = time.perf_counter()
     print(f"CMA-ES gripper design for the {DEMO_SCENE} disk: budget {DEMO_BUDGET} "
           f"evaluations, strain limit {DEFAULT_STRAIN_LIMIT}")
     run_optimize("cmaes", scene=DEMO_SCENE, budget=DEMO_BUDGET, seed=0, out=out_dir,
                  prefix="demo")
+    verify_outputs(out_dir, "demo_result.json", DEMO_VERIFY_TOP)
     print(f"demo done in {time.perf_counter() - t0:.1f} s")
     return 0

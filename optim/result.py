@@ -73,6 +73,9 @@ class OptimResult:
         sorted by contact score.
     options
         The method's options as used (population size, sigma0, ...).
+    top_designs
+        The best distinct designs evaluated (up to 10, best first), each ``{"design": {...},
+        "reward": ...}``: what ``psm-grasp verify`` re-scores with the FEM.
     executor
         How the populations were evaluated (``"in-process"``, ``"processes(2)"``,
         ``"dask(tcp://...)"``).
@@ -94,6 +97,7 @@ class OptimResult:
     object: dict[str, Any] = field(default_factory=dict)
     pareto_front: tuple[dict[str, Any], ...] = ()
     options: dict[str, Any] = field(default_factory=dict)
+    top_designs: tuple[dict[str, Any], ...] = ()
     executor: str = "in-process"
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -108,6 +112,7 @@ class OptimResult:
         object.__setattr__(self, "history_wall_time_s",
                            tuple(float(v) for v in self.history_wall_time_s))
         object.__setattr__(self, "pareto_front", tuple(self.pareto_front))
+        object.__setattr__(self, "top_designs", tuple(self.top_designs))
         n = len(self.history_evaluations)
         if len(self.history_best_reward) != n or len(self.history_wall_time_s) != n:
             raise ValueError(
@@ -138,6 +143,7 @@ class OptimResult:
         if unknown:
             raise ValueError(f"unknown OptimResult fields {sorted(unknown)}")
         data["pareto_front"] = tuple(data.get("pareto_front", ()))
+        data["top_designs"] = tuple(data.get("top_designs", ()))
         return cls(**data)
 
     def to_json(self, path: str | Path) -> Path:

@@ -1,0 +1,203 @@
+"""FEM verification of an optimization run: ``psm-grasp verify OUT_DIR --top K``.
+
+The K best distinct designs of a run (:attr:`OptimResult.top_designs`) are scored again by
+:func:`envs.evaluate.evaluate_designs` with the model the run used and with the finite-element
+reference (``fidelity="fem"``, same metrics and reward), and both rankings are written beside
+the run: ``verify.json`` and ``verify.png`` (PSM against FEM reward per design, and the two
+rankings).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from envs.evaluate import evaluate_designs
+from envs.model.defaults import (
+    DEFAULT_CONTOUR_STIFFNESS_RATIO,
+    FEM_DESIGN_RINGS,
+    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+)
+from envs.scene import DESIGN_FIELDS, SoftDisk
+from envs.validation import check_integer
+
+from .charts import model_of
+from .result import OptimResult
+
+__all__ = ["DEFAULT_TOP", "find_result", "verify_result", "verify_run", "verify_figure"]
+
+DEFAULT_TOP = 3
+MAX_TOP = 10  # what an OptimResult keeps
+REPORTED = ("reward", "contact_score", "grip_share", "peak_log_strain", "converged",
+            "valid_at_rest", "status")
+
+
+def find_result(out_dir: str | Path, result: str | None = None) -> Path:
+    """The result file of a run in ``out_dir``: ``result`` (a name in it) or its only
+    ``*_result.json``; ``ValueError`` naming what was found otherwise."""
+    folder = Path(out_dir)
+    if not folder.is_dir():
+        raise ValueError(f"OUT_DIR {str(folder)!r} is not a folder")
+    if result is not None:
+        path = folder / result
+        if not path.is_file():
+            raise ValueError(f"--result {result!r} is not a file in {str(folder)!r}")
+        return path
+    found = sorted(folder.glob("*_result.json"))
+    if len(found) != 1:
+        names = [p.name for p in found] or "none"
+        raise ValueError(f"OUT_DIR {str(folder)!r} must hold exactly one *_result.json (found "
+                         f"{names}); name one with --result")
+    return found[0]
+
+
+def _disk(obj: dict[str, Any]) -> SoftDisk:
+    return SoftDisk(obj["radius_m"], 0.0, obj["youngs_modulus_pa"], obj["poisson_ratio"],
+                    obj["thickness_m"], obj["stiffness_scale"],
+                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
+
+
+def _ranks(values: np.ndarray) -> list[int]:
+    """1 = best (largest); ties keep the earlier design first."""
+    order = np.argsort(-values, kind="stable")
+    ranks = np.empty(values.size, dtype=int)
+    ranks[order] = np.arange(1, values.size + 1)
+    return ranks.tolist()
+
+
+def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
+                  fem_rings: int = FEM_DESIGN_RINGS, executor=None) -> dict[str, Any]:
+    """Re-score the ``top`` best distinct designs of ``result`` with its model and the FEM.
+
+    Returns the content of ``verify.json``: per design (in the run's order, best first) its
+    fields, the PSM and FEM metrics of :data:`REPORTED` and both ranks; and a summary (the
+    Spearman rank correlation for three designs or more, whether both fidelities pick the same
+    best, the largest reward difference).
+    """
+    top = check_integer("--top", top, 1, MAX_TOP)
+    picks = list(result.top_designs)[:top]
+    if not picks and result.best_design:
+        picks = [{"design": result.best_design, "reward": result.best_reward}]
+    if not picks:
+        raise ValueError("the run has no evaluated design to verify")
+    obj = result.object
+    designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in picks])
+    common = {"strain_limits": obj["strain_limit"],
+              "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
+                                                      PAPER_TORSION_STIFFNESS_NM_PER_RAD)}
+    disk = _disk(obj)
+    model = model_of(obj)
+    psm = evaluate_designs(designs, disk, **common, **model)
+    fem = evaluate_designs(designs, disk, **common, fidelity="fem", fem_rings=fem_rings,
+                           executor=executor)
+    psm_rank, fem_rank = _ranks(psm["reward"]), _ranks(fem["reward"])
+    rows = []
+    for i, p in enumerate(picks):
+        rows.append({
+            "design": p["design"],
+            "psm": {k: psm[k][i].item() for k in REPORTED},
+            "fem": {k: fem[k][i].item() for k in REPORTED},
+            "psm_rank": psm_rank[i],
+            "fem_rank": fem_rank[i],
+        })
+    summary: dict[str, Any] = {
+        "designs": len(rows),
+        "same_best": psm_rank.index(1) == fem_rank.index(1),
+        "fem_rank_of_psm_best": fem_rank[psm_rank.index(1)],
+        "max_reward_difference": float(np.max(np.abs(psm["reward"] - fem["reward"]))),
+        "all_fem_converged": bool(fem["converged"].all()),
+    }
+    if len(rows) >= 3:
+        from scipy.stats import spearmanr
+
+        rho = spearmanr(psm["reward"], fem["reward"]).statistic
+        summary["spearman"] = None if not math.isfinite(rho) else float(rho)
+    return {"run": {"method": result.method, "seed": result.seed,
+                    "object": obj.get("name"), "model": model},
+            "fem": {"rings": fem_rings, "elements": int(6 * fem_rings**2)},
+            "summary": summary, "designs": rows}
+
+
+def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
+    """PSM against FEM reward per design, and the two rankings, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = report["designs"]
+    labels = [f"#{i + 1}" for i in range(len(rows))]
+    psm = [r["psm"]["reward"] for r in rows]
+    fem = [r["fem"]["reward"] for r in rows]
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(9.5, 4.0))
+    x = np.arange(len(rows))
+    ax.bar(x - 0.2, psm, 0.4, label=f"PSM ({report['run']['model']['element']}, "
+           f"N = {report['run']['model']['n_triangles']}, M = {report['run']['model']['n_rings']})",
+           color="tab:blue")
+    ax.bar(x + 0.2, fem, 0.4, label=f"FEM ({report['fem']['elements']} P2 triangles)",
+           color="tab:orange")
+    ax.set_xticks(x, labels)
+    ax.set_xlabel("design (the run's order, best first)")
+    ax.set_ylabel("reward")
+    ax.axhline(0.0, color="0.5", lw=0.6)
+    ax.legend(fontsize=8)
+    s = report["summary"]
+    rho = s.get("spearman")
+    ax.set_title(f"{report['run']['method']} on {report['run']['object']}: max |PSM - FEM| "
+                 f"{s['max_reward_difference']:.3f}", fontsize=9)
+    n = len(rows)
+    for i, r in enumerate(rows):
+        ax2.plot([0, 1], [r["psm_rank"], r["fem_rank"]], "o-", color=f"C{i % 10}")
+        ax2.annotate(labels[i], (0, r["psm_rank"]), xytext=(-22, -3),
+                     textcoords="offset points", fontsize=8)
+    ax2.set_xticks([0, 1], ["PSM rank", "FEM rank"])
+    ax2.set_xlim(-0.4, 1.3)
+    ax2.set_ylim(n + 0.5, 0.5)
+    ax2.set_ylabel("rank (1 = best)")
+    ax2.set_title(("same best design" if s["same_best"] else
+                   f"the PSM's best is the FEM's #{s['fem_rank_of_psm_best']}")
+                  + (f"; Spearman {rho:.2f}" if rho is not None else ""), fontsize=9)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | None = None,
+               fem_rings: int = FEM_DESIGN_RINGS, executor=None) -> tuple[dict, dict]:
+    """Verify the run in ``out_dir``; write ``verify.json`` and ``verify.png`` there.
+
+    Returns the report and the written paths.
+    """
+    top = check_integer("--top", top, 1, MAX_TOP)
+    fem_rings = check_integer("--fem-rings", fem_rings, 2, 40)
+    path = find_result(out_dir, result)
+    report = verify_result(OptimResult.from_json(path), top, fem_rings, executor)
+    report["run"]["result_file"] = path.name
+    folder = Path(out_dir)
+    paths = {"verify": folder / "verify.json", "chart": folder / "verify.png"}
+    paths["verify"].write_text(json.dumps(report, indent=1) + "\n")
+    verify_figure(report, paths["chart"])
+    return report, paths
+
+
+def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
+    """A short table of the verification."""
+    print(f"FEM verification of {report['run']['method']} on {report['run']['object']} "
+          f"({report['fem']['elements']} quadratic triangles):")
+    print("  design   PSM reward  FEM reward  PSM rank  FEM rank  FEM contact  FEM log strain")
+    for i, r in enumerate(report["designs"]):
+        print(f"  #{i + 1:<6d} {r['psm']['reward']:10.4f}  {r['fem']['reward']:10.4f}  "
+              f"{r['psm_rank']:8d}  {r['fem_rank']:8d}  {r['fem']['contact_score']:11.3f}  "
+              f"{r['fem']['peak_log_strain']:14.3f}")
+    s = report["summary"]
+    print(f"  same best design: {s['same_best']}; max |PSM - FEM| reward "
+          f"{s['max_reward_difference']:.4f}"
+          + (f"; Spearman {s['spearman']:.3f}" if s.get("spearman") is not None else ""))
+    for name, p in paths.items():
+        print(f"  {name:12s}: {p}")

@@ -1,0 +1,81 @@
+"""FEM verification of an optimization run (``psm-grasp verify``, ``optimize --verify-top``)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from envs.cli import main
+from envs.scene import DESIGN_FIELDS
+from optim import OptimResult
+
+pytest.importorskip("skfem")
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    code = main(["optimize", "--method", "random", "--budget", "60", "--seed", "4", "--out",
+                 str(out), "--no-progress", "--verify-top", "3"])
+    assert code in (0, 3)
+    return out
+
+
+def test_a_run_keeps_its_best_distinct_designs(run_dir):
+    result = OptimResult.from_json(run_dir / "random_seed4_result.json")
+    top = result.top_designs
+    assert 3 <= len(top) <= 10
+    rewards = [t["reward"] for t in top]
+    assert rewards == sorted(rewards, reverse=True)
+    assert rewards[0] == result.best_reward
+    assert top[0]["design"] == result.best_design
+
+
+def test_verify_rescores_the_run_and_writes_its_files(run_dir):
+    report = json.loads((run_dir / "verify.json").read_text())
+    assert (run_dir / "verify.png").stat().st_size > 0
+    result = OptimResult.from_json(run_dir / "random_seed4_result.json")
+    rows = report["designs"]
+    assert len(rows) == 3
+    for row, kept in zip(rows, result.top_designs, strict=False):
+        assert row["design"] == kept["design"]
+        # the PSM side is the run's own model: the reward it scored, exactly
+        assert row["psm"]["reward"] == kept["reward"]
+        assert row["fem"]["valid_at_rest"]
+    assert sorted(r["psm_rank"] for r in rows) == [1, 2, 3]
+    assert sorted(r["fem_rank"] for r in rows) == [1, 2, 3]
+    best_fem = max(range(3), key=lambda i: rows[i]["fem"]["reward"])
+    assert rows[best_fem]["fem_rank"] == 1
+    assert report["summary"]["same_best"] == (rows[0]["fem_rank"] == 1)
+    assert -1.0 <= report["summary"]["spearman"] <= 1.0
+    diff = max(abs(r["psm"]["reward"] - r["fem"]["reward"]) for r in rows)
+    assert report["summary"]["max_reward_difference"] == pytest.approx(diff)
+
+
+def test_verify_command_on_the_run_folder(run_dir, capsys):
+    assert main(["verify", str(run_dir), "--top", "2"]) == 0
+    printed = capsys.readouterr().out
+    assert "FEM verification of random on paper-r070" in printed
+    report = json.loads((run_dir / "verify.json").read_text())
+    assert len(report["designs"]) == 2
+    designs = np.array([[r["design"][k] for k in DESIGN_FIELDS] for r in report["designs"]])
+    assert np.ptp(designs, axis=0).max() > 0  # distinct designs
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--top", "0"], "--top"),
+    (["--top", "11"], "--top"),
+    (["--result", "missing.json"], "--result"),
+])
+def test_verify_refuses_bad_options(run_dir, capsys, args, message):
+    assert main(["verify", str(run_dir), *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_verify_needs_a_run(tmp_path, capsys):
+    assert main(["verify", str(tmp_path)]) == 2
+    assert "exactly one *_result.json" in capsys.readouterr().err
+    assert main(["verify", str(tmp_path / "nowhere")]) == 2
+    assert "is not a folder" in capsys.readouterr().err
