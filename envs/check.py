@@ -740,12 +740,14 @@ def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
     """Forces of one triangle (corners (ring, index) counter-clockwise) of a ring mesh: its
     share of its three edges' springs and its area energy. Returns the largest force [N]."""
     m = int(prm[CK_RINGS])
-    qax, qay, _ = _ring_corner(prm, points, interior, ka, ia, True)
-    qbx, qby, _ = _ring_corner(prm, points, interior, kb, ib, True)
-    qcx, qcy, _ = _ring_corner(prm, points, interior, kc, ic, True)
-    pax, pay, ra = _ring_corner(prm, points, interior, ka, ia, False)
-    pbx, pby, rb = _ring_corner(prm, points, interior, kb, ib, False)
-    pcx, pcy, rc = _ring_corner(prm, points, interior, kc, ic, False)
+    # rest/current as runtime flags, not literals: _ring_corner then compiles once
+    rest, now = m > 0, m < 0
+    qax, qay, _ = _ring_corner(prm, points, interior, ka, ia, rest)
+    qbx, qby, _ = _ring_corner(prm, points, interior, kb, ib, rest)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, kc, ic, rest)
+    pax, pay, ra = _ring_corner(prm, points, interior, ka, ia, now)
+    pbx, pby, rb = _ring_corner(prm, points, interior, kb, ib, now)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, kc, ic, now)
     a0 = 0.5 * ((qbx - qax) * (qcy - qay) - (qcx - qax) * (qby - qay))
     if prm[CK_MU] > 0.0:
         return _cst_forces(prm, force, (qax, qay, qbx, qby, qcx, qcy),
@@ -773,14 +775,15 @@ def _quad_forces(prm, points, interior, k, i, force):
     corners counter-clockwise are a = (k - 1, i), b = (k, i), c = (k, i + 1), d = (k - 1, i + 1)
     and its area the shoelace sum, whose gradient over a corner is (y_next - y_prev,
     x_prev - x_next) / 2. Returns the largest force [N]."""
-    qax, qay, _ = _ring_corner(prm, points, interior, k - 1, i, True)
-    qbx, qby, _ = _ring_corner(prm, points, interior, k, i, True)
-    qcx, qcy, _ = _ring_corner(prm, points, interior, k, i + 1, True)
-    qdx, qdy, _ = _ring_corner(prm, points, interior, k - 1, i + 1, True)
-    pax, pay, ra = _ring_corner(prm, points, interior, k - 1, i, False)
-    pbx, pby, rb = _ring_corner(prm, points, interior, k, i, False)
-    pcx, pcy, rc = _ring_corner(prm, points, interior, k, i + 1, False)
-    pdx, pdy, rd = _ring_corner(prm, points, interior, k - 1, i + 1, False)
+    rest, now = k > 0, k < 0  # runtime flags (see _mesh_triangle)
+    qax, qay, _ = _ring_corner(prm, points, interior, k - 1, i, rest)
+    qbx, qby, _ = _ring_corner(prm, points, interior, k, i, rest)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, k, i + 1, rest)
+    qdx, qdy, _ = _ring_corner(prm, points, interior, k - 1, i + 1, rest)
+    pax, pay, ra = _ring_corner(prm, points, interior, k - 1, i, now)
+    pbx, pby, rb = _ring_corner(prm, points, interior, k, i, now)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, k, i + 1, now)
+    pdx, pdy, rd = _ring_corner(prm, points, interior, k - 1, i + 1, now)
     a0 = 0.5 * ((qax * qby - qbx * qay) + (qbx * qcy - qcx * qby) + (qcx * qdy - qdx * qcy)
                 + (qdx * qay - qax * qdy))
     area = 0.5 * ((pax * pby - pbx * pay) + (pbx * pcy - pcx * pby) + (pcx * pdy - pdx * pcy)
@@ -801,9 +804,12 @@ def _ring_forces(prm, points, interior, force):
     m = int(prm[CK_RINGS])
     big = 0.0
     if m == 1:
-        # the fan: triangles (centre, p_i, p_i+1)
+        # the fan: triangles (centre, p_i, p_i+1); ring numbers as runtime values (a literal
+        # 0 or 1 would compile _mesh_triangle again)
+        centre, rim = m - 1, m
         for i in range(n):
-            big = _npmax(big, _mesh_triangle(prm, points, interior, 0, i, 1, i, 1, i + 1, force))
+            big = _npmax(big, _mesh_triangle(prm, points, interior, centre, i, rim, i, rim,
+                                             i + 1, force))
         return big
     for k in range(1, m + 1):
         for i in range(n):

@@ -53,7 +53,7 @@ def test_rank_one_saddle_test_matches_the_dense_eigenvalues(scale, k_gauge):
     bidx = K._band_index(n)
     nb = 2 * n
     ab, bb, dd = np.zeros((nb, K.BW + 1)), np.zeros((nb, 2)), np.zeros((2, 2))
-    K._spring_terms(x, n, prm, bidx, np.zeros(nb + 2), ab, bb, dd, True)
+    K._spring_terms(x, n, prm, bidx, np.zeros(nb + 2), ab, bb, dd, False)
     w, perm = _dense(ab, bb, dd, bidx, n)
     t = np.zeros(nb + 2)
     t[0], t[1] = -math.sin(prm[K.P_PHASE]), math.cos(prm[K.P_PHASE])

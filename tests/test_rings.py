@@ -102,7 +102,7 @@ def test_energy_gradient_and_band_hessian_are_exact(n, m, element):
     bidx = mesh_band_index(n, m)
     ab, bb, dd = np.zeros((nbb, bw + 1)), np.zeros((nbb, 2)), np.zeros((2, 2))
     grad = np.zeros(x.size)
-    _spring_terms(x, n, kp, bidx, grad, ab, bb, dd, True, False)
+    _spring_terms(x, n, kp, bidx, grad, ab, bb, dd, False)
     # dense Hessian in state order from the band
     full = np.zeros((nbb + 2, nbb + 2))
     for p in range(nbb):

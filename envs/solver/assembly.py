@@ -293,17 +293,37 @@ def _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
+def _gauge_gradient(x, prm, grad):
+    """Add the gauge spring's gradient: a stiff tangential spring on point 0 removes the free
+    rotation of the contour about the pin; its reaction must vanish at the answer (checked by
+    the caller)."""
+    kg = prm[P_GAUGE]
+    if kg > 0.0:
+        tx, ty, ut = _gauge_stretch(x, prm)
+        grad[0] += kg * ut * tx
+        grad[1] += kg * ut * ty
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, psd):
     """Energy gradient (state order) and Hessian (band order) of the model's terms and the
-    gauge spring."""
+    gauge spring.
+
+    Every flag passed to the Hessian kernels here and in :func:`_drop_curvature` is a runtime
+    value of the same type (never a literal ``True``/``False`` nor an omitted default): numba
+    compiles a callee once per argument type, and a literal is a type of its own, so each
+    kernel compiles once instead of three times (a first run compiles ~40 s less).
+    """
     mesh_gradient(x, n, prm, grad)
-    if want_hess and prm[P_MU] > 0.0:
-        _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd)
+    _gauge_gradient(x, prm, grad)
+    sign = 1.0  # passed, not omitted: an omitted default is a type of its own
+    if prm[P_MU] > 0.0:
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign)
         if prm[P_QUAD] > 0.0:
-            _quad_hessian(x, n, prm, bidx, ab, bb, dd, psd)
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign)
         for j in range(2):
             dd[j, j] += prm[P_KAPPA]
-    elif want_hess:
+    else:
         nb = ab.shape[0]
         m = int(prm[P_RINGS])
         for t in range(n_edge_types(m)):
@@ -317,16 +337,11 @@ def _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, want_hess, psd=False):
         for j in range(2):
             dd[j, j] += prm[P_KAPPA]
         if prm[P_KA] > 0.0:
-            _area_hessian(x, n, prm, bidx, ab, bb, dd, psd)
+            _area_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign)
     kg = prm[P_GAUGE]
     if kg > 0.0:
-        # gauge: a stiff tangential spring on point 0 removes the free rotation of the contour
-        # about the pin; its reaction must vanish at the answer (checked by the caller)
-        tx, ty, ut = _gauge_stretch(x, prm)
-        grad[0] += kg * ut * tx
-        grad[1] += kg * ut * ty
-        if want_hess:
-            _add_point(ab, bidx[0], kg * tx * tx, kg * ty * ty, kg * tx * ty)
+        tx, ty, _ = _gauge_stretch(x, prm)
+        _add_point(ab, bidx[0], kg * tx * tx, kg * ty * ty, kg * tx * ty)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -364,13 +379,17 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
     curvature (kept in ``ch``) taken out, without evaluating the constraints again."""
     nb = ab.shape[0]
     m = int(prm[P_RINGS])
+    # runtime flags, not literals: the kernels below then reuse the compilation of
+    # _spring_terms' calls (see its docstring)
+    convex = m > 0
+    exact = not convex
     if prm[P_MU] > 0.0:
         # constant-strain triangles: their exact Hessian out, the tangent at rest in
-        _cst_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
-        _cst_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, exact, -1.0)
+        _cst_hessian(x, n, prm, bidx, ab, bb, dd, convex, 1.0)
         if prm[P_QUAD] > 0.0:
-            _quad_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
-            _quad_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, exact, -1.0)
+            _quad_hessian(x, n, prm, bidx, ab, bb, dd, convex, 1.0)
     for t in range(n_edge_types(m) if prm[P_MU] == 0.0 else 0):
         for i in range(n):
             ka, ia, kb, ib = edge_ends(t, i, n, m)
@@ -386,8 +405,8 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
                           -tt * (1.0 - uy * uy), tt * ux * uy)
     if prm[P_KA] > 0.0 and prm[P_MU] == 0.0:
         # the area energy: its exact Hessian out, its convexified one in
-        _area_hessian(x, n, prm, bidx, ab, bb, dd, False, -1.0)
-        _area_hessian(x, n, prm, bidx, ab, bb, dd, True, 1.0)
+        _area_hessian(x, n, prm, bidx, ab, bb, dd, exact, -1.0)
+        _area_hessian(x, n, prm, bidx, ab, bb, dd, convex, 1.0)
     for m in range(mcount):
         if ch[m, CH_BLOCK] == 0.0:
             continue
@@ -419,7 +438,7 @@ def _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab,
     ab[:, :] = 0.0
     bb[:, :] = 0.0
     dd[:, :] = 0.0
-    _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, True, psd)
+    _spring_terms(x, n, prm, bidx, grad, ab, bb, dd, psd)
     for d in range(x.shape[0]):
         res[d] = grad[d]
         gb[d] = 0.0
@@ -525,13 +544,15 @@ def _merit(x, n, prm, kinds, fj, fidx, mcount, gbuf):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, gbuf, grad5, hess5, dofs, res):
     res[:] = 0.0
-    # gradient only: the matrix arguments are not touched
-    _spring_terms(x, n, prm, dofs, res, hess5, hess5, hess5, False)
+    # gradient only
+    mesh_gradient(x, n, prm, res)
+    _gauge_gradient(x, prm, res)
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
     for m in range(mcount):
+        # no Hessian, as a runtime flag: a literal False would compile _con_eval again
         g, nd = _con_eval(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs, grad5, hess5, dofs,
-                          False)
+                          n < 0)
         gbuf[m] = g
         for a in range(nd):
             res[dofs[a]] -= lam[m] * grad5[a]

@@ -82,10 +82,11 @@ from .status import (
 )
 
 FAST_BUDGET = 1.0 / 3.0  # iteration limit of the fast attempt, as a fraction of the option's
+ESCAPE_OPENING = 0.01  # first opening step of the fingers when leaving a saddle or a stall [scaled]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening=0.01):
+def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
     angle = (0.25 if attempt % 2 == 1 else -0.25) * attempt * 2.0 * math.pi / n
@@ -154,8 +155,10 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
     lam_in = lam_face.copy()
     fast = opts.copy()
     fast[O_MAXIT] = opts[O_MAXIT] * FAST_BUDGET
+    # flags as runtime values (n < 0 is False, n > 0 True): a literal True/False would
+    # compile _solve_attempt and its callees once per value (assembly._spring_terms)
     _solve_attempt(n, prm_in, fast, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
-                   info, 0.0, False)
+                   info, 0.0, n < 0)
     if info[I_STATUS] == OK and info[I_STABLE] == 1.0:
         return
     total = info[I_ITERATIONS]
@@ -167,7 +170,7 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
         x[:] = x_in
         lam_face[:, :] = lam_in
         _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand,
-                       face_cand, info, float(policy), True)
+                       face_cand, info, float(policy), n > 0)
         total += info[I_ITERATIONS]
         if info[I_STATUS] == OK or info[I_STATUS] == INVERTED:
             break
@@ -235,7 +238,7 @@ def _release_gauge(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fsc
         xs[d] = xkeep[d]
     for m in range(mcount):
         lam[m] = lkeep[m]
-    if not _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, 0, gbuf):
+    if not _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, n - n, gbuf, ESCAPE_OPENING):
         return POLISH_FAIL, stable, True
     return OK, stable, True
 
@@ -419,7 +422,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         last_fidx[:mcount] = fidx[:mcount]
         if status == SADDLE and escapes < 3:
             escapes += 1
-            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf):
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf, ESCAPE_OPENING):
                 _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face)
                 continue
         if status == SADDLE:
@@ -441,7 +444,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # solve the same equations as the one without it below; go straight there unless
             # the candidate set changes (then polish as usual, for the next round's start)
             skip_gauge_polish = not _grow_candidates(xs, x0, n, prm, face_cand, corner_cand,
-                                                     blocked, False)
+                                                     blocked, n < 0)
         if opts[O_POLISH] > 0.0 and not blocked and not skip_gauge_polish:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                  fscale, active, work_it, gbuf, stable_out)
@@ -449,7 +452,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         # check the candidate set against the solution
         changed = False
         if not skip_gauge_polish:
-            changed = _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked)
+            changed = _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked, n > 0)
         if status == POLISH_FAIL or (blocked and not changed):
             # keep the interior-point answer; the caller reports the reason
             break
@@ -465,7 +468,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         if not changed and not stable and escapes < 3:
             # converged to a saddle (e.g. a symmetric squeeze past a bifurcation): perturb
             escapes += 1
-            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf):
+            if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf, ESCAPE_OPENING):
                 _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face)
                 continue
         if not changed:
@@ -475,7 +478,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face)
         mnew = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
         xprev = x0.copy()
-        if not _escape(xs, x0, n, prm, kinds, fj, fidx, mnew, 0, gbuf, 1e-4):
+        if not _escape(xs, x0, n, prm, kinds, fj, fidx, mnew, n - n, gbuf, 1e-4):
             for d in range(x0.shape[0]):
                 x0[d] = xprev[d]
         if rnd >= int(opts[O_MAXROUND]) + escapes - 1:

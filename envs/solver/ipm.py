@@ -167,8 +167,11 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         # The same pass gives the stationarity residual (sig = lam / g does not depend on mu).
         for m in range(mcount):
             sig[m] = lam[m] / g[m]
+        # psd=False as a runtime value, not a literal: the Hessian kernels compile once
+        # (assembly._spring_terms)
+        exact = n < 0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                       g, grad5, hess5, dofs, mu, False, gb, res, cg, cd, ch)
+                       g, grad5, hess5, dofs, mu, exact, gb, res, cg, cd, ch)
         kkt = 0.0
         for d in range(nx):
             kkt = max(kkt, abs(res[d]))

@@ -123,8 +123,11 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             else:
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
+        # psd=False as a runtime value, not a literal: the Hessian kernels compile once
+        # (assembly._spring_terms)
+        exact = n < 0
         _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0, False, gbuf_p, res_p, cg, cd, ch)
+                       dd, g, grad5, hess5, dofs, 0.0, exact, gbuf_p, res_p, cg, cd, ch)
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
