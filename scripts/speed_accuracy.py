@@ -14,8 +14,8 @@ per torque of their ramp.
 
 The model family's members are drawn beside them with their own scales, *not* refitted on this
 reference: the paper's fan at s = 1, spring ring meshes with the hybrid scales derived from E and
-nu, and constant-strain ring meshes with their shipped calibration (fitted on the three paper
-disks over 0.05-0.5 N·m; ``envs.model.family``).
+nu, and constant-strain and nh-quad ring meshes (the default model is nh-quad 40 x 2) with their
+shipped calibration (fitted on the three paper disks over 0.05-0.5 N·m; ``envs.model.family``).
 
 MuJoCo's points (``scripts/peer_mujoco.py``: a 2-D flex per mesh size, wall time from rest to
 rest per torque, scored against the same reference) are drawn when ``--mujoco`` names an
@@ -70,17 +70,22 @@ NEWTON_REPEATS = 3  # timing repeats (median) of the Newton ramps up to N = 80
 STYLE = {"newton": ("tab:blue", "o"), "slsqp": ("tab:orange", "s"),
          "nelder-mead": ("tab:red", "D"), "fem": ("k", "P"),
          "fan s=1": ("0.45", "v"), "rings: springs": ("tab:cyan", "^"),
-         "rings: cst": ("tab:brown", "*")}
+         "rings: cst": ("tab:brown", "*"),
+         "rings: nh-quad (default 40 x 2)": ("tab:green", "h")}
 FAMILY = (Member(20, 1), Member(40, 1), Member(20, 2, "hybrid"), Member(20, 3, "hybrid"),
           Member(24, 4, "hybrid"), Member(32, 6, "hybrid"), Member(20, 3, "calibrated", "cst"),
           Member(20, 4, "calibrated", "cst"), Member(24, 4, "calibrated", "cst"),
           Member(24, 6, "calibrated", "cst"), Member(32, 6, "calibrated", "cst"),
-          Member(48, 8, "calibrated", "cst"))
+          Member(48, 8, "calibrated", "cst"), Member(32, 2, "calibrated", "nhquad"),
+          Member(40, 2, "calibrated", "nhquad"), Member(48, 3, "calibrated", "nhquad"),
+          Member(56, 4, "calibrated", "nhquad"), Member(80, 6, "calibrated", "nhquad"))
 
 
 def _family_method(member: Member) -> str:
     if member.n_rings == 1:
         return "fan s=1"
+    if member.element == "nhquad":
+        return "rings: nh-quad (default 40 x 2)"
     return "rings: cst" if member.element == "cst" else "rings: springs"
 
 
