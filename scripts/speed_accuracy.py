@@ -131,7 +131,7 @@ def mujoco_points(path: Path) -> list[dict]:
 def draw_chart(points: list[dict], front: list[int], title: str, path: Path,
                peers: list[dict] = ()) -> None:
     """The chart: every point, the Pareto front (indices into ``points``) and peer points."""
-    fig = Figure(figsize=(8, 5.5))
+    fig = Figure(figsize=(11, 5.5))
     ax = fig.add_subplot()
     styles = dict(STYLE, mujoco=MUJOCO_STYLE) if peers else STYLE
     every = list(points) + list(peers)
@@ -167,7 +167,7 @@ def draw_chart(points: list[dict], front: list[int], title: str, path: Path,
     ax.set_ylabel("jaw closing-angle error vs FEM r/24 [%] (RMS over 3 torques)")
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # outside: no point hidden
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
