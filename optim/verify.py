@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,10 @@ from .result import OptimResult
 __all__ = ["DEFAULT_TOP", "find_result", "verify_result", "verify_run", "verify_figure"]
 
 DEFAULT_TOP = 3
+# the FEM confirms a design when its reward is within this share of the PSM's (plus the
+# absolute margin): beyond it the verification warns
+CONFIRM_RELATIVE = 0.25
+CONFIRM_ABSOLUTE = 0.01
 MAX_TOP = 10  # what an OptimResult keeps
 REPORTED = ("reward", "contact_score", "grip_share", "peak_log_strain", "converged",
             "valid_at_rest", "status")
@@ -76,7 +81,8 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     Returns the content of ``verify.json``: per design (in the run's order, best first) its
     fields, the PSM and FEM metrics of :data:`REPORTED` and both ranks; and a summary (the
     Spearman rank correlation for three designs or more, whether both fidelities pick the same
-    best, the largest reward difference).
+    best, the largest reward difference, and ``best_confirmed``: the FEM reward of the PSM's
+    best design within 25 % + 0.01 of the PSM's).
     """
     top = check_integer("--top", top, 1, MAX_TOP)
     picks = list(result.top_designs)[:top]
@@ -104,8 +110,11 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
             "psm_rank": psm_rank[i],
             "fem_rank": fem_rank[i],
         })
+    best = psm_rank.index(1)
+    margin = CONFIRM_RELATIVE * abs(psm["reward"][best]) + CONFIRM_ABSOLUTE
     summary: dict[str, Any] = {
         "designs": len(rows),
+        "best_confirmed": bool(abs(psm["reward"][best] - fem["reward"][best]) <= margin),
         "same_best": psm_rank.index(1) == fem_rank.index(1),
         "fem_rank_of_psm_best": fem_rank[psm_rank.index(1)],
         "max_reward_difference": float(np.max(np.abs(psm["reward"] - fem["reward"]))),
@@ -201,3 +210,9 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
           + (f"; Spearman {s['spearman']:.3f}" if s.get("spearman") is not None else ""))
     for name, p in paths.items():
         print(f"  {name:12s}: {p}")
+    if not s["best_confirmed"]:
+        best = next(r for r in report["designs"] if r["psm_rank"] == 1)
+        print(f"psm-grasp: warning: the FEM does not confirm the run's best design (reward "
+              f"{best['fem']['reward']:.4f} against the point-spring model's "
+              f"{best['psm']['reward']:.4f}, more than {CONFIRM_RELATIVE:.0%} + "
+              f"{CONFIRM_ABSOLUTE:g} apart): check it before building it", file=sys.stderr)

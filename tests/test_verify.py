@@ -52,6 +52,19 @@ def test_verify_rescores_the_run_and_writes_its_files(run_dir):
     assert -1.0 <= report["summary"]["spearman"] <= 1.0
     diff = max(abs(r["psm"]["reward"] - r["fem"]["reward"]) for r in rows)
     assert report["summary"]["max_reward_difference"] == pytest.approx(diff)
+    best = next(r for r in rows if r["psm_rank"] == 1)
+    gap = abs(best["psm"]["reward"] - best["fem"]["reward"])
+    assert report["summary"]["best_confirmed"] == (gap <= 0.25 * abs(best["psm"]["reward"])
+                                                   + 0.01)
+
+
+def test_verify_warns_when_the_fem_does_not_confirm_the_best(run_dir, capsys, monkeypatch):
+    import optim.verify as verify
+
+    monkeypatch.setattr(verify, "CONFIRM_RELATIVE", 0.0)
+    monkeypatch.setattr(verify, "CONFIRM_ABSOLUTE", 0.0)  # no two fidelities agree exactly
+    assert main(["verify", str(run_dir), "--top", "1"]) == 0
+    assert "the FEM does not confirm the run's best design" in capsys.readouterr().err
 
 
 def test_verify_command_on_the_run_folder(run_dir, capsys):
