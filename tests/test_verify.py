@@ -92,3 +92,13 @@ def test_verify_needs_a_run(tmp_path, capsys):
     assert "exactly one *_result.json" in capsys.readouterr().err
     assert main(["verify", str(tmp_path / "nowhere")]) == 2
     assert "is not a folder" in capsys.readouterr().err
+
+
+def test_verify_without_the_fem_extra_says_what_to_install(run_dir, capsys, monkeypatch):
+    import optim.cli
+
+    monkeypatch.setattr(optim.cli, "fem_available", lambda: False)
+    assert main(["verify", str(run_dir)]) == 2
+    assert "pip install -e '.[fem]'" in capsys.readouterr().err
+    assert main(["optimize", "--budget", "10", "--out", str(run_dir), "--verify-top", "2"]) == 2
+    assert "--verify-top needs scikit-fem" in capsys.readouterr().err
