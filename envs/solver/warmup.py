@@ -27,7 +27,7 @@ def announce_compile(stream=None) -> bool:
     first solve; returns whether it did."""
     if kernels_cached():
         return False
-    print("psm-grasp: compiling the solver's kernels (first run after an install: about 3-5 "
+    print("psm-grasp: compiling the solver's kernels (first run after an install: about 2 "
           "minutes on a 2-core machine; later runs load them in about a second) ...",
           file=stream or sys.stderr, flush=True)
     return True
