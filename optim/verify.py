@@ -166,6 +166,7 @@ def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
     ax2.set_xticks([0, 1], ["PSM rank", "FEM rank"])
     ax2.set_xlim(-0.4, 1.3)
     ax2.set_ylim(n + 0.5, 0.5)
+    ax2.set_yticks(range(1, n + 1))
     ax2.set_ylabel("rank (1 = best)")
     ax2.set_title(("same best design" if s["same_best"] else
                    f"the PSM's best is the FEM's #{s['fem_rank_of_psm_best']}")
