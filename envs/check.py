@@ -54,7 +54,7 @@ from typing import NamedTuple
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, prange, types
+from numba import njit, types
 from numba.extending import intrinsic
 
 __all__ = [
@@ -849,14 +849,21 @@ def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
     _verdict(prm, face, corner, force, spring_max, acc, out)
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
+@njit(cache=True, error_model="numpy", nogil=True)
+def _check_rows(start, stop_row, prms, points, angles, face, corner, stop, out):
+    for b in range(start, stop_row):
+        check_one(prms[b], points[b], angles[b], face[b], corner[b], stop[b], out[b])
+
+
 def check_batch(prms, points, angles, face, corner, stop, out):
-    """:func:`check_one` over a batch (first axis of every argument), in parallel threads.
+    """:func:`check_one` over a batch (first axis of every argument), rows on threads
+    (:func:`envs.parallel.run_rows`).
 
     Shapes: ``prms`` (B, N_CK), ``points`` (B, N, 2), ``angles`` (B, 2), ``face`` (B, 2, N),
     ``corner`` (B, 2, 4, N), ``stop`` (B, 2), ``out`` (B, N_OUT); all float64.
     """
-    # checked before the parallel loop, where an exception would not come out as itself
+    from envs.parallel import run_rows  # threads only: no physics of the solver
+
     nb, n = prms.shape[0], points.shape[1]
     for size in (points.shape[0], angles.shape[0], face.shape[0], corner.shape[0],
                  stop.shape[0], out.shape[0]):
@@ -864,8 +871,7 @@ def check_batch(prms, points, angles, face, corner, stop, out):
             raise ValueError("check_batch: every argument needs the same batch size")
     if face.shape[2] != n or corner.shape[3] != n or corner.shape[2] != 4:
         raise ValueError("check_batch: face must be (B, 2, N) and corner (B, 2, 4, N)")
-    for b in prange(nb):
-        check_one(prms[b], points[b], angles[b], face[b], corner[b], stop[b], out[b])
+    run_rows(_check_rows, nb, prms, points, angles, face, corner, stop, out)
 
 
 def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,

@@ -583,20 +583,6 @@ def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
                             fem_rings=fem_rings)
 
 
-def _check_start_method(executor) -> None:
-    """Refuse process pools that fork: a child forked from a process whose numba kernels have
-    run on the GNU OpenMP threading layer is killed by numba ("fork() called from a process
-    already using GNU OpenMP"), which shows up as a broken pool after the work was sent."""
-    context = getattr(executor, "_mp_context", None) or getattr(executor, "_ctx", None)
-    get_method = getattr(context, "get_start_method", None)
-    if callable(get_method) and get_method() == "fork":
-        raise ValueError(
-            f"executor {type(executor).__name__} starts its workers with 'fork', which is not "
-            "safe with numba's OpenMP threads; use the 'spawn' or 'forkserver' start method "
-            "(ProcessPoolExecutor(mp_context=multiprocessing.get_context('spawn'))) or "
-            "optim.executors.ProcessExecutor")
-
-
 def _result_of(item):
     # dask-like executors return futures from map
     result = getattr(item, "result", None)
@@ -650,12 +636,11 @@ def evaluate_designs(
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
         dask client wrapper, ...): the rows are cut into chunks of ``chunk_size`` that are
-        evaluated with the same function, and the results are concatenated in order. A process
-        pool that starts its workers with ``"fork"`` (the default of ``ProcessPoolExecutor`` on
-        Linux before Python 3.14) is refused with a ``ValueError`` before any work: numba's
-        OpenMP thread pool is not fork-safe; use ``"spawn"``/``"forkserver"`` or
-        :class:`optim.executors.ProcessExecutor`. On one machine no executor beats the
-        default: the in-process evaluation already runs the rows on every core.
+        evaluated with the same function, and the results are concatenated in order. Any
+        start method works, ``"fork"`` included (the rows run on Python threads in compiled
+        code that releases the GIL, :mod:`envs.parallel`, not on numba's OpenMP pool, which a
+        forked child could not use). On one machine no executor beats the default: the
+        in-process evaluation already runs the rows on every core.
     chunk_size
         Rows per chunk when an executor is given, >= 1 (default 256 at ``fidelity="psm"``, 1
         at ``"fem"``: one FEM grasp is worth shipping to a worker).
@@ -768,7 +753,6 @@ def evaluate_designs(
                                 fem_rings)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
-    _check_start_method(executor)
     starts = range(0, batch, int(chunk_size))
     chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, limits, kf))
               for s in starts]

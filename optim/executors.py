@@ -10,8 +10,9 @@ evaluation is lost and none is counted twice.
   the rows of a population in parallel threads.
 - :class:`SerialExecutor`: chunks one after the other in this process (tests, debugging).
 - :class:`ProcessExecutor`: a :class:`concurrent.futures.ProcessPoolExecutor` with the
-  ``spawn`` start method (numba's OpenMP pool is not fork-safe); a pool broken by a dead worker
-  is replaced.
+  ``spawn`` start method (a fresh interpreter per worker; ``fork`` works too since the batch
+  rows run on Python threads, :mod:`envs.parallel`); a pool broken by a dead worker is
+  replaced.
 - :class:`DaskExecutor`: chunks submitted to a ``distributed.Client`` (an existing cluster by
   address, or a :class:`distributed.LocalCluster` for ``"local"``); Dask is imported lazily.
 - :class:`RetryingExecutor`: the retry loop, around anything with ``submit(fn, item)`` returning
@@ -63,9 +64,9 @@ def _writable(item: Any) -> Any:
 
 
 class _ThreadLimited:
-    """``fn`` run with numba limited to ``threads`` threads (picklable).
+    """``fn`` run with the batch solver limited to ``threads`` threads (picklable).
 
-    Several workers on one machine would otherwise each start one OpenMP thread per core.
+    Several workers on one machine would otherwise each run one thread per core.
     """
 
     def __init__(self, fn: Callable[[Any], Any], threads: int | None) -> None:
@@ -73,9 +74,9 @@ class _ThreadLimited:
 
     def __call__(self, item: Any) -> Any:
         if self.threads is not None:
-            import numba
+            from envs.parallel import set_solver_threads
 
-            numba.set_num_threads(max(1, min(self.threads, numba.config.NUMBA_NUM_THREADS)))
+            set_solver_threads(self.threads)
         return self.fn(_writable(item))
 
 

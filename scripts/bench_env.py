@@ -24,10 +24,10 @@ import platform
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 from envs import DesignBounds, GripperDesignEnv, ObjectDistribution, SoftDisk, evaluate_designs
+from envs.parallel import solver_threads
 from envs.scene import PRESETS
 
 TARGET_DESIGNS_PER_S = 20_000
@@ -201,8 +201,7 @@ def main(argv: list[str] | None = None) -> dict:
     report = {
         **model,
         "disk": "paper-r070",
-        "numba_threads": numba.get_num_threads(),
-        "numba_threading_layer": numba.threading_layer(),
+        "solver_threads": solver_threads(),
         "cpu": platform.processor() or platform.machine(),
         "warm_up_s": warm_s,
         "step_loop": loop,
@@ -222,7 +221,7 @@ def main(argv: list[str] | None = None) -> dict:
                        else f"bench_env_{spec.element}.json")
     path.write_text(json.dumps(report, indent=2))
 
-    print(f"numba threads: {report['numba_threads']} ({report['numba_threading_layer']}), "
+    print(f"solver threads: {report['solver_threads']} (Python threads, nogil kernels), "
           f"{spec.element} N = {spec.n_triangles}, M = {spec.n_rings}, warm-up {warm_s:.1f} s")
     print(f"step loop (reset + step): {loop['steps_per_s']:9.1f} steps/s   "
           f"valid {loop['valid_fraction']:.2f}, converged "

@@ -1,6 +1,6 @@
 """Driver of the compiled solve: contact policies, outer rounds over the candidate sets, the
-rotation gauge, saddle escapes, the final guards; one grasp (solve_one) or a batch in parallel
-threads (solve_batch).
+rotation gauge, saddle escapes, the final guards; one grasp (solve_one) or a range of a batch's
+rows without the GIL (solve_rows; :func:`solve_batch` runs them on threads).
 """
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..model.energy import folded_triangles
 from ..model.layout import (
@@ -43,6 +43,7 @@ from ..model.layout import (
     P_THMIN,
 )
 from ..model.rings import kernel_copy, mesh_band_index
+from ..parallel import run_rows
 from .assembly import (
     _gauge_force,
     _stationarity,
@@ -499,9 +500,18 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     info[I_STABLE] = 1.0 if (stable and not saddle) else 0.0
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_cand, face_cand, infos):
-    """:func:`solve_one` over a batch (first axis), in parallel threads."""
-    for b in prange(prms.shape[0]):
+@njit(cache=True, error_model="numpy", nogil=True)
+def solve_rows(start, stop, n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
+               face_cand, infos):
+    """:func:`solve_one` over the rows ``start <= b < stop`` of a batch (first axis)."""
+    for b in range(start, stop):
         solve_one(n, prms[b], opts, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                   corner_cand[b], face_cand[b], infos[b])
+
+
+def solve_batch(n, prms, opts, xs, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
+                infos):
+    """:func:`solve_one` over a batch (first axis), on :func:`envs.parallel.run_rows`'s
+    threads."""
+    run_rows(solve_rows, prms.shape[0], n, prms, opts, xs, lam_face, lam_corner, lam_stop,
+             corner_cand, face_cand, infos)

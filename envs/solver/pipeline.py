@@ -17,9 +17,8 @@ from __future__ import annotations
 import time
 from typing import NamedTuple
 
-import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from envs import check
 from envs.model.layout import (
@@ -65,6 +64,7 @@ from envs.model.metrics import (
 from envs.model.problem import SceneColumns, pack_params, rest_state, stiffness_unit
 from envs.model.rings import HUB_RADIUS, kernel_copy
 
+from ..parallel import run_rows
 from . import driver
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
 
@@ -116,11 +116,10 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
         driver.solve_one(n, prm[0], opts, xs[0], lam_face[0], lam_corner[0], lam_stop[0],
                          corner_cand[0], face_cand[0], infos[0])
     else:
-        # dynamic scheduling, one row at a time: solve times vary by 100x between rows (a row
-        # hitting the iteration limit), so static blocks would leave threads idle
-        with numba.parallel_chunksize(1):
-            driver.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
-                               face_cand, infos)
+        # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
+        # between rows (a row hitting the iteration limit)
+        driver.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
+                           face_cand, infos)
     return infos, lam_corner, lam_stop
 
 
@@ -227,10 +226,11 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
                           int(metrics[M_INVERTED]))
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, interior,
-                 face, corner, stop, totals, edges, metrics, ck, verdict, status):
-    for b in prange(scene.shape[0]):
+@njit(cache=True, error_model="numpy", nogil=True)
+def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
+                 points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
+                 status):
+    for b in range(start, stop_row):
         status[b] = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b],
                                 lam_stop[b], infos[b], points[b], interior[b], face[b],
                                 corner[b], stop[b], totals[b], edges[b], metrics[b], ck[b],
@@ -308,8 +308,9 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
                                 corner[0], stop[0], totals[0], edges[0], metrics[0], ck[0],
                                 verdict[0])
     else:
-        _finish_rows(scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points, interior,
-                     face, corner, stop, totals, edges, metrics, ck, verdict, status)
+        run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
+                 points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
+                 status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
     passed = verdict[:, check.OUT_PASSED] > 0.0
     return BatchSolution(
