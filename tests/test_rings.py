@@ -335,3 +335,15 @@ def test_drawing_a_ring_grasp_shows_its_mesh():
     assert np.abs(strains).max() < 1e-12
     _, strains = mesh_segments(res.points_m, res.interior_points_m, c, r, 3)
     assert np.abs(strains).max() == pytest.approx(res.peak_strain, rel=1e-9)
+
+
+def test_an_nhquad_scale_far_from_its_fitted_n_warns():
+    import warnings
+
+    from envs.model.family import calibration_scale
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert calibration_scale(40, 2, "nhquad") == calibration_scale(56, 2, "nhquad")
+    with pytest.warns(UserWarning, match="fitted at N = .*refine N and M together"):
+        calibration_scale(200, 2, "nhquad")

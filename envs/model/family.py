@@ -24,8 +24,12 @@ the FEM (:func:`cst_disk` applies it).
 
 The nh-quad member (``element="nhquad"``) moves the volumetric term from the triangles to the
 quads, which removes the locking; what is left is the stiffness of linear triangles in bending
-of a coarse ring layer, which depends on the ring count M, not on N or nu (measured): one
-scale per M, :data:`NHQUAD_SCALES`, below 1 and rising towards 1 as the rings refine.
+of a coarse ring layer, which depends on the ring count M and not on nu, nor on N near the N
+it was fitted at (measured): one scale per M, :data:`NHQUAD_SCALES`, below 1 and rising towards
+1 as the rings refine. Far from the fitted N the triangles' shape changes and so does the
+error (``scripts/fig5_error_vs_n.py``, r = 0.10 m, M = 2: 9 % RMS at N = 20, 1.2 % at 40,
+2.4 % at 64, 3.5 % at 200): refine N and M together; :func:`calibration_scale` warns outside
+the range.
 
 A shipped scale multiplies the disk's own ``stiffness_scale``: that field stays the user's
 material calibration (1 for the paper disks, 0.033 for the paper's TPU forceps), the member's
@@ -34,6 +38,7 @@ scale corrects the discretization (:func:`calibration_scale`, :func:`calibrated_
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 from typing import NamedTuple
 
@@ -180,8 +185,15 @@ NHQUAD_SCALES = {
 }
 
 
+NHQUAD_N_RANGE = (0.8, 1.25)  # the factors on the fitted N range a shipped nh-quad scale holds
+
+
 def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
     """The shipped discretization scale of a member of the family.
+
+    An nh-quad member with N outside ``NHQUAD_N_RANGE`` times its fitted N range (M = 2:
+    26-60) gets the scale with a ``UserWarning``: its error grows there (see the module's
+    docstring).
 
     Raises
     ------
@@ -195,6 +207,15 @@ def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
             raise ValueError(f"n_rings = {m} has no shipped nh-quad calibration; one of "
                              f"{sorted(NHQUAD_SCALES)} (or fit one with "
                              "scripts/calibrate_family.py)")
+        fitted = NHQUAD_SCALES[m][1]
+        low, high = NHQUAD_N_RANGE[0] * min(fitted), NHQUAD_N_RANGE[1] * max(fitted)
+        if not low <= n <= high:
+            warnings.warn(
+                f"the shipped nh-quad scale for n_rings = {m} was fitted at N = {fitted}; "
+                f"at n_triangles = {n} (outside {low:.0f}-{high:.0f}) its closing-angle error "
+                "against the FEM grows (M = 2, r = 0.10 m: 1.2 % RMS at N = 40, 9 % at N = 20, "
+                "3.5 % at N = 200; scripts/fig5_error_vs_n.py): refine N and M together (N / M "
+                "about 16-20)", UserWarning, stacklevel=4)
         return NHQUAD_SCALES[m][0]
     if element == "cst":
         if (n, m) not in CST_SCALES:
