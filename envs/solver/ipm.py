@@ -37,6 +37,7 @@ from .contact import (
     _all_gaps,
     _tunnels,
 )
+from .curvature import _negative_curvature_step
 from .gauge import (
     _gauge_reanchor,
     _leave_saddle,
@@ -49,6 +50,8 @@ from .status import (
     OK,
     SADDLE,
 )
+
+MAX_CURVATURE_STEPS = 2  # steps along a saddle's unstable mode per interior-point call
 
 
 class IpmWork(NamedTuple):
@@ -150,6 +153,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     it = 0
     n_neg = 0
+    curvature_steps = 0
     n_walled = 0
     have_acc = False  # merit parts at x known (from the line search that reached x)
     e_acc = 0.0
@@ -222,7 +226,22 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                 n_neg += 1
                 if n_neg >= 6:
                     # negative curvature at a nearly converged barrier problem: a saddle that
-                    # descent from a symmetric start cannot leave; the caller perturbs and retries
+                    # descent from a symmetric start cannot leave. Step along its unstable mode
+                    # (twice at most), then the barrier restarts as after the gauge's turn;
+                    # failing that, the caller perturbs and retries
+                    if curvature_steps < MAX_CURVATURE_STEPS and _negative_curvature_step(
+                            x, n, prm, bidx, kinds, fj, fidx, mcount, g, kreg, ab, bb, dd, lb,
+                            ybuf, rb, ob, rt, ot, grad, step, xt, gt):
+                        curvature_steps += 1
+                        n_neg = 0
+                        if mu < mu0:
+                            mu = mu0
+                            shrink = 0.01
+                        for m in range(mcount):
+                            lam[m] = max(lam[m], mu / g[m])
+                        have_acc = False
+                        alpha = -1.0
+                        continue
                     work_it[0] += it
                     return SADDLE, it
             _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab, bb,
