@@ -16,7 +16,8 @@ import math
 
 from numba import njit
 
-from .assembly import _step_from_band
+from ..model.energy import folded_triangles
+from .assembly import _energy, _step_from_band
 from .banded import _factor_solve
 from .contact import _all_gaps, _tunnels
 
@@ -54,8 +55,8 @@ def _negative_curvature_step(x, n, prm, bidx, kinds, fj, fidx, mcount, g, kreg, 
     ``x`` and the gaps ``g`` are those after the step).
 
     The step moves no point more than :data:`CURVATURE_STEP` point spacings and keeps every
-    gap above a tenth of its value with nothing tunnelling (halved until it does, either
-    sense).
+    gap above a tenth of its value, with nothing tunnelling and no triangle turned over
+    (halved until it does, either sense).
     """
     nbb = ab.shape[0]
     nb = 2 * n
@@ -93,6 +94,7 @@ def _negative_curvature_step(x, n, prm, bidx, kinds, fj, fidx, mcount, g, kreg, 
         biggest = max(biggest, abs(step[d]))
     if not biggest > 0.0:
         return False
+    folded = folded_triangles(x, n, prm)
     for sgn in (1.0, -1.0):
         c = sgn * CURVATURE_STEP * 2.0 * math.pi / n / biggest
         for _k in range(STEP_HALVINGS):
@@ -104,7 +106,11 @@ def _negative_curvature_step(x, n, prm, bidx, kinds, fj, fidx, mcount, g, kreg, 
                 if not gt[m] >= 0.1 * g[m]:
                     ok = False
                     break
-            if ok and not _tunnels(x, xt, n, prm):
+            # nothing tunnels and no triangle turns over (the energy of an nh-quad or
+            # area-energy mesh is infinite there; the springs-only fan must not be stepped
+            # into a fold)
+            if (ok and not _tunnels(x, xt, n, prm) and math.isfinite(_energy(xt, n, prm))
+                    and folded_triangles(xt, n, prm) <= folded):
                 for d in range(x.shape[0]):
                     x[d] = xt[d]
                 for m in range(mcount):
