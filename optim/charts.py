@@ -39,6 +39,13 @@ def _save(fig: Figure, path: str | Path | None) -> Figure:
     return fig
 
 
+def disk_of(obj: dict[str, Any], distance_m: float = 0.0) -> SoftDisk:
+    """The disk of a result's object (its placement ``distance_m``; a design replaces it)."""
+    return SoftDisk(obj["radius_m"], distance_m, obj["youngs_modulus_pa"],
+                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
+                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
+
+
 def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     """The :class:`~envs.scene.Scene` of a design (dict in SI units) on a result's object.
 
@@ -47,9 +54,7 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     ValueError
         If the design is invalid at rest (the fingers overlap the disk, ...).
     """
-    disk = SoftDisk(obj["radius_m"], design["distance_m"], obj["youngs_modulus_pa"],
-                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
-                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
+    disk = disk_of(obj, design["distance_m"])
     torsion = obj.get("torsion_stiffness_nm_per_rad", PAPER_TORSION_STIFFNESS_NM_PER_RAD)
     # the one Design -> Scene mapping, the one evaluate_designs scored
     return Design(**{k: design[k] for k in DESIGN_FIELDS}).to_scene(disk, torsion)

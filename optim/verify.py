@@ -18,15 +18,11 @@ from typing import Any
 import numpy as np
 
 from envs.evaluate import evaluate_designs
-from envs.model.defaults import (
-    DEFAULT_CONTOUR_STIFFNESS_RATIO,
-    FEM_DESIGN_RINGS,
-    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
-)
-from envs.scene import DESIGN_FIELDS, SoftDisk
+from envs.model.defaults import FEM_DESIGN_RINGS, PAPER_TORSION_STIFFNESS_NM_PER_RAD
+from envs.scene import DESIGN_FIELDS
 from envs.validation import check_integer
 
-from .charts import model_of
+from .charts import disk_of, model_of
 from .result import OptimResult
 
 __all__ = ["DEFAULT_TOP", "find_result", "verify_result", "verify_run", "verify_figure"]
@@ -60,12 +56,6 @@ def find_result(out_dir: str | Path, result: str | None = None) -> Path:
     return found[0]
 
 
-def _disk(obj: dict[str, Any]) -> SoftDisk:
-    return SoftDisk(obj["radius_m"], 0.0, obj["youngs_modulus_pa"], obj["poisson_ratio"],
-                    obj["thickness_m"], obj["stiffness_scale"],
-                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
-
-
 def _ranks(values: np.ndarray) -> list[int]:
     """1 = best (largest); ties keep the earlier design first."""
     order = np.argsort(-values, kind="stable")
@@ -95,7 +85,7 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     common = {"strain_limits": obj["strain_limit"],
               "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
                                                       PAPER_TORSION_STIFFNESS_NM_PER_RAD)}
-    disk = _disk(obj)
+    disk = disk_of(obj)
     model = model_of(obj)
     psm = evaluate_designs(designs, disk, **common, **model)
     fem = evaluate_designs(designs, disk, **common, fidelity="fem", fem_rings=fem_rings,
@@ -184,8 +174,6 @@ def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | Non
 
     Returns the report and the written paths.
     """
-    top = check_integer("--top", top, 1, MAX_TOP)
-    fem_rings = check_integer("--fem-rings", fem_rings, 2, 40)
     path = find_result(out_dir, result)
     report = verify_result(OptimResult.from_json(path), top, fem_rings, executor)
     report["run"]["result_file"] = path.name

@@ -13,14 +13,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from envs.model.defaults import FEM_DESIGN_RINGS, FEM_MAX_RINGS
 from envs.scene import Scene
 
 from .grasp import fem_grasp
 from .result import FemResult
 
-__all__ = ["FEM_DESIGN_RINGS", "FEM_MAX_RINGS", "fem_design_grasps", "fem_metrics"]
-
+__all__ = ["fem_design_grasps", "fem_metrics"]
 
 
 def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], rings: int,
@@ -45,7 +43,6 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray) -> dict[str,
     (each rim node with its share of the rim), ``n_contacts`` (B, 2) the rim nodes in contact.
     """
     b = len(results)
-    nan2 = (math.nan, math.nan)
     ok = np.array([r.converged for r in results], dtype=bool)
 
     def column(get, width: int | None = None) -> np.ndarray:
@@ -65,7 +62,7 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray) -> dict[str,
         "tip_forces_n": column(lambda r: r.tip_forces_n, 2),
         "total_force_n": column(lambda r: r.contact_forces_n, 2),
         "contact_fraction": column(lambda r: sum(r.contact_fractions)),
-        "stop_torques_nm": column(lambda r: r.stop_torques_nm if r.converged else nan2, 2),
+        "stop_torques_nm": column(lambda r: r.stop_torques_nm, 2),
         "peak_strain": column(lambda r: r.peak_stretch_strain),
         "peak_log_strain": column(lambda r: r.peak_strain),
         "max_displacement_ratio": column(lambda r: r.max_displacement_m) / radius_m,

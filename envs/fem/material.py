@@ -112,29 +112,25 @@ def _neo_hookean(
     return w, p, a, True
 
 
-def _principal_stretches(fmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """In-plane principal stretches ``(lambda_max, lambda_min)`` of deformation gradients."""
+def _cauchy_green_eigenvalues(fmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues ``(largest, smallest)`` of the in-plane ``C = F^T F``: the squared
+    principal stretches."""
     c11 = fmat[0, 0] ** 2 + fmat[1, 0] ** 2
     c22 = fmat[0, 1] ** 2 + fmat[1, 1] ** 2
     c12 = fmat[0, 0] * fmat[0, 1] + fmat[1, 0] * fmat[1, 1]
     mean = 0.5 * (c11 + c22)
     rad = np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)
-    return np.sqrt(mean + rad), np.sqrt(np.maximum(mean - rad, 0.0))
+    return mean + rad, mean - rad
 
 
 def _stretch_strain_magnitude(fmat: np.ndarray) -> np.ndarray:
     """Largest in-plane principal engineering strain magnitude ``max |lambda_i - 1|``."""
-    hi, lo = _principal_stretches(fmat)
-    return np.maximum(np.abs(hi - 1.0), np.abs(lo - 1.0))
+    hi, lo = _cauchy_green_eigenvalues(fmat)
+    return np.maximum(np.abs(np.sqrt(hi) - 1.0), np.abs(np.sqrt(np.maximum(lo, 0.0)) - 1.0))
 
 
 def _log_strain_magnitude(fmat: np.ndarray) -> np.ndarray:
     """Largest in-plane principal logarithmic (Hencky) strain magnitude ``max |ln lambda_i|``."""
-    c11 = fmat[0, 0] ** 2 + fmat[1, 0] ** 2
-    c22 = fmat[0, 1] ** 2 + fmat[1, 1] ** 2
-    c12 = fmat[0, 0] * fmat[0, 1] + fmat[1, 0] * fmat[1, 1]
-    mean = 0.5 * (c11 + c22)
-    rad = np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)
-    lo = np.maximum(mean - rad, 1e-300)
-    hi = mean + rad
+    hi, lo = _cauchy_green_eigenvalues(fmat)
+    lo = np.maximum(lo, 1e-300)
     return np.maximum(np.abs(0.5 * np.log(hi)), np.abs(0.5 * np.log(lo)))

@@ -213,9 +213,9 @@ def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
             warnings.warn(
                 f"the shipped nh-quad scale for n_rings = {m} was fitted at N = {fitted}; "
                 f"at n_triangles = {n} (outside {low:.0f}-{high:.0f}) its closing-angle error "
-                "against the FEM grows (M = 2, r = 0.10 m: 1.2 % RMS at N = 40, 9 % at N = 20, "
-                "3.5 % at N = 200; scripts/fig5_error_vs_n.py): refine N and M together (N / M "
-                "about 16-20)", UserWarning, stacklevel=4)
+                "against the FEM grows (e.g. M = 2, r = 0.10 m: 1.2 % RMS at N = 40, 9 % at "
+                "N = 20, 3.5 % at N = 200; scripts/fig5_error_vs_n.py): refine N and M together "
+                "(N / M about 16-20)", UserWarning, stacklevel=4)
         return NHQUAD_SCALES[m][0]
     if element == "cst":
         if (n, m) not in CST_SCALES:

@@ -137,6 +137,21 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
                      work)
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _restart_barrier(mu, mu0, shrink, lam, g, mcount, lift):
+    """After a step off a saddle (it moves contacts): the barrier back at its first ``mu0``
+    and every multiplier at least ``mu / g`` (also when ``mu`` stays, with ``lift``).
+    Returns ``(mu, shrink)``."""
+    restart = mu < mu0
+    if restart:
+        mu = mu0
+        shrink = 0.01
+    if restart or lift:
+        for m in range(mcount):
+            lam[m] = max(lam[m], mu / g[m])
+    return mu, shrink
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it, work):
     (grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam, grad5, hess5,
@@ -213,11 +228,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                 # problem has it. Off it, the gauge is proximal (it damps the turn without
                 # holding it) and the barrier goes back to the first mu: the turn moves contacts
                 if _leave_saddle(x, n, prm, bidx, kinds, fj, fidx, mcount, shift, work):
-                    if mu < mu0:
-                        mu = mu0
-                        shrink = 0.01
-                        for m in range(mcount):
-                            lam[m] = max(lam[m], mu / g[m])
+                    mu, shrink = _restart_barrier(mu, mu0, shrink, lam, g, mcount, False)
                     have_acc = False
                     alpha = -1.0
                     continue
@@ -234,11 +245,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                             ybuf, rb, ob, rt, ot, grad, step, xt, gt):
                         curvature_steps += 1
                         n_neg = 0
-                        if mu < mu0:
-                            mu = mu0
-                            shrink = 0.01
-                        for m in range(mcount):
-                            lam[m] = max(lam[m], mu / g[m])
+                        # the gaps changed: the multipliers are lifted even where mu stays
+                        mu, shrink = _restart_barrier(mu, mu0, shrink, lam, g, mcount, True)
                         have_acc = False
                         alpha = -1.0
                         continue
