@@ -119,7 +119,7 @@ def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening):
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand, info):
     """Solve one grasp in place: a fast attempt, then the plain ones as a fallback.
 
@@ -156,24 +156,28 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
     lam_in = lam_face.copy()
     fast = opts.copy()
     fast[O_MAXIT] = opts[O_MAXIT] * FAST_BUDGET
-    # flags as runtime values (n < 0 is False, n > 0 True): a literal True/False would
-    # compile _solve_attempt and its callees once per value (assembly._spring_terms)
-    _solve_attempt(n, prm_in, fast, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
-                   info, 0.0, n < 0)
-    if info[I_STATUS] == OK and info[I_STABLE] == 1.0:
-        return
-    total = info[I_ITERATIONS]
-    keep_fast = info[I_STATUS] == OK
-    if keep_fast:
-        kept = (x.copy(), lam_face.copy(), lam_corner.copy(), lam_stop.copy(),
-                corner_cand.copy(), face_cand.copy(), info.copy())
-    for policy in range(2):
-        x[:] = x_in
-        lam_face[:, :] = lam_in
-        _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand,
-                       face_cand, info, float(policy), n > 0)
+    total = 0.0
+    keep_fast = False
+    # attempt 0 is the fast one, 1 and 2 the plain ones with contact policies 0 and 1: one call
+    # site, so that _solve_attempt compiles into this function once (envs.solver.warmup)
+    for attempt in range(3):
+        if attempt > 0:
+            x[:] = x_in
+            lam_face[:, :] = lam_in
+        # flags as runtime values (n < 0 is False, n > 0 True): a literal True/False would
+        # compile _solve_attempt and its callees once per value (assembly._spring_terms)
+        _solve_attempt(n, prm_in, fast if attempt == 0 else opts, x, lam_face, lam_corner,
+                       lam_stop, corner_cand, face_cand, info, float(max(attempt - 1, 0)),
+                       n < 0 if attempt == 0 else n > 0)
         total += info[I_ITERATIONS]
-        if info[I_STATUS] == OK or info[I_STATUS] == INVERTED:
+        if attempt == 0:
+            if info[I_STATUS] == OK and info[I_STABLE] == 1.0:
+                return
+            keep_fast = info[I_STATUS] == OK
+            if keep_fast:
+                kept = (x.copy(), lam_face.copy(), lam_corner.copy(), lam_stop.copy(),
+                        corner_cand.copy(), face_cand.copy(), info.copy())
+        elif info[I_STATUS] == OK or info[I_STATUS] == INVERTED:
             break
     if keep_fast and not (info[I_STATUS] == OK and info[I_STABLE] == 1.0):
         x[:] = kept[0]
@@ -216,7 +220,7 @@ def _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale, lam_guess_fa
     return mu0, feasible
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _release_gauge(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
                    work_it, gbuf, stable_out, skipped_polish):
     """Release the rotation gauge and polish the contact set without it.
@@ -319,7 +323,7 @@ def _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face):
             lam_guess_face[fj[m], fidx[m]] = lam[m]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
                    info, policy, plain):
     """Solve one grasp in place.

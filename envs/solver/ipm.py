@@ -96,7 +96,7 @@ class IpmWork(NamedTuple):
     wt: np.ndarray
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it):
     """Primal-dual interior point on a fixed constraint set. Returns (status, iterations).
 

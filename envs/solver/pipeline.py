@@ -113,8 +113,8 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     opts = _OPTIONS
     if b == 1:
         # one row needs no thread pool (and stays fork-safe in process-based vector envs)
-        driver.solve_one(n, prm[0], opts, xs[0], lam_face[0], lam_corner[0], lam_stop[0],
-                         corner_cand[0], face_cand[0], infos[0])
+        driver.solve_rows(0, 1, n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
+                          face_cand, infos)
     else:
         # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
         # between rows (a row hitting the iteration limit)
@@ -208,7 +208,7 @@ def _public_status(raw, passed, inverted):
     return LINESEARCH_FAIL if raw == BLOCKED else raw
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, interior, face,
                 corner, stop, totals, edges, metrics, ck, verdict):
     state_metrics(x, n, kernel_copy(prm, n), metrics)
@@ -303,10 +303,8 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     verdict = np.zeros((b, check.N_OUT))
     status = np.empty(b, dtype=np.int64)
     if b == 1:
-        status[0] = _finish_one(scene[0], prm[0], n, xs[0], lam_face[0], lam_corner[0],
-                                lam_stop[0], infos[0], points[0], interior[0], face[0],
-                                corner[0], stop[0], totals[0], edges[0], metrics[0], ck[0],
-                                verdict[0])
+        _finish_rows(0, 1, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
+                     interior, face, corner, stop, totals, edges, metrics, ck, verdict, status)
     else:
         run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
                  points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,

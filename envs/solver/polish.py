@@ -57,7 +57,7 @@ def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
     return e
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 

@@ -13,7 +13,7 @@ from pathlib import Path
 __all__ = ["kernels_cached", "announce_compile"]
 
 # the batch and single-grasp entries: cached together with everything they call
-_ENTRIES = ("driver.solve_one-*.nbi", "driver.solve_rows-*.nbi", "pipeline._finish_one-*.nbi")
+_ENTRIES = ("driver.solve_rows-*.nbi", "pipeline._finish_rows-*.nbi")
 
 
 def kernels_cached() -> bool:
