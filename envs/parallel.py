@@ -61,8 +61,8 @@ def run_rows(kernel: Callable, n_rows: int, *args) -> None:
     """Call ``kernel(start, stop, *args)`` over blocks covering rows ``0 .. n_rows - 1``.
 
     ``kernel`` is a ``nogil`` compiled function that handles rows ``start <= b < stop`` and
-    touches no other row's data. The calling thread works too; an exception of any block is
-    raised here after every block has finished.
+    touches no other row's data. The calling thread works too, alone (no pool) for one row or
+    one thread; an exception of any block is raised here after every block has finished.
     """
     threads = min(solver_threads(), n_rows)
     if threads <= 1:

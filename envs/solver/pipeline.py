@@ -110,16 +110,10 @@ def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     corner_cand = np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_)
     face_cand = np.zeros((b, 2, n), dtype=np.bool_)
     infos = np.zeros((b, N_INFO))
-    opts = _OPTIONS
-    if b == 1:
-        # one row needs no thread pool (and stays fork-safe in process-based vector envs)
-        driver.solve_rows(0, 1, n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
-                          face_cand, infos)
-    else:
-        # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
-        # between rows (a row hitting the iteration limit)
-        driver.solve_batch(n, prm, opts, xs, lam_face, lam_corner, lam_stop, corner_cand,
-                           face_cand, infos)
+    # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
+    # between rows (a row hitting the iteration limit); one row runs in the calling thread
+    driver.solve_batch(n, prm, _OPTIONS, xs, lam_face, lam_corner, lam_stop, corner_cand,
+                       face_cand, infos)
     return infos, lam_corner, lam_stop
 
 
@@ -302,13 +296,8 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     ck = np.zeros((b, check.N_CK))
     verdict = np.zeros((b, check.N_OUT))
     status = np.empty(b, dtype=np.int64)
-    if b == 1:
-        _finish_rows(0, 1, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
-                     interior, face, corner, stop, totals, edges, metrics, ck, verdict, status)
-    else:
-        run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
-                 points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
-                 status)
+    run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
+             interior, face, corner, stop, totals, edges, metrics, ck, verdict, status)
     inverted = metrics[:, M_INVERTED].astype(np.int64)
     passed = verdict[:, check.OUT_PASSED] > 0.0
     return BatchSolution(
