@@ -225,15 +225,14 @@ def _solve_general3(lb, nb, bb, rb, ybuf, out):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
-    """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
-    if ab.shape[1] == BW + 1:
-        if not _chol_band(ab, lb, nb, shift):
-            return False
+def _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, out_b, out_t):
+    """Solve [[A, B], [B^T, D]] + shift I with A + shift I already factored into ``lb`` (by
+    :func:`_factor_solve` with the same ``shift``); returns False if the angles' Schur
+    complement is not positive definite. The border's columns are solved again with the
+    right-hand side (the same sweep), so ``ybuf`` need not be kept between calls."""
+    if lb.shape[1] == BW + 1:
         _solve_band3(lb, nb, bb, rb, ybuf, out_b)
     else:
-        if not _chol_general(ab, lb, nb, shift):
-            return False
         _solve_general3(lb, nb, bb, rb, ybuf, out_b)
     s00 = dd[0, 0] + shift
     s11 = dd[1, 1] + shift
@@ -257,3 +256,14 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
     for p in range(nb):
         out_b[p] -= ybuf[p, 0] * t0 + ybuf[p, 1] * t1
     return True
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
+    """Solve [[A, B], [B^T, D]] + shift I; returns False if not positive definite."""
+    if ab.shape[1] == BW + 1:
+        if not _chol_band(ab, lb, nb, shift):
+            return False
+    elif not _chol_general(ab, lb, nb, shift):
+        return False
+    return _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, out_b, out_t)

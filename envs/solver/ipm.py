@@ -31,13 +31,14 @@ from .assembly import (
 )
 from .banded import (
     _factor_solve,
+    _solve_factored,
     band_shape,
 )
 from .contact import (
     _all_gaps,
     _tunnels,
 )
-from .curvature import _negative_curvature_step
+from .curvature import _negative_curvature_step, _smallest_pd_shift
 from .gauge import (
     _gauge_reanchor,
     _leave_saddle,
@@ -52,6 +53,9 @@ from .status import (
 )
 
 MAX_CURVATURE_STEPS = 2  # steps along a saddle's unstable mode per interior-point call
+MAX_SOC = 1  # second-order corrections of a rejected full step
+STALL_STEPS = 2  # stalled steps on the modified matrix before a shifted exact one
+GAP_TARGET = 0.05  # a shrinking gap's share left after a step cut back for it
 
 
 class IpmWork(NamedTuple):
@@ -65,7 +69,8 @@ class IpmWork(NamedTuple):
     trial), ``sig`` (multiplier over gap), ``dlam`` (multiplier step), cached gradients ``cg``,
     their dofs ``cd`` and curvature ``ch``. One constraint's scratch: ``grad5``, ``hess5``,
     ``dofs``. The gauge's saddle test (:mod:`envs.solver.gauge`): ``wb`` (band order) and
-    ``wt`` (2) get ``W^-1 t``.
+    ``wt`` (2) get ``W^-1 t``. The second-order correction: ``corr`` (state order) and ``qs``
+    (per constraint, the gaps' change beyond their linearization).
     """
 
     grad: np.ndarray
@@ -94,6 +99,9 @@ class IpmWork(NamedTuple):
     ch: np.ndarray
     wb: np.ndarray
     wt: np.ndarray
+    corr: np.ndarray
+    qs: np.ndarray
+    gf: np.ndarray
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -131,8 +139,11 @@ def _ipm(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_
     ch = np.zeros((mcount, CH_BLOCK + 1))
     wb = np.zeros(nbb)
     wt = np.zeros(2)
+    corr = np.zeros(nx)
+    qs = np.zeros(mcount)
+    gf = np.zeros(mcount)
     work = IpmWork(grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam,
-                   grad5, hess5, dofs, gb, cg, cd, ch, wb, wt)
+                   grad5, hess5, dofs, gb, cg, cd, ch, wb, wt, corr, qs, gf)
     return _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it,
                      work)
 
@@ -153,9 +164,79 @@ def _restart_barrier(mu, mu0, shrink, lam, g, mcount, lift):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _trial(x, xt, n, prm, kinds, fj, fidx, mcount, g, gt, shrink, mu, bound):
+    """Line-search test of the trial point ``xt``: every gap positive and shrunk by at most
+    ``shrink``, no tunnelling, barrier merit at most ``bound``. Returns (accepted, walled,
+    energy, sum of log gaps); ``walled``: rejected by the anti-tunnelling test only."""
+    e_t, l_t = _merit(xt, n, prm, kinds, fj, fidx, mcount, gt)
+    phi = e_t - mu * l_t
+    if not phi < math.inf:
+        return False, False, e_t, l_t
+    for m in range(mcount):
+        if gt[m] < shrink * g[m]:
+            return False, False, e_t, l_t
+    if _tunnels(x, xt, n, prm):
+        return False, True, e_t, l_t
+    return phi <= bound, False, e_t, l_t
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _gap_limited(g, gf, mcount):
+    """Factor of the next trial step after the first was rejected with the gaps ``gf``: the
+    secant of each shrinking gap between ``x`` and the trial brought to GAP_TARGET of its
+    value (not a blind half, which can only halve an overshooting gap per iteration); 0.5 if
+    no gap limits it (the merit's decrease failed)."""
+    fac = 1.0
+    for m in range(mcount):
+        if gf[m] < GAP_TARGET * g[m]:
+            fac = min(fac, (1.0 - GAP_TARGET) * g[m] / (g[m] - gf[m]))
+    return fac if fac < 1.0 else 0.5
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _second_order(x, xt, step, n, prm, bidx, kinds, fj, fidx, mcount, g, gt, lam, sig, mu, cg,
+                  cd, qs, corr, lb, bb, dd, ybuf, shift, rb, rt, ob, ot):
+    """Second-order correction of the rejected full step ``x -> xt = x + step``.
+
+    The Newton step linearizes each gap and the complementarity ``lam g = mu``. Right after a
+    cut of mu both fail where a contact's force must grow (its predicted gap is
+    ``(mu - g dlam) / lam``: negative once dlam is comparable to lam), and against a turning
+    finger the gaps curve (bilinear in a point's position and the finger's angle). With ``q``
+    a gap's change beyond its linearization at ``xt`` and the product ``dlam dg`` of the step
+    (Mehrotra's corrector term), the rows ``lam (dg + q) + g dlam + dlam_p dg_p = mu - lam g``
+    give the same matrix and the extra right-hand side ``-sum sig qs grad g`` with
+    ``qs = q + dlam_p dg_p / lam``: one more solve with the factor ``lb`` of the step (IPOPT's
+    second-order correction, for inequality gaps). ``gt``: the gaps at ``xt``, which becomes
+    ``x + step + corr``.
+    Returns False if the solve fails.
+    """
+    nb = 2 * n
+    corr[:] = 0.0
+    for m in range(mcount):
+        nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+        lin = 0.0
+        for a in range(nd):
+            lin += cg[m, a] * step[cd[m, a]]
+        # beyond the linearization: the gap's curvature, and the product of the multiplier's
+        # and the gap's steps in lam g = mu (Mehrotra's corrector term)
+        dlp = mu / g[m] - lam[m] - sig[m] * lin
+        qs[m] = gt[m] - g[m] - lin + dlp * lin / lam[m]
+        w = sig[m] * qs[m]
+        for a in range(nd):
+            corr[cd[m, a]] += w * cg[m, a]
+    _rhs_to_band(corr, bidx, nb, rb, rt)
+    if not _solve_factored(lb, bb, dd, ybuf, lb.shape[0], shift, rb, rt, ob, ot):
+        return False
+    _step_from_band(ob, ot, bidx, nb, corr, corr)
+    for d in range(x.shape[0]):
+        xt[d] = x[d] + step[d] + corr[d]
+    return True
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, work_it, work):
     (grad, step, xt, res, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, gt, sig, dlam, grad5, hess5,
-     dofs, gb, cg, cd, ch, _, _) = work
+     dofs, gb, cg, cd, ch, _, _, corr, qs, gf) = work
     nb = 2 * n
     nx = x.shape[0]
     nbb = ab.shape[0]
@@ -168,6 +249,9 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     it = 0
     n_neg = 0
+    kkt_prev = math.inf
+    mu_prev = -1.0
+    n_stall = 0
     curvature_steps = 0
     n_walled = 0
     have_acc = False  # merit parts at x known (from the line search that reached x)
@@ -216,12 +300,19 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         if done:
             work_it[0] += it
             return OK, it
+        # no progress at this mu (e.g. a crawl down a soft mode that the modified matrix
+        # below makes stiff: full steps, the residual growing a few per cent a step)
+        stalled = mu == mu_prev and kkt >= 0.9 * kkt_prev
+        mu_prev = mu
+        kkt_prev = kkt
         it += 1
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
+        modified = not ok
         if ok:
             n_neg = 0
+            n_stall = 0
             if check_gauge and prm[P_GAUGE] > 0.0 and prm[P_GPROX] == GAUGE_AT_REST:
                 check_gauge = False
                 # tested after each decrease of mu: the saddle shows as soon as the barrier
@@ -252,9 +343,21 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
                         continue
                     work_it[0] += it
                     return SADDLE, it
-            _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab, bb,
-                            dd)
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
+            n_stall = n_stall + 1 if stalled else 0
+            if n_stall >= STALL_STEPS:
+                # descent on the modified matrix stalls: it makes a soft mode stiff, and the
+                # iterate crawls down it (full steps, the residual growing a few per cent a
+                # step). The exact matrix shifted just past its most negative curvature takes
+                # the long step along that mode (the line search and the step caps bound it)
+                hi = _smallest_pd_shift(ab, bb, dd, lb, ybuf, nbb, kreg, rb, rt, ob, ot)
+                if hi > 0.0:
+                    shift = 2.0 * hi
+                    ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
+            if not ok:
+                shift = kreg
+                _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, hess5, dofs, ab,
+                                bb, dd)
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, nbb, shift, rb, rt, ob, ot)
         if not ok:
             shift = max(shift_last / 3.0, 1e-8 * max(prm[P_KC], prm[P_KR]))
             while not ok:
@@ -283,26 +386,42 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         phi0 = e_acc - mu * l_acc
         accepted = False
         walled = False
+        soc = False
         for _ls in range(60):
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
-            e_t, l_t = _merit(xt, n, prm, kinds, fj, fidx, mcount, gt)
-            phi = e_t - mu * l_t
-            if phi < math.inf:
-                feasible = True
-                for m in range(mcount):
-                    if gt[m] < shrink * g[m]:
-                        feasible = False
-                        break
-                if feasible and _tunnels(x, xt, n, prm):
-                    feasible = False
-                    walled = True
-                if feasible and phi <= phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0):
-                    accepted = True
+            bound = phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0)
+            accepted, wall, e_t, l_t = _trial(x, xt, n, prm, kinds, fj, fidx, mcount, g, gt,
+                                              shrink, mu, bound)
+            walled = walled or wall
+            if accepted or wall or _ls > 0:
+                if accepted:
                     e_acc = e_t
                     l_acc = l_t
                     break
-            alpha *= 0.5
+                alpha *= 0.5
+                continue
+            # the first trial failed: its gaps tell how far the step may go
+            _all_gaps(xt, n, prm, kinds[:mcount], fj, fidx, gf)
+            if alpha == 1.0 and MAX_SOC > 0:
+                # the full step left the linearization of the gaps and of lam g = mu (right after
+                # a cut of mu, a point whose contact force must grow is predicted through the
+                # finger): correct it with the same factor before backtracking
+                if _second_order(x, xt, step, n, prm, bidx, kinds, fj, fidx, mcount, g, gf,
+                                 lam, sig, mu, cg, cd, qs, corr, lb, bb, dd, ybuf, shift, rb,
+                                 rt, ob, ot):
+                    accepted, wall, e_t, l_t = _trial(x, xt, n, prm, kinds, fj, fidx, mcount,
+                                                      g, gt, shrink, mu, bound)
+                    walled = walled or wall
+                    soc = accepted
+            if accepted:
+                e_acc = e_t
+                l_acc = l_t
+                break
+            alpha *= _gap_limited(g, gf, mcount)
+        if soc:
+            for d in range(nx):
+                step[d] += corr[d]
         # a corner or a point held back only by the anti-tunnelling tests (a contact the
         # candidate set lacks): hand back to the caller, which adds what is touched
         n_walled = n_walled + 1 if (walled and alpha < 1e-2) else 0
@@ -327,6 +446,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             dl = 0.0
             for a in range(nd):
                 dl += cg[m, a] * step[cd[m, a]]
+            if soc:
+                dl += qs[m]  # the corrected step's gap change beyond its linear part
             dlam[m] = mu / g[m] - lam[m] - sig[m] * dl
             if dlam[m] < 0.0:
                 alpha_d = min(alpha_d, -0.99 * lam[m] / dlam[m])
@@ -335,7 +456,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             gm = gt[m]
             lam[m] = min(max(lam_new, mu / (1e10 * gm)), 1e10 * mu / gm)
         if opts.shape[0] > N_OPTIONS:
-            print("ipm", it, mu / fscale, kkt / fscale, alpha, shift, ok, mcount)
+            print("ipm", it, mu / fscale, kkt / fscale, alpha, shift, modified, soc, mcount)
         for d in range(nx):
             x[d] = xt[d]
         for m in range(mcount):
