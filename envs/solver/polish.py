@@ -111,6 +111,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             lam[m] = 0.0
     stable = True
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    kkt_best = math.inf
     for _outer in range(40):
         work_it[0] += 1
         sn, cs = _trig(x, n)
@@ -186,9 +187,13 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 viol = max(viol, abs(g[m]))
         if kkt <= 10.0 * tol and viol <= 1e-13:
             return True, stable
-        if _outer >= 8 and kkt <= 100.0 * tol and viol <= 1e-12:
-            # stagnating at round-off level: good enough (the independent check has the say)
+        if viol <= 1e-12 and ((_outer >= 8 and kkt <= 100.0 * tol)
+                              or (kkt >= 0.5 * kkt_best and kkt <= 1e3 * tol)):
+            # stagnating at round-off level: good enough (the independent check has the say).
+            # The floor grows with the mesh (N = 1000: ~1e-10 of the force scale, where the
+            # plain test spent 9 Newton steps on round-off)
             return True, stable
+        kkt_best = min(kkt_best, kkt)
     return False, stable
 
 
