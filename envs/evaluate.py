@@ -53,8 +53,23 @@ from .scene import (
     design_from_relative,
     relative_from_design,
 )
+from .scoring import (
+    N_WEIGHTS,
+    W_CONTACT,
+    W_CONTACT_CAP,
+    W_DEFORM,
+    W_DEFORM_CAP,
+    W_FAIL,
+    W_GAP,
+    W_INVALID,
+    W_MISS,
+    W_VIOLATION,
+    grip_share_rows,
+    psm_metrics_rows,
+    reward_rows,
+)
 from .solver.pipeline import BatchSolution, solve_columns
-from .solver.status import CHECK_FAILED, FEM_FAILED, NOT_SOLVED, OK
+from .solver.status import FEM_FAILED, NOT_SOLVED, OK
 from .validation import check_integer, check_range
 
 __all__ = [
@@ -287,6 +302,18 @@ class RewardWeights:
                 f"RewardWeights.invalid = {self.invalid!r} must be at least deform * deform_cap "
                 f"+ 2 miss + gap = {worst_valid!r}, so that every invalid design scores below "
                 "every valid one")
+        weights = np.empty(N_WEIGHTS)
+        for name, k in (("contact", W_CONTACT), ("contact_cap", W_CONTACT_CAP),
+                        ("deform", W_DEFORM), ("deform_cap", W_DEFORM_CAP), ("miss", W_MISS),
+                        ("gap", W_GAP), ("invalid", W_INVALID), ("violation", W_VIOLATION),
+                        ("fail", W_FAIL)):
+            weights[k] = getattr(self, name)
+        weights.flags.writeable = False
+        object.__setattr__(self, "_vector", weights)
+
+    def vector(self) -> np.ndarray:
+        """The weights in the layout of :func:`envs.scoring.reward_rows` (read-only)."""
+        return self._vector
 
 
 # ---------------------------------------------------------------------------------------------
@@ -376,44 +403,25 @@ def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: 
     or that closes the jaws on their stops has a share near 0 (CMA-ES found such designs when
     contact was counted by force > 0 alone); a squeeze with little travel keeps nearly all.
     """
-    torque = cols.torque_nm[:, None]
-    grip = (torque - cols.torsion_stiffness_nm_per_rad[:, None]
-            * (cols.rest_angle_rad[:, None] - jaw_angles_rad) - stop_torques_nm)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        share = np.where(torque > 0.0, grip / torque, 0.0)
-    return np.clip(share, 0.0, 1.0).min(axis=1)
+    out = np.empty(cols.size)
+    grip_share_rows(cols.torque_nm, cols.torsion_stiffness_nm_per_rad, cols.rest_angle_rad,
+                    np.ascontiguousarray(jaw_angles_rad, dtype=np.float64),
+                    np.ascontiguousarray(stop_torques_nm, dtype=np.float64), out)
+    return out
 
 
 def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int,
                 cols: SceneColumns) -> None:
     """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
-    what happened)."""
-    n_contacts = np.count_nonzero(sol.face_forces_n > 0.0, axis=2).astype(np.int64)
-    corner = sol.corner_totals_n.sum(axis=2)
-    grip = grip_share(cols, sol.jaw_angles_rad, sol.stop_torques_nm)
-    metrics = {
-        "jaw_angles_rad": sol.jaw_angles_rad,
-        "n_contacts": n_contacts,
-        "touching": (n_contacts > 0) | (corner > 0.0),
-        "total_force_n": sol.face_forces_n.sum(axis=2) + corner,
-        # the fraction of the contour in contact, as far as the grip is carried by the object
-        "contact_score": grip * n_contacts.sum(axis=1) / n,
-        "grip_share": grip,
-        "peak_strain": sol.peak_strain,
-        "peak_log_strain": sol.peak_log_strain,
-        "max_displacement_ratio": sol.max_displacement_ratio,
-    }
-    # the float metrics (the others are counts and flags of finite forces): one pass
-    floats = np.column_stack((sol.jaw_angles_rad, metrics["total_force_n"], sol.peak_strain,
-                              sol.peak_log_strain, sol.max_displacement_ratio))
-    finite = np.isfinite(floats).all(axis=1)
-    ok = sol.converged & finite
-    out["status"][rows] = np.where(sol.converged & ~finite, CHECK_FAILED, sol.status)
-    out["iterations"][rows] = sol.iterations
-    out["stable"][rows] = sol.stable
-    out["converged"][rows] = ok
-    for key, v in metrics.items():
-        out[key][rows[ok]] = v[ok]
+    what happened; :func:`envs.scoring.psm_metrics_rows`)."""
+    psm_metrics_rows(
+        rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
+        sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, sol.peak_strain,
+        sol.peak_log_strain, sol.max_displacement_ratio, cols.torque_nm,
+        cols.torsion_stiffness_nm_per_rad, cols.rest_angle_rad, out["status"], out["converged"],
+        out["iterations"], out["stable"], out["jaw_angles_rad"], out["n_contacts"],
+        out["touching"], out["total_force_n"], out["contact_score"], out["grip_share"],
+        out["peak_strain"], out["peak_log_strain"], out["max_displacement_ratio"])
 
 
 def rest_violation(cols: SceneColumns) -> np.ndarray:
@@ -557,23 +565,12 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
 
 def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndarray,
                 w: RewardWeights) -> None:
-    ok = out["converged"]
-    score = np.minimum(out["contact_score"], w.contact_cap)
-    # the principal log strain: the one strain measure that means the same at both
-    # fidelities (the FEM has no springs); scripts/fidelity.py measured the PSM-FEM rank
-    # agreement of the reward rise with it
-    strain_ratio = np.minimum(out["peak_log_strain"] / out["strain_limit"], w.deform_cap)
-    out["reward_contact"][:] = np.where(ok, w.contact * score, 0.0)
-    out["reward_deform"][:] = np.where(ok, 0.0 - w.deform * strain_ratio, 0.0)
-    missing = np.count_nonzero(~out["touching"], axis=1)
-    out["penalty_miss"][:] = np.where(ok, 0.0 - w.miss * missing, 0.0)
-    gap = out["finger_gap_m"].max(axis=1) / radius_m
-    out["penalty_gap"][:] = np.where(ok, 0.0 - w.gap * gap / (1.0 + gap), 0.0)
-    out["penalty_invalid"][:] = np.where(
-        valid, 0.0, 0.0 - w.invalid - w.violation * out["rest_violation"])
-    out["penalty_fail"][:] = np.where(valid & ~ok, 0.0 - w.fail, 0.0)
-    out["reward"][:] = (out["reward_contact"] + out["reward_deform"] + out["penalty_miss"]
-                        + out["penalty_gap"] + out["penalty_invalid"] + out["penalty_fail"])
+    reward_rows(w.vector(), valid, out["converged"], out["contact_score"],
+                out["peak_log_strain"], out["strain_limit"], out["touching"],
+                out["finger_gap_m"], np.ascontiguousarray(radius_m, dtype=np.float64),
+                out["rest_violation"], out["reward_contact"], out["reward_deform"],
+                out["penalty_miss"], out["penalty_gap"], out["penalty_invalid"],
+                out["penalty_fail"], out["reward"])
 
 
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,

@@ -211,7 +211,7 @@ class Scene:
             raise ValueError(f"gripper must be a Gripper, got {type(g).__name__}")
         if not isinstance(d, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(d).__name__}")
-        code = int(rest_codes(self.columns(0.0))[0])
+        code = int(rest_codes(self.rows(0.0))[0])
         if code == REST_OVERLAP:
             _, clearance = _clearance(self.columns(0.0))
             raise ValueError(

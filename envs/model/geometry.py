@@ -19,7 +19,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
+from numba import njit, vectorize
 
 from .defaults import CORNER_ROUNDING
 
@@ -97,13 +97,17 @@ def closed_angle_of(length_m: float, joint_offset_m: float, width_m: float) -> f
     return math.atan2(hw, length_m) - math.asin(min(1.0, joint_offset_m / rr))
 
 
-def bar_distance(along_m, across_m, length_m: float, width_m: float):
+@vectorize(["float64(float64, float64, float64, float64)"], cache=True)
+def bar_distance(along_m, across_m, length_m, width_m):
     """Distance from a point to a finger bar (0 inside) from its coordinates along the bar axis
-    and along the inward normal, relative to the joint [m]; elementwise on arrays."""
+    and along the inward normal, relative to the joint [m]; a ufunc (elementwise on arrays,
+    callable from compiled code; NaN in, NaN out)."""
+    if math.isnan(along_m) or math.isnan(across_m) or math.isnan(length_m) or math.isnan(width_m):
+        return math.nan
     hw = width_m / 2
-    ds = np.maximum(0.0, np.maximum(-along_m, along_m - length_m))
-    dm = np.maximum(0.0, np.maximum(across_m - hw, -hw - across_m))
-    return np.hypot(ds, dm)
+    ds = max(0.0, max(-along_m, along_m - length_m))
+    dm = max(0.0, max(across_m - hw, -hw - across_m))
+    return math.hypot(ds, dm)
 
 
 def distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):

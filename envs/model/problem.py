@@ -15,7 +15,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, vectorize
 
 from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
 from .energy import bulk_modulus_2d, lame_per_e
@@ -147,38 +147,74 @@ class SceneColumns(NamedTuple):
         return cls(*np.asarray(rows, dtype=np.float64).T)
 
 
+@vectorize(["float64(float64, float64, float64, float64, float64)"], cache=True)
+def _front_m(rest_angle_rad, joint_offset_m, finger_width_m, radius_m, distance_m):
+    """Signed distance of the disk centre in front of the right gripping face [m] (a ufunc)."""
+    s, c = math.sin(rest_angle_rad), math.cos(rest_angle_rad)
+    # centre (0, d_1 + r) relative to the right joint (d_3, 0); right finger n = (-c, s)
+    across = c * joint_offset_m + s * (distance_m + radius_m)
+    return across - finger_width_m / 2
+
+
+@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
+def _clearance_m(finger_length_m, rest_angle_rad, joint_offset_m, finger_width_m, radius_m,
+                 distance_m):
+    """Rest clearance between the disk and the right finger bar [m] (the left mirrors it; a
+    ufunc)."""
+    s, c = math.sin(rest_angle_rad), math.cos(rest_angle_rad)
+    rel_x = -joint_offset_m
+    rel_y = distance_m + radius_m
+    along = s * rel_x + c * rel_y  # right finger: e = (s, c), n = (-c, s)
+    across = -c * rel_x + s * rel_y
+    return bar_distance(along, across, finger_length_m, finger_width_m) - radius_m
+
+
 def _clearance(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance of the disk centre in front of the right gripping face, and the rest
     clearance between the disk and the right finger bar [m] (the left finger mirrors it)."""
-    s, c = np.sin(cols.rest_angle_rad), np.cos(cols.rest_angle_rad)
-    rel_x = -cols.joint_offset_m  # centre (0, d_1 + r) relative to the right joint (d_3, 0)
-    rel_y = cols.distance_m + cols.radius_m
-    along = s * rel_x + c * rel_y  # right finger: e = (s, c), n = (-c, s)
-    across = -c * rel_x + s * rel_y
-    front = across - cols.finger_width_m / 2
-    clearance = bar_distance(along, across, cols.finger_length_m, cols.finger_width_m)
-    return front, clearance - cols.radius_m
+    return (_front_m(cols.rest_angle_rad, cols.joint_offset_m, cols.finger_width_m,
+                     cols.radius_m, cols.distance_m),
+            _clearance_m(cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
+                         cols.finger_width_m, cols.radius_m, cols.distance_m))
 
 
-def rest_codes(cols: SceneColumns) -> np.ndarray:
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _rest_codes_into(table, codes):
+    """:func:`rest_codes` of a (B, N_SCENE) scene matrix into ``codes``; the first failed test
+    in the order not finite, gripper out of range, fingers too wide, centre behind a face,
+    overlap names the row."""
+    for i in range(table.shape[0]):
+        finite = True
+        for k in range(N_SCENE):
+            finite = finite and math.isfinite(table[i, k])
+        ln, th0, d3 = table[i, S_LENGTH], table[i, S_REST_ANGLE], table[i, S_JOINT_OFFSET]
+        w, r, d1 = table[i, S_WIDTH], table[i, S_RADIUS], table[i, S_DISTANCE]
+        if not finite:
+            codes[i] = REST_NOT_FINITE
+        elif not (ln > 0 and 0 < th0 < math.pi / 2 and d3 >= 0 and 0 < w < ln
+                  and table[i, S_TORQUE] >= 0):
+            codes[i] = REST_GRIPPER
+        elif not w < 2 * r:
+            codes[i] = REST_WIDTH
+        elif not _front_m(th0, d3, w, r, d1) > 0:
+            codes[i] = REST_BEHIND_FACE
+        elif not _clearance_m(ln, th0, d3, w, r, d1) > 0:
+            codes[i] = REST_OVERLAP
+        else:
+            codes[i] = REST_OK
+
+
+def rest_codes(cols) -> np.ndarray:
     """Why each scene is invalid at rest (:data:`REST_OK` where it is valid), shape (B,).
 
-    The material fields are validated where a disk is built (:class:`envs.scene.SoftDisk`);
-    here the geometry of the gripper and the disk together, and the torque.
+    ``cols``: :class:`SceneColumns` or a (B, N_SCENE) scene matrix. The material fields are
+    validated where a disk is built (:class:`envs.scene.SoftDisk`); here the geometry of the
+    gripper and the disk together, and the torque.
     """
-    codes = np.full(cols.size, REST_OK, dtype=np.int64)
-    with np.errstate(invalid="ignore", over="ignore"):
-        finite = np.all(np.isfinite(np.stack(cols)), axis=0)
-        ln, th0, d3, w = (cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
-                          cols.finger_width_m)
-        gripper_ok = ((ln > 0) & (th0 > 0) & (th0 < math.pi / 2) & (d3 >= 0) & (w > 0)
-                      & (w < ln) & (cols.torque_nm >= 0))
-        front, clearance = _clearance(cols)
-    codes[~(clearance > 0)] = REST_OVERLAP
-    codes[~(front > 0)] = REST_BEHIND_FACE
-    codes[~(w < 2 * cols.radius_m)] = REST_WIDTH
-    codes[~gripper_ok] = REST_GRIPPER
-    codes[~finite] = REST_NOT_FINITE
+    table = cols.rows() if isinstance(cols, SceneColumns) else np.ascontiguousarray(
+        cols, dtype=np.float64)
+    codes = np.empty(table.shape[0], dtype=np.int64)
+    _rest_codes_into(table, codes)
     return codes
 
 

@@ -1,0 +1,101 @@
+"""The compiled metric and reward loops (envs.scoring) against the documented formulas.
+
+The formulas of :class:`envs.evaluate.RewardWeights` and :func:`envs.evaluate_designs` are
+written here again in numpy over the returned columns, as an independent reading of the
+docstrings, on a batch that mixes converged, failed and invalid designs and two N groups.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from envs import DesignBounds, RewardWeights, Scene, SoftDisk, evaluate_designs
+from envs.evaluate import grip_share
+from envs.model.problem import (
+    REST_BEHIND_FACE,
+    REST_GRIPPER,
+    REST_NOT_FINITE,
+    REST_OK,
+    REST_OVERLAP,
+    REST_WIDTH,
+    SceneColumns,
+    rest_codes,
+)
+
+
+@pytest.fixture(scope="module")
+def batch():
+    disk = SoftDisk(0.07, 0.0)
+    rng = np.random.default_rng(5)
+    designs = DesignBounds().sample(rng, 160, disk)
+    designs[::7, 5] = -0.05  # some overlap the disk at rest
+    designs[3, 0] = np.nan
+    n = np.where(np.arange(designs.shape[0]) % 2 == 0, 12, 20)
+    weights = RewardWeights(contact=1.3, deform=0.2, miss=0.4, gap=0.7, invalid=3.5,
+                            violation=0.8, fail=2.0, contact_cap=0.4, deform_cap=3.0)
+    out = evaluate_designs(designs, disk, n_triangles=n, element="spring", weights=weights)
+    return designs, disk, n, weights, out
+
+
+def test_batch_mixes_outcomes(batch):
+    *_, out = batch
+    assert (~out["valid_at_rest"]).sum() >= 20
+    assert out["converged"].sum() >= 100
+
+
+def test_reward_terms_follow_their_formulas(batch):
+    designs, disk, n, w, out = batch
+    ok = out["converged"]
+    valid = out["valid_at_rest"]
+    contact = np.where(ok, w.contact * np.minimum(out["contact_score"], w.contact_cap), 0.0)
+    deform = np.where(ok, -w.deform * np.minimum(out["peak_log_strain"] / out["strain_limit"],
+                                                 w.deform_cap), 0.0)
+    miss = np.where(ok, -w.miss * (~out["touching"]).sum(axis=1), 0.0)
+    g = out["finger_gap_m"].max(axis=1) / disk.radius_m
+    gap = np.where(ok, -w.gap * g / (1 + g), 0.0)
+    invalid = np.where(valid, 0.0, -w.invalid - w.violation * out["rest_violation"])
+    fail = np.where(valid & ~ok, -w.fail, 0.0)
+    for key, ref in (("reward_contact", contact), ("reward_deform", deform),
+                     ("penalty_miss", miss), ("penalty_gap", gap),
+                     ("penalty_invalid", invalid), ("penalty_fail", fail)):
+        np.testing.assert_allclose(out[key], ref, rtol=0, atol=1e-15, err_msg=key)
+    np.testing.assert_allclose(out["reward"], contact + deform + miss + gap + invalid + fail,
+                               rtol=0, atol=1e-15)
+
+
+def test_contact_score_is_grip_share_times_contact_fraction(batch):
+    designs, disk, n, w, out = batch
+    ok = out["converged"]
+    np.testing.assert_allclose(out["contact_score"][ok],
+                               out["grip_share"][ok] * out["n_contacts"][ok].sum(axis=1) / n[ok],
+                               rtol=0, atol=1e-15)
+    assert np.all(out["n_contacts"][~ok] == 0) and np.all(out["contact_score"][~ok] == 0.0)
+    # the share from its definition: (T - k_f (theta_0 - theta) - M_stop) / T, clipped, min
+    cols = SceneColumns(*(np.full(3, v) for v in (0.1, 0.6, 0.01, 0.01, 0.07, 0.07, 0.0,
+                                                  1e5, 0.45, 0.01, 1.0, 1.0, 1.0)),
+                        torque_nm=np.array([0.2, 0.2, 0.0]))
+    jaw = np.array([[0.5, 0.4], [0.6, 0.6], [0.5, 0.5]])
+    stop = np.array([[0.0, 0.01], [0.0, 0.0], [0.0, 0.0]])
+    ref = np.clip((0.2 - 0.07 * (0.6 - jaw[:2]) - stop[:2]) / 0.2, 0, 1).min(axis=1)
+    np.testing.assert_allclose(grip_share(cols, jaw, stop), [*ref, 0.0], rtol=0, atol=1e-15)
+
+
+def test_rest_codes_name_the_first_failed_test():
+    base = Scene.preset("paper-r070").rows(0.2)[0]
+    cases = (  # (column, value, code)
+        (None, None, REST_OK),
+        (6, np.inf, REST_NOT_FINITE),
+        (13, -1.0, REST_GRIPPER),  # negative torque
+        (3, 0.2, REST_GRIPPER),  # finger as wide as it is long
+        (3, 0.15, REST_WIDTH),  # wider than the disk
+        (6, -0.2, REST_BEHIND_FACE),  # the disk centre behind the gripping faces
+        (1, 0.05, REST_OVERLAP),  # fingers nearly closed at rest
+    )
+    rows = np.tile(base, (len(cases), 1))
+    for k, (col, value, _) in enumerate(cases):
+        if col is not None:
+            rows[k, col] = value
+    assert list(rest_codes(rows)) == [code for *_, code in cases]
+    # the columns of the same scenes give the same codes
+    assert list(rest_codes(SceneColumns.from_rows(rows))) == [code for *_, code in cases]
