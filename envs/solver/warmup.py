@@ -1,19 +1,92 @@
-"""Whether the compiled solver is in numba's on-disk cache, and a notice when it is not.
+"""Whether the compiled solver is in numba's on-disk cache; on a cold cache, a notice and a
+compile split over two processes.
 
-The first run after an install compiles the kernels (minutes on a 2-core machine) with no
-output of its own; the command-line entry points call :func:`announce_compile` first so that a
-new user knows what the wait is.
+The first run after an install compiles the kernels (about a minute and a half on a 2-core
+machine, one process) with no output of its own; the command-line entry points call
+:func:`announce_compile` first so that a new user knows what the wait is, and it compiles the
+solver's largest independent compile units in two processes at once (:func:`precompile`).
+
+Why two processes: numba compiles in one thread, and a function it has cached is linked into a
+caller compiled later (its callees are not compiled again). The units below do not call one
+another, so a spawned process compiles one share into the cache while this one compiles the
+other; the first solve then compiles only what is left (``scripts/compile_profile.py`` shows
+the split: the Newton matrix alone is a quarter of the cold compile).
 """
 
 from __future__ import annotations
 
+import importlib
+import os
+import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["kernels_cached", "announce_compile"]
+from numba.core import types
+
+__all__ = ["kernels_cached", "announce_compile", "precompile"]
 
 # the batch and single-grasp entries: cached together with everything they call
 _ENTRIES = ("driver.solve_rows-*.nbi", "pipeline._finish_rows-*.nbi")
+
+# Compile units (module of envs.solver, function, argument types) that do not call one another,
+# in two shares of about equal compile time. Argument types: f/i/b = float64/int64/bool
+# scalars, with a digit: C-contiguous arrays of that many dimensions. They must be the types
+# the solver calls them with (tests/test_warmup.py checks that they add no specialization).
+_HELPER_UNITS = (
+    ("assembly", "_newton_matrix",
+     "f1 i f1 i1 i1 i1 i1 i f1 f1 f1 f2 f2 f2 f1 f1 f2 i1 f b f1 f1 f2 i2 f2"),
+    ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1"),
+)
+_MAIN_UNITS = (
+    ("pipeline", "_finish_rows", "i i f2 f2 i f2 f3 f4 f2 f2 f3 f3 f3 f4 f2 f3 i3 f2 f2 f2 i1"),
+    ("assembly", "_drop_curvature", "f1 i f1 i1 i1 i1 i i2 f2 f2 i1 f2 f2 f2"),
+    ("curvature", "_negative_curvature_step",
+     "f1 i f1 i1 i1 i1 i1 i f1 f f2 f2 f2 f2 f2 f1 f1 f1 f1 f1 f1 f1 f1"),
+    ("start", "_close_to_contact", "f1 i f1"),
+    ("assembly", "_merit", "f1 i f1 i1 i1 i1 i f1"),
+    ("assembly", "_stationarity", "f1 i f1 i1 i1 i1 i f1 f1 f1 f2 i1 f1"),
+    ("contact", "_all_gaps", "f1 i f1 i1 i1 i1 f1"),
+    ("candidates", "_initial_candidates", "f1 i f1 b2 b3 f2 f2"),
+    ("candidates", "_grow_candidates", "f1 f1 i f1 b2 b3 b b"),
+    ("driver", "_finish", "f1 i f1 i1 i1 i1 i f1 f1 f i f2 f3 f1 f1"),
+    ("driver", "_escape", "f1 f1 i f1 i1 i1 i1 i i f1 f"),
+)
+_SCALARS = {"f": types.float64, "i": types.int64, "b": types.boolean}
+
+
+def unit_signature(spec: str) -> tuple:
+    """The numba argument types of a unit's spec string (see ``_HELPER_UNITS``)."""
+    out = []
+    for code in spec.split():
+        scalar = _SCALARS[code[0]]
+        out.append(types.Array(scalar, int(code[1:]), "C") if len(code) > 1 else scalar)
+    return tuple(out)
+
+
+def unit_dispatcher(module: str, name: str):
+    """The numba dispatcher of a compile unit."""
+    return getattr(importlib.import_module(f"envs.solver.{module}"), name)
+
+
+def _compile_units(units) -> None:
+    for module, name, spec in units:
+        unit_dispatcher(module, name).compile(unit_signature(spec))
+
+
+def _helper_command() -> list[str]:
+    """The second process: a fresh interpreter (not multiprocessing's spawn, which would run
+    the user's main module again) compiling ``_HELPER_UNITS``."""
+    return [sys.executable, "-c", "from envs.solver.warmup import _HELPER_UNITS, _compile_units; "
+            "_compile_units(_HELPER_UNITS)"]
+
+
+def _helper_env() -> dict[str, str]:
+    """This environment with the package's own root first on ``PYTHONPATH`` (the helper must
+    compile the files this process runs, into the same cache)."""
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    return env
 
 
 def kernels_cached() -> bool:
@@ -22,12 +95,35 @@ def kernels_cached() -> bool:
     return all(any(cache.glob(pattern)) for pattern in _ENTRIES)
 
 
-def announce_compile(stream=None) -> bool:
-    """Print a notice on ``stream`` (default stderr) when the kernels will be compiled by the
-    first solve; returns whether it did."""
+def precompile() -> bool:
+    """On a cold cache, compile the solver's largest independent units, one share in a second
+    Python process and the other here, and wait for both; returns whether it compiled.
+
+    Without it the first solve compiles everything in one process; a failed helper costs
+    nothing but the time (the first solve then compiles what is missing).
+    """
     if kernels_cached():
         return False
-    print("psm-grasp: compiling the solver's kernels (first run after an install: about 2 "
-          "minutes on a 2-core machine; later runs load them in about a second) ...",
-          file=stream or sys.stderr, flush=True)
+    try:
+        helper = subprocess.Popen(_helper_command(), env=_helper_env(),
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        helper = None
+    try:
+        _compile_units(_MAIN_UNITS)
+    finally:
+        if helper is not None:
+            helper.wait()
+    return True
+
+
+def announce_compile(stream=None) -> bool:
+    """On a cold cache, print a notice on ``stream`` (default stderr) and :func:`precompile`;
+    returns whether it did."""
+    if kernels_cached():
+        return False
+    print("psm-grasp: compiling the solver's kernels (first run after an install: about a "
+          "minute on a 2-core machine, two processes; later runs load them in about a second) "
+          "...", file=stream or sys.stderr, flush=True)
+    precompile()
     return True
