@@ -232,6 +232,9 @@ def test_compile_notice_only_when_the_kernels_are_not_cached(tmp_path, monkeypat
     fake = tmp_path / "solver" / "warmup.py"
     fake.parent.mkdir()
     monkeypatch.setattr(warmup, "__file__", str(fake))
+    compiled = []
+    monkeypatch.setattr(warmup, "precompile", lambda: compiled.append(True) or True)
     assert not warmup.kernels_cached()
     assert warmup.announce_compile()
     assert "compiling the solver's kernels" in capsys.readouterr().err
+    assert compiled == [True]  # and it starts the two-process compile

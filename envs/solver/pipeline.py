@@ -14,6 +14,7 @@ optimizers, rendering and charts) all solve through :func:`solve_columns`:
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import NamedTuple
 
@@ -67,6 +68,7 @@ from envs.model.rings import HUB_RADIUS, kernel_copy
 from ..parallel import run_rows
 from . import driver
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
+from .warmup import announce_compile
 
 __all__ = ["BatchSolution", "solve_columns", "checked_solution", "row_message"]
 
@@ -102,8 +104,17 @@ class BatchSolution(NamedTuple):
 _OPTIONS = default_options()  # shared by every solve: the kernels only read it
 
 
+@functools.cache
+def _prepare_kernels() -> None:
+    """Once per process, before the first solve: on a cold cache a notice and the compile split
+    over two processes (:func:`envs.solver.warmup.announce_compile`), for library callers as
+    for the command line."""
+    announce_compile()
+
+
 def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
     """Run the compiled solver in place; returns the info rows and the corner/stop forces."""
+    _prepare_kernels()
     b = prm.shape[0]
     lam_corner = np.zeros((b, 2, N_CORNERS, n))
     lam_stop = np.zeros((b, 2))
