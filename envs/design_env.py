@@ -6,6 +6,7 @@ actions to designs, draws objects, builds observations and ``info``, and renders
 
 from __future__ import annotations
 
+import copy
 import math
 import textwrap
 from dataclasses import dataclass
@@ -95,21 +96,27 @@ class ObjectDistribution:
             if len(pair) != 2 or pair[0] > pair[1]:
                 raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
             object.__setattr__(self, name, pair)
-        # a SoftDisk validates the material fields
-        SoftDisk(radii[0], 0.0, self.youngs_modulus_range_pa[0], self.poisson_ratio,
+        # a SoftDisk validates the material fields (both ends of the modulus range)
+        SoftDisk(radii[0], 0.0, self.youngs_modulus_range_pa[1], self.poisson_ratio,
                  self.thickness_m, self.stiffness_scale)
+        object.__setattr__(self, "_templates", tuple(
+            SoftDisk(r, 0.0, self.youngs_modulus_range_pa[0], self.poisson_ratio,
+                     self.thickness_m, self.stiffness_scale) for r in radii))
 
     def sample(self, rng: np.random.Generator) -> tuple[SoftDisk, float]:
         """Draw an object and its strain limit (always three draws, in a fixed order).
 
         The disk's ``distance_m`` is 0: the design's ``distance_m`` replaces it.
         """
-        radius = self.radii_m[int(rng.integers(len(self.radii_m)))]
+        k = int(rng.integers(len(self.radii_m)))
         lo, hi = self.youngs_modulus_range_pa
         modulus = float(np.exp(rng.uniform(math.log(lo), math.log(hi))))
         limit = float(rng.uniform(*self.strain_limit_range))
-        disk = SoftDisk(radius, 0.0, modulus, self.poisson_ratio, self.thickness_m,
-                        self.stiffness_scale)
+        # every field lies in a range validated at construction: a copy of the radius' validated
+        # template with the drawn modulus, not a SoftDisk validated again (a vector env draws
+        # one object per reset, hundreds per step)
+        disk = copy.copy(self._templates[k])
+        object.__setattr__(disk, "youngs_modulus_pa", modulus)
         return disk, limit
 
 
@@ -597,10 +604,12 @@ class GripperDesignVectorEnv(VectorEnv):
 
     def _object_infos(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         info: dict[str, np.ndarray] = {}
+        idx = rows.tolist()
+        # one object info per row (not per row and key)
+        per_row = [_object_info(self._disks[i], self._limits[i]) for i in idx]
         for key in OBJECT_INFO_KEYS:
             arr = np.zeros(self.num_envs)
-            for i in rows.tolist():
-                arr[i] = _object_info(self._disks[i], self._limits[i])[key]
+            arr[idx] = [row[key] for row in per_row]
             info[key] = arr
             info[f"_{key}"] = self._mask(rows)
         return info
