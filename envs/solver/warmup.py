@@ -26,7 +26,7 @@ from numba.core import types
 __all__ = ["kernels_cached", "announce_compile", "precompile"]
 
 # the batch and single-grasp entries: cached together with everything they call
-_ENTRIES = ("driver.solve_rows-*.nbi", "pipeline._finish_rows-*.nbi")
+_ENTRIES = (("driver", "solve_rows"), ("pipeline", "_finish_rows"))
 
 # Compile units (module of envs.solver, function, argument types) that do not call one another,
 # in two shares of about equal compile time. Argument types: f/i/b = float64/int64/bool
@@ -51,6 +51,7 @@ _MAIN_UNITS = (
     ("driver", "_finish", "f1 i f1 i1 i1 i1 i f1 f1 f i f2 f3 f1 f1"),
     ("driver", "_escape", "f1 f1 i f1 i1 i1 i1 i i f1 f"),
 )
+_announced = False  # announce_compile has run its compile in this process
 _SCALARS = {"f": types.float64, "i": types.int64, "b": types.boolean}
 
 
@@ -89,10 +90,16 @@ def _helper_env() -> dict[str, str]:
     return env
 
 
+def _cache_dir(module: str, name: str) -> Path:
+    """Where numba keeps a compile unit's cache (next to the source, or numba's user-wide cache
+    directory when the package's folder is not writable)."""
+    return Path(unit_dispatcher(module, name).stats.cache_path)
+
+
 def kernels_cached() -> bool:
     """True when numba's cache holds the solver's entry kernels (a warm start)."""
-    cache = Path(__file__).resolve().parent / "__pycache__"
-    return all(any(cache.glob(pattern)) for pattern in _ENTRIES)
+    return all(any(_cache_dir(module, name).glob(f"{module}.{name}-*.nbi"))
+               for module, name in _ENTRIES)
 
 
 def precompile() -> bool:
@@ -120,8 +127,12 @@ def precompile() -> bool:
 def announce_compile(stream=None) -> bool:
     """On a cold cache, print a notice on ``stream`` (default stderr) and :func:`precompile`;
     returns whether it did."""
-    if kernels_cached():
+    global _announced
+    if _announced or kernels_cached():
         return False
+    # once per process: the first solve after it compiles what is left (and must not split
+    # the compile again because its entries are not cached yet)
+    _announced = True
     print("psm-grasp: compiling the solver's kernels (first run after an install: about a "
           "minute on a 2-core machine, two processes; later runs load them in about a second) "
           "...", file=stream or sys.stderr, flush=True)
