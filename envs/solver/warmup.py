@@ -19,6 +19,7 @@ import importlib
 import os
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 from numba.core import types
@@ -52,6 +53,7 @@ _MAIN_UNITS = (
     ("driver", "_escape", "f1 f1 i f1 i1 i1 i1 i i f1 f"),
 )
 _announced = False  # announce_compile has run its compile in this process
+_lock = threading.Lock()
 _SCALARS = {"f": types.float64, "i": types.int64, "b": types.boolean}
 
 
@@ -128,13 +130,19 @@ def announce_compile(stream=None) -> bool:
     """On a cold cache, print a notice on ``stream`` (default stderr) and :func:`precompile`;
     returns whether it did."""
     global _announced
-    if _announced or kernels_cached():
-        return False
-    # once per process: the first solve after it compiles what is left (and must not split
-    # the compile again because its entries are not cached yet)
-    _announced = True
+    # once per process, and one thread at a time (evaluate_designs with a thread executor
+    # starts several first solves at once): the first solve after it compiles what is left
+    # and must not split the compile again because its entries are not cached yet
+    with _lock:
+        if _announced or kernels_cached():
+            return False
+        _announced = True
+        _notice_and_precompile(stream)
+    return True
+
+
+def _notice_and_precompile(stream) -> None:
     print("psm-grasp: compiling the solver's kernels (first run after an install: about a "
           "minute on a 2-core machine, two processes; later runs load them in about a second) "
           "...", file=stream or sys.stderr, flush=True)
     precompile()
-    return True
