@@ -58,9 +58,12 @@ def stress_ramp(name: str, n: int, m: int, element: str, strain: float) -> dict:
     reached = bool(last.converged and last.peak_strain >= strain)
     failed = [r for r in results if not r.converged]
     folded = [r for r in results if r.inverted_triangles > 0]
+    # converged on a saddle: counted apart (the ramp leaves such a branch where it can)
+    unstable = [r for r in results if r.converged and not r.stable]
     return {
         "scene": name, "n": n, "rings": m, "element": element,
         "steps": len(results), "failed_steps": len(failed), "folded_steps": len(folded),
+        "unstable_steps": len(unstable),
         "reached_strain": reached,
         "passed": reached and not failed and not folded,
         "final_torque_nm": last.torque_nm, "final_peak_strain": last.peak_strain,
@@ -115,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{args.element} M={m} N={n:5d} {name}: "
                       f"{'pass' if row['passed'] else 'FAIL'} steps {row['steps']:3d} "
                       f"failed {row['failed_steps']} folded {row['folded_steps']} "
+                      f"unstable {row['unstable_steps']} "
                       f"T {row['final_torque_nm']:.3g} N·m strain "
                       f"{row['final_peak_strain']:.3f} ({row['wall_s']:.1f} s)"
                       + (f" first failure {row['first_failure']}" if row["first_failure"]

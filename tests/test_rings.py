@@ -171,6 +171,22 @@ def test_ring_ramp_warm_starts_and_is_monotone():
     assert np.all(np.diff(closing) > 0)
 
 
+def test_ramp_snaps_off_a_symmetric_branch_that_loses_its_stability():
+    # a 4-point disk squeezed on two opposite corners: past ~1 N·m the symmetric equilibrium
+    # is a saddle (the square turns to lay a side on each finger). A direct solve there stays
+    # on the saddle and says so; the ramp leaves it for the stable grasp, which closes further
+    scene = Scene.preset("paper-r050")
+    torque = 1.231
+    direct = simulate(scene, torque, 4, n_rings=2, element="nhquad")
+    assert direct.converged and not direct.stable
+    torques = 0.02 * 1.25 ** np.arange(22)
+    out = simulate_ramp(scene, torques, 4, n_rings=2, element="nhquad")
+    assert all(r.converged and r.stable for r in out), [(r.torque_nm, r.message) for r in out]
+    snapped = simulate_ramp(scene, [0.5, 0.9, torque], 4, n_rings=2, element="nhquad")[-1]
+    assert snapped.converged and snapped.stable
+    assert np.mean(snapped.jaw_angles_rad) < np.mean(direct.jaw_angles_rad) - 0.05
+
+
 def test_ring_arguments_are_validated():
     with pytest.raises(ValueError, match="n_rings"):
         simulate(SCENE, 0.2, 20, n_rings=0, element="spring")

@@ -20,7 +20,7 @@ from envs import check
 from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_PHASE_RAD, STIFFNESS_RULES
 from envs.model.family import ModelSpec, resolve_model
 from envs.model.layout import S_SCALE
-from envs.model.problem import stiffness_unit
+from envs.model.problem import pack_params, rest_state, stiffness_unit
 from envs.scene import Scene
 from envs.validation import check_choice, check_range
 
@@ -34,6 +34,7 @@ WARM_OPENING_RAD = 1e-3
 NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
 NESTED_FACTOR = 4
 CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does not help
+TURNED_START = 0.25  # a turned rest start: this fraction of a point spacing about the pin
 
 
 def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
@@ -126,10 +127,52 @@ def _prolong(prob: _Problem, coarse: GraspResult) -> tuple[np.ndarray, np.ndarra
     return x, lam
 
 
+def _turned(prob: _Problem, x: np.ndarray, sense: float) -> np.ndarray:
+    """The scaled state ``x`` turned rigidly about the pin by :data:`TURNED_START` point
+    spacings in the sense ``sense`` (+1 or -1); the fingers stay where they are.
+
+    A rigid turn about the pin costs no energy: a start on one side of a symmetric saddle that
+    a start on the mirror plane may not leave (a 4-point disk squeezed on two corners turns
+    past about 1 N·m to lay a side on each finger; the solver's escapes from the deformed
+    saddle fall back to it).
+    """
+    angle = sense * TURNED_START * 2.0 * math.pi / prob.n
+    turn = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    out = x.copy()
+    for part in (slice(0, 2 * prob.n), slice(2 * prob.n + 2, None)):  # contour, interior
+        out[part] = (x[part].reshape(-1, 2) @ turn.T).ravel()
+    return out
+
+
+def _rest(prob: _Problem) -> np.ndarray:
+    """The scaled rest state of the problem's mesh (fingers open)."""
+    prm = pack_params(prob.rows, prob.n, prob.rule, prob.phase, prob.m, prob.element)
+    return rest_state(prm, prob.n)[0]
+
+
+def _leave_unstable(prob: _Problem, res: GraspResult) -> GraspResult:
+    """In place of the unstable equilibrium ``res``: the stable one reached from the rest shape
+    turned a little about the pin (either sense), or ``res`` if neither start reaches one.
+
+    (The deformed equilibrium itself turned does not fit between the fingers.) The iterations
+    and solve time of every attempt are counted.
+    """
+    iterations, spent = res.iterations, res.solve_time_s
+    rest = _rest(prob)
+    for sense in (1.0, -1.0):
+        turned, _ = prob.solve(_turned(prob, rest, sense), np.zeros((2, prob.n)))
+        iterations += turned.iterations
+        spent += turned.solve_time_s
+        if turned.converged and turned.stable:
+            return replace(turned, iterations=iterations, solve_time_s=spent)
+    return replace(res, iterations=iterations, solve_time_s=spent)
+
+
 def _solve_newton(prob: _Problem) -> GraspResult:
     """Newton solve from rest; fine meshes start from a coarser solution (nested iteration).
 
-    A solve that fails is retried by continuation: the torque is ramped from zero with
+    A solve that fails is retried from the rest shape turned a little about the pin, either
+    sense (:func:`_turned`), then by continuation: the torque is ramped from zero with
     adaptive steps, each started from the previous equilibrium.
     """
     spent = 0.0  # compiled-solver time of every attempt (the checks are not counted)
@@ -147,11 +190,21 @@ def _solve_newton(prob: _Problem) -> GraspResult:
             if res is not None:
                 spent += res.solve_time_s
             res, _ = prob.solve()
-    # no continuation after a fold, nor after a failed solve that ended on a folded iterate:
+    # no retry after a fold, nor after a failed solve that ended on a folded iterate:
     # measured on the solver sweep, continuation rescued none of the latter (N = 200 - 500)
     # and cost up to 10 s each
-    if (not res.converged and prob.torque_nm > 0 and prob.n <= CONTINUATION_MAX_N
-            and res.inverted_triangles == 0):
+    retry = not res.converged and prob.torque_nm > 0 and res.inverted_triangles == 0
+    for sense in (1.0, -1.0) if retry else ():
+        # two solves from turned rest shapes cost less than a continuation ramp
+        turned, _ = prob.solve(_turned(prob, _rest(prob), sense), np.zeros((2, prob.n)))
+        if turned.converged:
+            extra += res.iterations
+            spent += res.solve_time_s
+            res = turned
+            break
+        extra += turned.iterations
+        spent += turned.solve_time_s
+    if not res.converged and retry and prob.n <= CONTINUATION_MAX_N:
         failed = res
         spent += failed.solve_time_s
         res = _continuation(prob)
@@ -302,7 +355,11 @@ def simulate_ramp(
 
     Each step starts from the previous equilibrium with the fingers opened by a small angle
     (so that the start is strictly inside the contact constraints), which follows the branch of
-    equilibria the ramp reaches. A step whose warm start fails is retried from rest.
+    equilibria the ramp reaches. A step whose warm start fails is retried from rest. A step
+    that ends on an unstable equilibrium (the branch the ramp followed has lost its stability,
+    e.g. a symmetric squeeze past a bifurcation) is solved again from the rest shape turned a
+    little about the pin, either sense, and takes the stable equilibrium that reaches (where
+    a slowly loaded disk snaps to).
 
     Parameters
     ----------
@@ -347,6 +404,8 @@ def simulate_ramp(
             res, _ = prob.solve(*_warm_start(prob, prev))
         if res is None or not res.converged:
             res = _solve_newton(prob)
+        if res.converged and not res.stable:
+            res = _leave_unstable(prob, res)
         out.append(res)
         prev = res
         if res.converged and res.peak_strain >= stop:
