@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import gymnasium
 
+# first, before any kernel loads (numba's vectorized functions load at import): its import
+# deletes a kernel cache written from other source (numba checks a kernel's own file only)
+from . import _kernel_cache  # noqa: F401
 from .design_env import GripperDesignEnv, GripperDesignVectorEnv, ObjectDistribution
 from .evaluate import DesignBounds, RewardWeights, evaluate_designs
 from .scene import PRESETS, Design, Gripper, Scene, SoftDisk

@@ -403,10 +403,16 @@ def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: 
     or that closes the jaws on their stops has a share near 0 (CMA-ES found such designs when
     contact was counted by force > 0 alone); a squeeze with little travel keeps nearly all.
     """
+    angles = np.ascontiguousarray(jaw_angles_rad, dtype=np.float64)
+    stops = np.ascontiguousarray(stop_torques_nm, dtype=np.float64)
+    for name, arr in (("jaw_angles_rad", angles), ("stop_torques_nm", stops)):
+        # the compiled loop does not check bounds: a short array would be read past its end
+        if arr.shape != (cols.size, 2):
+            raise ValueError(f"{name} must have shape ({cols.size}, 2) (one row a scene, one "
+                             f"column a finger), got {arr.shape}")
     out = np.empty(cols.size)
     grip_share_rows(cols.torque_nm, cols.torsion_stiffness_nm_per_rad, cols.rest_angle_rad,
-                    np.ascontiguousarray(jaw_angles_rad, dtype=np.float64),
-                    np.ascontiguousarray(stop_torques_nm, dtype=np.float64), out)
+                    angles, stops, out)
     return out
 
 

@@ -79,6 +79,11 @@ def test_contact_score_is_grip_share_times_contact_fraction(batch):
     stop = np.array([[0.0, 0.01], [0.0, 0.0], [0.0, 0.0]])
     ref = np.clip((0.2 - 0.07 * (0.6 - jaw[:2]) - stop[:2]) / 0.2, 0, 1).min(axis=1)
     np.testing.assert_allclose(grip_share(cols, jaw, stop), [*ref, 0.0], rtol=0, atol=1e-15)
+    # the compiled loop has no bounds checks: a short array is refused before it runs
+    with pytest.raises(ValueError, match=r"jaw_angles_rad must have shape \(3, 2\)"):
+        grip_share(cols, jaw[:2], stop)
+    with pytest.raises(ValueError, match="stop_torques_nm"):
+        grip_share(cols, jaw, stop.ravel())
 
 
 def test_rest_codes_name_the_first_failed_test():

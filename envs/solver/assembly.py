@@ -49,6 +49,7 @@ from .contact import (
     _con_eval,
     _con_value,
     _trig,
+    constraint_dofs,
 )
 
 CH_BLOCK = 15  # column of the constraint curvature cache: 1 where the constraint has a block
@@ -410,7 +411,7 @@ def _drop_curvature(x, n, prm, bidx, kinds, fj, mcount, cd, ch, blk, dofs, ab, b
     for m in range(mcount):
         if ch[m, CH_BLOCK] == 0.0:
             continue
-        nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+        nd = constraint_dofs(kinds[m])
         t = 0
         for a in range(nd):
             dofs[a] = cd[m, a]

@@ -14,6 +14,8 @@ from numba import njit
 
 from ..model.geometry import finger_axes
 from ..model.layout import (
+    KIND_CORNER,
+    KIND_FACE,
     P_C0X,
     P_HW,
     P_LMAX,
@@ -483,3 +485,15 @@ def _build_constraints(face, corner, n, kinds, fj, fidx):
         fidx[m] = 0
         m += 1
     return m
+
+
+@njit(cache=True, inline="always")
+def constraint_dofs(kind):
+    """How many unknowns a constraint's gap depends on (its columns of ``cd``/``cg``): a face
+    gap the point (x, y) and its finger's angle, a corner gap the contour edge's two points and
+    the finger's angle, a joint stop the finger's angle alone."""
+    if kind == KIND_FACE:
+        return 3
+    if kind == KIND_CORNER:
+        return 5
+    return 1

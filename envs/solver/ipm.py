@@ -37,6 +37,7 @@ from .banded import (
 from .contact import (
     _all_gaps,
     _tunnels,
+    constraint_dofs,
 )
 from .curvature import _negative_curvature_step, _smallest_pd_shift
 from .gauge import (
@@ -55,6 +56,8 @@ from .status import (
 MAX_CURVATURE_STEPS = 2  # steps along a saddle's unstable mode per interior-point call
 MAX_SOC = 1  # second-order corrections of a rejected full step
 STALL_STEPS = 2  # stalled steps on the modified matrix before a shifted exact one
+MAX_POINT_STEP = 0.1  # largest point move of one step [scaled by the radius]
+MAX_FINGER_STEP = 0.05  # largest finger turn of one step [rad]
 GAP_TARGET = 0.05  # a shrinking gap's share left after a step cut back for it
 
 
@@ -70,7 +73,8 @@ class IpmWork(NamedTuple):
     their dofs ``cd`` and curvature ``ch``. One constraint's scratch: ``grad5``, ``hess5``,
     ``dofs``. The gauge's saddle test (:mod:`envs.solver.gauge`): ``wb`` (band order) and
     ``wt`` (2) get ``W^-1 t``. The second-order correction: ``corr`` (state order) and ``qs``
-    (per constraint, the gaps' change beyond their linearization).
+    (per constraint, the gaps' change beyond their linearization); ``gf`` (per constraint):
+    the gaps at a rejected first trial point, for the next step length (:func:`_gap_limited`).
     """
 
     grad: np.ndarray
@@ -213,7 +217,7 @@ def _second_order(x, xt, step, n, prm, bidx, kinds, fj, fidx, mcount, g, gt, lam
     nb = 2 * n
     corr[:] = 0.0
     for m in range(mcount):
-        nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+        nd = constraint_dofs(kinds[m])
         lin = 0.0
         for a in range(nd):
             lin += cg[m, a] * step[cd[m, a]]
@@ -231,6 +235,19 @@ def _second_order(x, xt, step, n, prm, bidx, kinds, fj, fidx, mcount, g, gt, lam
     for d in range(x.shape[0]):
         xt[d] = x[d] + step[d] + corr[d]
     return True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _step_excess(step, nb):
+    """How far ``step`` exceeds the step limits (above 1: by that factor):
+    :data:`MAX_POINT_STEP` for every point coordinate, :data:`MAX_FINGER_STEP` for the two
+    finger angles at ``nb`` and ``nb + 1`` (a full step can jump a finger past a vertex)."""
+    smax = 0.0
+    for d in range(step.shape[0]):
+        if d != nb and d != nb + 1:
+            smax = max(smax, abs(step[d]))
+    return max(smax / MAX_POINT_STEP, abs(step[nb]) / MAX_FINGER_STEP,
+               abs(step[nb + 1]) / MAX_FINGER_STEP)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -371,12 +388,8 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
             shift_last = shift
         slope = _step_from_band(ob, ot, bidx, nb, grad, step)
         # damp huge finger rotations (a full step can jump a finger past a vertex)
-        smax = 0.0
-        for d in range(nx):
-            if d != nb and d != nb + 1:
-                smax = max(smax, abs(step[d]))
         alpha = 1.0
-        lim = max(smax / 0.1, abs(step[nb]) / 0.05, abs(step[nb + 1]) / 0.05)
+        lim = _step_excess(step, nb)
         if lim > 1.0:
             alpha = 1.0 / lim
         if not have_acc:
@@ -442,7 +455,7 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         # (constraint gradients at x kept by _newton_matrix)
         alpha_d = 1.0
         for m in range(mcount):
-            nd = 3 if kinds[m] == 0 else (5 if kinds[m] == 1 else 1)
+            nd = constraint_dofs(kinds[m])
             dl = 0.0
             for a in range(nd):
                 dl += cg[m, a] * step[cd[m, a]]

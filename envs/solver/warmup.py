@@ -16,10 +16,12 @@ the split: the Newton matrix alone is a quarter of the cold compile).
 from __future__ import annotations
 
 import importlib
+import multiprocessing
 import os
 import subprocess
 import sys
 import threading
+import warnings
 from pathlib import Path
 
 from numba.core import types
@@ -120,6 +122,11 @@ def precompile() -> bool:
         helper = None
     try:
         _compile_units(_MAIN_UNITS)
+    except Exception as exc:  # noqa: BLE001 - best effort: the first solve compiles the rest
+        warnings.warn(f"psm-grasp: the cold-start compile split failed ({exc!r}); the first "
+                      "solve compiles the kernels in one process", RuntimeWarning, stacklevel=2)
+        if helper is not None:
+            helper.kill()
     finally:
         if helper is not None:
             helper.wait()
@@ -133,12 +140,25 @@ def announce_compile(stream=None) -> bool:
     # once per process, and one thread at a time (evaluate_designs with a thread executor
     # starts several first solves at once): the first solve after it compiles what is left
     # and must not split the compile again because its entries are not cached yet
+    if multiprocessing.parent_process() is not None:
+        # a worker of a process pool: its parent announced; one split per worker would run
+        # two compiling processes per worker against one cache
+        return False
     with _lock:
         if _announced or kernels_cached():
             return False
         _announced = True
         _notice_and_precompile(stream)
     return True
+
+
+def _new_lock() -> None:
+    """A forked child's lock: the parent's may be held by a thread the child does not have."""
+    global _lock
+    _lock = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_new_lock)
 
 
 def _notice_and_precompile(stream) -> None:
