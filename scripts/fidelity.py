@@ -1,8 +1,9 @@
 """How far the point-spring model's ranking of designs can be trusted: PSM against FEM rewards.
 
 For each paper disk, ``--designs`` random designs of :class:`envs.evaluate.DesignBounds` are
-scored by :func:`envs.evaluate.evaluate_designs` at ``fidelity="psm"`` (the default model, and
-the paper's springs-only fan beside it) and at ``fidelity="fem"`` (the finite-element reference,
+scored by :func:`envs.evaluate.evaluate_designs` at ``fidelity="psm"`` (the default model, the
+paper's springs-only fan and finer calibrated nh-quad members beside it, with their cost a
+design) and at ``fidelity="fem"`` (the finite-element reference,
 cached on disk per design). Over the designs valid at rest that converged at both fidelities
 (invalid designs get the same penalty at both and would only inflate the agreement) it reports:
 
@@ -17,6 +18,7 @@ panel per disk). The FEM costs ~0.3-1 s per design; ``--workers`` runs it in pro
 Usage::
 
     python scripts/fidelity.py [--designs 100] [--seed 0] [--workers 2] [--quick]
+                               [--members 80x2 96x6 120x6 160x8]
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ from envs.scene import Scene  # noqa: E402
 
 SCENES = ("paper-r050", "paper-r070", "paper-r100")
 MODELS = {"default": {}, "paper fan": {"element": "spring"}}
+# finer nh-quad members (N x rings, calibrated): how the ranking follows refinement and its cost
+MEMBERS = ((80, 2), (96, 6), (120, 6), (160, 8))
 TERMS = ("reward", "contact_score", "peak_log_strain", "peak_strain")
 
 
@@ -60,7 +64,15 @@ def rank_agreement(psm: dict, fem: dict, rows: np.ndarray) -> dict:
     return out
 
 
-def run_scene(name: str, n: int, seed: int, executor) -> dict:
+def model_table(members) -> dict[str, dict]:
+    """The models scored against the FEM: the default, the paper's fan and ``members``."""
+    table = dict(MODELS)
+    for n_pts, rings in members:
+        table[f"nh-quad {n_pts}x{rings}"] = {"n_triangles": n_pts, "n_rings": rings}
+    return table
+
+
+def run_scene(name: str, n: int, seed: int, executor, models: dict) -> dict:
     scene = Scene.preset(name)
     designs = DesignBounds().sample(np.random.default_rng(seed), n, scene.disk)
     t0 = time.perf_counter()
@@ -69,13 +81,14 @@ def run_scene(name: str, n: int, seed: int, executor) -> dict:
     entry: dict = {"scene": name, "designs": n, "fem_wall_s": fem_s,
                    "fem_converged": int(fem["converged"].sum()),
                    "valid_at_rest": int(fem["valid_at_rest"].sum()), "models": {}}
-    for label, kw in MODELS.items():
+    for label, kw in models.items():
         t0 = time.perf_counter()
         psm = evaluate_designs(designs, scene.disk, **kw)
         psm_s = time.perf_counter() - t0
         rows = np.flatnonzero(fem["valid_at_rest"] & fem["converged"] & psm["converged"])
         entry["models"][label] = {
             "psm_wall_s": psm_s,
+            "psm_ms_per_design": 1e3 * psm_s / n,
             "psm_converged": int((psm["converged"] & psm["valid_at_rest"]).sum()),
             **rank_agreement(psm, fem, rows),
             "rows": rows.tolist(),
@@ -125,6 +138,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=None,
                     help="FEM in this many spawned processes (default: in process)")
     ap.add_argument("--quick", action="store_true", help="12 designs of paper-r070 only")
+    ap.add_argument("--members", nargs="*", default=[f"{a}x{b}" for a, b in MEMBERS],
+                    help="finer nh-quad members NxM scored beside the default (none: skip)")
     ap.add_argument("--out", default="out")
     args = ap.parse_args(argv)
     scenes = ("paper-r070",) if args.quick else SCENES
@@ -136,10 +151,15 @@ def main(argv: list[str] | None = None) -> int:
         from optim.executors import ProcessExecutor
 
         executor = ProcessExecutor(args.workers)
+    try:
+        members = [tuple(int(v) for v in m.lower().split("x")) for m in args.members]
+    except ValueError:
+        ap.error(f"--members takes NxM values (e.g. 96x6), got {args.members}")
+    models = model_table(members)
     results = []
     try:
         for name in scenes:
-            entry = run_scene(name, n, args.seed, executor)
+            entry = run_scene(name, n, args.seed, executor, models)
             results.append(entry)
             print(f"{name}: {entry['valid_at_rest']} of {n} valid, FEM "
                   f"{entry['fem_converged']} converged in {entry['fem_wall_s']:.0f} s")
@@ -147,11 +167,13 @@ def main(argv: list[str] | None = None) -> int:
                 terms = ", ".join(
                     f"{k} {m[f'spearman_{k}']:.3f}" for k in TERMS[1:]
                     if m.get(f"spearman_{k}") is not None)
-                print(f"  {label:9s}: Spearman reward {m.get('spearman_reward', float('nan')):.3f}"
+                print(f"  {label:14s}: Spearman reward "
+                      f"{m.get('spearman_reward', float('nan')):.3f}"
                       f" ({terms}); same best {m.get('same_best')}, FEM rank of the PSM's best "
                       f"{m.get('fem_rank_of_psm_best')}, regret {m.get('fem_regret', 0):.4f}; "
                       f"|error| mean {m.get('reward_error_mean', 0):.4f} max "
-                      f"{m.get('reward_error_max', 0):.4f}")
+                      f"{m.get('reward_error_max', 0):.4f}; {m['psm_ms_per_design']:.1f} ms a "
+                      "design")
     finally:
         if executor is not None:
             executor.close()
