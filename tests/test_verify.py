@@ -58,6 +58,32 @@ def test_verify_rescores_the_run_and_writes_its_files(run_dir):
                                                    + 0.01)
 
 
+def test_verify_reranks_with_the_finer_member(run_dir):
+    # the ranking member's column is that member's own evaluation of the same designs
+    from envs import evaluate_designs
+    from optim.charts import disk_of
+    from optim.verify import RANKING_MEMBER
+
+    report = json.loads((run_dir / "verify.json").read_text())
+    result = OptimResult.from_json(run_dir / "random_seed4_result.json")
+    rows = report["designs"]
+    assert report["ranking_member"] == RANKING_MEMBER
+    assert RANKING_MEMBER["n_rings"] > 2 and RANKING_MEMBER["n_triangles"] > 40
+    designs = np.array([[r["design"][k] for k in DESIGN_FIELDS] for r in rows])
+    obj = result.object
+    own = evaluate_designs(designs, disk_of(obj), strain_limits=obj["strain_limit"],
+                           **RANKING_MEMBER)
+    np.testing.assert_allclose([r["ranking_member"]["reward"] for r in rows], own["reward"],
+                               rtol=0, atol=1e-12)
+    assert sorted(r["ranking_member_rank"] for r in rows) == [1, 2, 3]
+    best = min(rows, key=lambda r: r["ranking_member_rank"])
+    assert best["ranking_member"]["reward"] == max(r["ranking_member"]["reward"] for r in rows)
+    s = report["summary"]
+    assert s["ranking_member_same_best"] == (best["fem_rank"] == 1)
+    assert s["fem_rank_of_ranking_member_best"] == best["fem_rank"]
+    assert -1.0 <= s["ranking_member_spearman"] <= 1.0
+
+
 def test_verify_warns_when_the_fem_does_not_confirm_the_best(run_dir, capsys, monkeypatch):
     import optim.verify as verify
 
