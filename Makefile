@@ -29,6 +29,7 @@ bench: $(STAMP)
 # after editing a kernel, clear it (a fresh clone, as CI uses, has none)
 clean-cache:
 	find envs -name '*.nbi' -delete -o -name '*.nbc' -delete
+	rm -rf envs/__pycache__/numba-*
 
 clean: clean-cache
 	rm -rf $(VENV) out .pytest_cache

@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import gymnasium
 
-# first, before any kernel loads (numba's vectorized functions load at import): its import
-# deletes a kernel cache written from other source (numba checks a kernel's own file only)
-from . import _kernel_cache  # noqa: F401
-from .design_env import GripperDesignEnv, GripperDesignVectorEnv, ObjectDistribution
-from .evaluate import DesignBounds, RewardWeights, evaluate_designs
-from .scene import PRESETS, Design, Gripper, Scene, SoftDisk
-from .solver import GraspResult, simulate, simulate_ramp
+from ._kernel_cache import kernel_cache
+
+# every kernel of the package is created by these imports: cached in a folder of this version
+# of the source (numba would check a kernel's own file only, not the files it inlines)
+with kernel_cache():
+    from .design_env import GripperDesignEnv, GripperDesignVectorEnv, ObjectDistribution
+    from .evaluate import DesignBounds, RewardWeights, evaluate_designs
+    from .scene import PRESETS, Design, Gripper, Scene, SoftDisk
+    from .solver import GraspResult, simulate, simulate_ramp
 
 __all__ = [
     "Gripper",

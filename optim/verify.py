@@ -212,20 +212,24 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
     """A short table of the verification."""
     print(f"FEM verification of {report['run']['method']} on {report['run']['object']} "
           f"({report['fem']['elements']} quadratic triangles):")
-    member = report["ranking_member"]
-    print(f"  (ranking member: {member['element']} N = {member['n_triangles']}, M = "
-          f"{member['n_rings']})")
-    print("  design   PSM reward  member reward  FEM reward  PSM rank  member rank  FEM rank  "
-          "FEM contact  FEM log strain")
+    member = report.get("ranking_member")  # absent from reports written before it
+    if member:
+        print(f"  (ranking member: {member['element']} N = {member['n_triangles']}, M = "
+              f"{member['n_rings']})")
+    print("  design   PSM reward" + ("  member reward" if member else "") + "  FEM reward  "
+          "PSM rank" + ("  member rank" if member else "") + "  FEM rank  FEM contact  "
+          "FEM log strain")
     for i, r in enumerate(report["designs"]):
-        print(f"  #{i + 1:<6d} {r['psm']['reward']:10.4f}  {r['ranking_member']['reward']:13.4f}"
-              f"  {r['fem']['reward']:10.4f}  {r['psm_rank']:8d}  {r['ranking_member_rank']:11d}"
-              f"  {r['fem_rank']:8d}  {r['fem']['contact_score']:11.3f}  "
+        print(f"  #{i + 1:<6d} {r['psm']['reward']:10.4f}"
+              + (f"  {r['ranking_member']['reward']:13.4f}" if member else "")
+              + f"  {r['fem']['reward']:10.4f}  {r['psm_rank']:8d}"
+              + (f"  {r['ranking_member_rank']:11d}" if member else "")
+              + f"  {r['fem_rank']:8d}  {r['fem']['contact_score']:11.3f}  "
               f"{r['fem']['peak_log_strain']:14.3f}")
     s = report["summary"]
-    print(f"  same best design: {s['same_best']} (ranking member: "
-          f"{s['ranking_member_same_best']}); max |PSM - FEM| reward "
-          f"{s['max_reward_difference']:.4f}"
+    print(f"  same best design: {s['same_best']}"
+          + (f" (ranking member: {s['ranking_member_same_best']})" if member else "")
+          + f"; max |PSM - FEM| reward {s['max_reward_difference']:.4f}"
           + (f"; Spearman {s['spearman']:.3f}" if s.get("spearman") is not None else "")
           + (f" (ranking member {s['ranking_member_spearman']:.3f})"
              if s.get("ranking_member_spearman") is not None else ""))

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from envs.model.defaults import DEFAULT_PHASE_RAD
 from envs.model.energy import energy_scaled, gradient_scaled
 from envs.model.problem import rest_state, scaled_params
 from envs.model.rings import (
@@ -185,6 +186,26 @@ def test_ramp_snaps_off_a_symmetric_branch_that_loses_its_stability():
     snapped = simulate_ramp(scene, [0.5, 0.9, torque], 4, n_rings=2, element="nhquad")[-1]
     assert snapped.converged and snapped.stable
     assert np.mean(snapped.jaw_angles_rad) < np.mean(direct.jaw_angles_rad) - 0.05
+
+
+def test_a_failed_solve_is_retried_from_a_turned_rest_shape():
+    # the same disk past its bifurcation: from the rest shape the solve stays on the symmetric
+    # saddle and fails; from the rest shape turned a quarter spacing it reaches the stable
+    # grasp, and simulate reports it with every attempt's iterations
+    from envs.solver.simulate import _Problem, _rest, _turned
+
+    scene = Scene.preset("paper-r050")
+    res = simulate(scene, 1.734, 4, n_rings=2, element="nhquad")
+    assert res.converged and res.stable, res.message
+    assert res.kkt.passed
+    prob = _Problem(scene, 1.734, 4, "van_gelder", DEFAULT_PHASE_RAD, 2, "nhquad",
+                    res.model_scale)
+    plain, _ = prob.solve()
+    assert not plain.converged
+    turned, _ = prob.solve(_turned(prob, _rest(prob), 1.0), np.zeros((2, 4)))
+    assert turned.converged
+    np.testing.assert_allclose(res.jaw_angles_rad, turned.jaw_angles_rad, rtol=0, atol=1e-9)
+    assert res.iterations == plain.iterations + turned.iterations
 
 
 def test_ring_arguments_are_validated():

@@ -128,3 +128,20 @@ def test_verify_without_the_fem_extra_says_what_to_install(run_dir, capsys, monk
     assert "pip install -e '.[fem]'" in capsys.readouterr().err
     assert main(["optimize", "--budget", "10", "--out", str(run_dir), "--verify-top", "2"]) == 2
     assert "--verify-top needs scikit-fem" in capsys.readouterr().err
+
+
+def test_a_report_written_before_the_ranking_member_still_prints_and_draws(run_dir, tmp_path,
+                                                                            capsys):
+    from optim.verify import print_report, verify_figure
+
+    report = json.loads((run_dir / "verify.json").read_text())
+    report.pop("ranking_member")
+    for row in report["designs"]:
+        row.pop("ranking_member")
+        row.pop("ranking_member_rank")
+    for key in ("ranking_member_same_best", "fem_rank_of_ranking_member_best",
+                "ranking_member_spearman"):
+        report["summary"].pop(key, None)  # (Spearman only for three designs or more)
+    print_report(report, {})
+    assert "member" not in capsys.readouterr().out
+    assert verify_figure(report, tmp_path / "old.png").stat().st_size > 0

@@ -4,7 +4,9 @@ the solver compiles them with, and its helper process runs."""
 from __future__ import annotations
 
 import inspect
+import os
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -66,28 +68,83 @@ def test_warm_cache_compiles_nothing():
     assert warmup.announce_compile() is False
 
 
-def test_kernel_cache_follows_every_compiled_source_file(tmp_path):
-    # numba checks a cached kernel against its own file only: the package deletes the cache
-    # when any file that uses numba changes (a kernel inlines its callees from other files)
-    from envs._kernel_cache import refresh_cache
+def _double(x):
+    return 2.0 * x
 
+
+def test_kernel_cache_folder_follows_every_source_file(tmp_path, monkeypatch):
+    # numba checks a cached kernel against its own file only; the package's kernels live in a
+    # folder named by a digest of all its source, so any edit (a callee, a constant of a plain
+    # module) starts a new folder, and the process's numba setting is put back afterwards
+    import numba
+
+    from envs import _kernel_cache as kc
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     (tmp_path / "kernels.py").write_text("from numba import njit\n")
-    (tmp_path / "plain.py").write_text("X = 1\n")
-    cache = tmp_path / "__pycache__"
-    cache.mkdir()
+    (tmp_path / "layout.py").write_text("SLOT = 1\n")
+    first = kc.source_digest(tmp_path)
+    (tmp_path / "layout.py").write_text("SLOT = 3\n")  # no kernel in it, read by kernels
+    second = kc.source_digest(tmp_path)
+    assert first != second
+    before = numba.config.CACHE_DIR
+    with kc.kernel_cache(tmp_path) as folder:
+        assert folder == tmp_path / "__pycache__" / f"numba-{second}"
+        assert numba.config.CACHE_DIR == str(folder)
+        kernel = numba.njit(cache=True)(_double)
+    assert numba.config.CACHE_DIR == before
+    assert Path(kernel.stats.cache_path).is_relative_to(folder)
+    assert kernel(2.0) == 4.0
+    # older versions' folders: the newest KEEP_OLD are kept (a process may still run them)
+    for k in range(kc.KEEP_OLD + 2):
+        old = tmp_path / "__pycache__" / f"numba-old{k}"
+        old.mkdir()
+        os.utime(old, (1e9 + k, 1e9 + k))
+    with kc.kernel_cache(tmp_path):
+        pass
+    left = sorted(p.name for p in (tmp_path / "__pycache__").glob("numba-*"))
+    assert left == sorted([f"numba-{second}", "numba-old2", "numba-old3"])
+    # a user's own NUMBA_CACHE_DIR holds the package's folder
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert kc.kernel_cache_dir("abc", tmp_path) == tmp_path / "mine" / "psm-grasp-numba-abc"
 
-    def write_cache():
-        for name in ("kernels.f-1.py312.nbi", "kernels.f-1.py312.1.nbc"):
-            (cache / name).write_bytes(b"x")
 
-    write_cache()
-    assert refresh_cache(tmp_path)  # nothing recorded which source wrote it: deleted
-    assert not list(cache.glob("*.nb?"))
-    write_cache()
-    assert not refresh_cache(tmp_path)  # same source: kept
-    (tmp_path / "plain.py").write_text("X = 2\n")
-    assert not refresh_cache(tmp_path)  # a file without kernels changed: kept
-    assert len(list(cache.glob("*.nb?"))) == 2
-    (tmp_path / "kernels.py").write_text("from numba import njit  # edited\n")
-    assert refresh_cache(tmp_path)
-    assert not list(cache.glob("*.nb?"))
+def test_the_package_kernels_are_cached_by_source_version():
+    from envs import _kernel_cache as kc
+    from envs.solver import driver
+
+    folder = kc.kernel_cache_dir(kc.source_digest())
+    assert Path(driver.solve_rows.stats.cache_path).is_relative_to(folder)
+
+
+def test_a_failed_compile_split_warns_and_stops_its_helper(monkeypatch):
+    # best effort: the first solve compiles what is missing, so a failure only warns, and the
+    # helper process is stopped rather than waited for
+    import sys
+    import time
+
+    monkeypatch.setattr(warmup, "kernels_cached", lambda: False)
+    monkeypatch.setattr(warmup, "_helper_command",
+                        lambda: [sys.executable, "-c", "import time; time.sleep(60)"])
+
+    def broken(units):
+        raise TypeError("a unit's signature does not match")
+
+    monkeypatch.setattr(warmup, "_compile_units", broken)
+    t0 = time.perf_counter()
+    with pytest.warns(RuntimeWarning, match="compile split failed"):
+        assert warmup.precompile() is True
+    assert time.perf_counter() - t0 < 30.0
+
+
+def test_a_pool_worker_announces_without_splitting(monkeypatch, capsys):
+    import multiprocessing
+
+    monkeypatch.setattr(warmup, "kernels_cached", lambda: False)
+    monkeypatch.setattr(warmup, "_announced", False)
+    split = []
+    monkeypatch.setattr(warmup, "precompile", lambda: split.append(True) or True)
+    monkeypatch.setattr(multiprocessing, "parent_process", lambda: object())
+    assert warmup.announce_compile()
+    assert "in this worker process" in capsys.readouterr().err
+    assert split == []

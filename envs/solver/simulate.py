@@ -131,10 +131,10 @@ def _turned(prob: _Problem, x: np.ndarray, sense: float) -> np.ndarray:
     """The scaled state ``x`` turned rigidly about the pin by :data:`TURNED_START` point
     spacings in the sense ``sense`` (+1 or -1); the fingers stay where they are.
 
-    A rigid turn about the pin costs no energy: a start on one side of a symmetric saddle that
-    a start on the mirror plane may not leave (a 4-point disk squeezed on two corners turns
-    past about 1 N·m to lay a side on each finger; the solver's escapes from the deformed
-    saddle fall back to it).
+    A start off the mirror plane, on one side of a symmetric saddle that a start on it may not
+    leave (a 4-point disk squeezed on two corners turns past about 1 N·m to lay a side on each
+    finger; the solver's escapes from the deformed saddle fall back to it). The turn costs no
+    energy for the paper's fan and a little for a ring mesh, whose hub stays fixed.
     """
     angle = sense * TURNED_START * 2.0 * math.pi / prob.n
     turn = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
@@ -193,7 +193,8 @@ def _solve_newton(prob: _Problem) -> GraspResult:
     # no retry after a fold, nor after a failed solve that ended on a folded iterate:
     # measured on the solver sweep, continuation rescued none of the latter (N = 200 - 500)
     # and cost up to 10 s each
-    retry = not res.converged and prob.torque_nm > 0 and res.inverted_triangles == 0
+    retry = (not res.converged and prob.torque_nm > 0 and res.inverted_triangles == 0
+             and prob.n <= CONTINUATION_MAX_N)
     for sense in (1.0, -1.0) if retry else ():
         # two solves from turned rest shapes cost less than a continuation ramp
         turned, _ = prob.solve(_turned(prob, _rest(prob), sense), np.zeros((2, prob.n)))
@@ -204,7 +205,7 @@ def _solve_newton(prob: _Problem) -> GraspResult:
             break
         extra += turned.iterations
         spent += turned.solve_time_s
-    if not res.converged and retry and prob.n <= CONTINUATION_MAX_N:
+    if not res.converged and retry:
         failed = res
         spent += failed.solve_time_s
         res = _continuation(prob)

@@ -140,15 +140,13 @@ def announce_compile(stream=None) -> bool:
     # once per process, and one thread at a time (evaluate_designs with a thread executor
     # starts several first solves at once): the first solve after it compiles what is left
     # and must not split the compile again because its entries are not cached yet
-    if multiprocessing.parent_process() is not None:
-        # a worker of a process pool: its parent announced; one split per worker would run
-        # two compiling processes per worker against one cache
-        return False
     with _lock:
         if _announced or kernels_cached():
             return False
         _announced = True
-        _notice_and_precompile(stream)
+        # a worker of a process pool compiles in one process: a split per worker would run two
+        # compiling processes per worker against one cache
+        _notice_and_precompile(stream, split=multiprocessing.parent_process() is None)
     return True
 
 
@@ -161,8 +159,10 @@ def _new_lock() -> None:
 os.register_at_fork(after_in_child=_new_lock)
 
 
-def _notice_and_precompile(stream) -> None:
-    print("psm-grasp: compiling the solver's kernels (first run after an install: about a "
-          "minute on a 2-core machine, two processes; later runs load them in about a second) "
-          "...", file=stream or sys.stderr, flush=True)
-    precompile()
+def _notice_and_precompile(stream, split: bool = True) -> None:
+    how = ("about a minute on a 2-core machine, two processes" if split
+           else "about a minute and a half in this worker process")
+    print(f"psm-grasp: compiling the solver's kernels (first run after an install: {how}; later "
+          "runs load them in about a second) ...", file=stream or sys.stderr, flush=True)
+    if split:
+        precompile()
