@@ -4,15 +4,13 @@ compile split over two processes.
 The first run after an install compiles the kernels (about a minute and a half on a 2-core
 machine, one process) with no output of its own; the command-line entry points call
 :func:`announce_compile` first so that a new user knows what the wait is, and it compiles the
-solver's largest compile units in two processes at once (:func:`precompile`).
+solver's largest independent compile units in two processes at once (:func:`precompile`).
 
 Why two processes: numba compiles in one thread, and a function it has cached is linked into a
-caller compiled later (its callees are not compiled again, even by another process that finds
-them in the cache). So a spawned process compiles one share into the cache while this one
-compiles the other, in an order where a unit that calls into the other share comes late enough
-to find it cached; the first solve then compiles only the batch entry
-(``scripts/compile_profile.py`` shows where the time goes: the Newton matrix alone is a quarter
-of the cold compile).
+caller compiled later (its callees are not compiled again). The units below do not call one
+another, so a spawned process compiles one share into the cache while this one compiles the
+other; the first solve then compiles only what is left (``scripts/compile_profile.py`` shows
+the split: the Newton matrix alone is a quarter of the cold compile).
 """
 
 from __future__ import annotations
@@ -33,30 +31,24 @@ __all__ = ["kernels_cached", "announce_compile", "precompile"]
 # the batch and single-grasp entries: cached together with everything they call
 _ENTRIES = (("driver", "solve_rows"), ("pipeline", "_finish_rows"))
 
-# Compile units (module of envs.solver, function, argument types) in two shares of about equal
-# compile time, each compiled in order. A unit calling a unit of the other share comes after
-# the time that one takes there, so it loads it from the cache (else it compiles it again, which
-# costs time, not correctness): the helper reaches the interior point (~40 s in) after the main
-# process has cached the curvature drop, the merit and the gaps (~11 s). What is left for the
-# first solve is the batch entry itself. Argument types: f/i/b = float64/int64/bool scalars,
-# with a digit: C-contiguous arrays of that many dimensions; W: the interior point's work
-# arrays (ipm.IpmWork). They must be the types the solver calls them with
-# (tests/test_warmup.py checks that each is the only specialization numba caches).
+# Compile units (module of envs.solver, function, argument types) that do not call one another,
+# in two shares of about equal compile time. Argument types: f/i/b = float64/int64/bool
+# scalars, with a digit: C-contiguous arrays of that many dimensions. They must be the types
+# the solver calls them with (tests/test_warmup.py checks that they add no specialization).
 _HELPER_UNITS = (
     ("assembly", "_newton_matrix",
      "f1 i f1 i1 i1 i1 i1 i f1 f1 f1 f2 f2 f2 f1 f1 f2 i1 f b f1 f1 f2 i2 f2"),
-    ("curvature", "_negative_curvature_step",
-     "f1 i f1 i1 i1 i1 i1 i f1 f f2 f2 f2 f2 f2 f1 f1 f1 f1 f1 f1 f1 f1"),
-    ("ipm", "_ipm_core", "f1 f1 i f1 f1 i1 i1 i1 i1 i f f i1 W"),
+    ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1"),
 )
 _MAIN_UNITS = (
-    ("assembly", "_drop_curvature", "f1 i f1 i1 i1 i1 i i2 f2 f2 i1 f2 f2 f2"),
-    ("assembly", "_merit", "f1 i f1 i1 i1 i1 i f1"),
-    ("contact", "_all_gaps", "f1 i f1 i1 i1 i1 f1"),
-    ("assembly", "_stationarity", "f1 i f1 i1 i1 i1 i f1 f1 f1 f2 i1 f1"),
-    ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1"),
     ("pipeline", "_finish_rows", "i i f2 f2 i f2 f3 f4 f2 f2 f3 f3 f3 f4 f2 f3 i3 f2 f2 f2 i1"),
+    ("assembly", "_drop_curvature", "f1 i f1 i1 i1 i1 i i2 f2 f2 i1 f2 f2 f2"),
+    ("curvature", "_negative_curvature_step",
+     "f1 i f1 i1 i1 i1 i1 i f1 f f2 f2 f2 f2 f2 f1 f1 f1 f1 f1 f1 f1 f1"),
     ("start", "_close_to_contact", "f1 i f1"),
+    ("assembly", "_merit", "f1 i f1 i1 i1 i1 i f1"),
+    ("assembly", "_stationarity", "f1 i f1 i1 i1 i1 i f1 f1 f1 f2 i1 f1"),
+    ("contact", "_all_gaps", "f1 i f1 i1 i1 i1 f1"),
     ("candidates", "_initial_candidates", "f1 i f1 b2 b3 f2 f2"),
     ("candidates", "_grow_candidates", "f1 f1 i f1 b2 b3 b b"),
     ("driver", "_finish", "f1 i f1 i1 i1 i1 i f1 f1 f i f2 f3 f1 f1"),
@@ -67,28 +59,10 @@ _lock = threading.Lock()
 _SCALARS = {"f": types.float64, "i": types.int64, "b": types.boolean}
 
 
-def _ipm_work_type():
-    """numba's type of the interior point's work arrays (:class:`envs.solver.ipm.IpmWork`)."""
-    import numba
-    import numpy as np
-
-    from .ipm import IpmWork
-
-    matrices = {"ab", "lb", "bb", "dd", "ybuf", "hess5", "cg", "cd", "ch"}
-    integers = {"dofs", "cd"}
-    sample = IpmWork(*(np.zeros((0, 0) if f in matrices else 0,
-                                dtype=np.int64 if f in integers else np.float64)
-                       for f in IpmWork._fields))
-    return numba.typeof(sample)
-
-
 def unit_signature(spec: str) -> tuple:
     """The numba argument types of a unit's spec string (see ``_HELPER_UNITS``)."""
     out = []
     for code in spec.split():
-        if code == "W":
-            out.append(_ipm_work_type())
-            continue
         scalar = _SCALARS[code[0]]
         out.append(types.Array(scalar, int(code[1:]), "C") if len(code) > 1 else scalar)
     return tuple(out)
