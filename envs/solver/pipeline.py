@@ -271,9 +271,9 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     prm = pack_params(scene, n, stiffness_rule, phase_rad, int(n_rings), element)
     # C order: the kernels are compiled for it (another layout compiles the solver again)
     xs = (rest_state(prm, n) if x0 is None
-          else np.ascontiguousarray(np.array(x0, dtype=np.float64, ndmin=2)))
+          else np.array(x0, dtype=np.float64, ndmin=2, order="C"))
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
-                else np.ascontiguousarray(np.array(lam0, dtype=np.float64, ndmin=3)))
+                else np.array(lam0, dtype=np.float64, ndmin=3, order="C"))
     t0 = time.perf_counter()
     infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
     elapsed = time.perf_counter() - t0

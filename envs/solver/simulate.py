@@ -150,6 +150,21 @@ def _rest(prob: _Problem) -> np.ndarray:
     return rest_state(prm, prob.n)[0]
 
 
+def _from_turned_rests(prob: _Problem, accept) -> tuple[GraspResult | None, int, float]:
+    """Solve from the rest shape turned a little about the pin, one sense then the other, until
+    ``accept(result)``; returns that result (or None) and the iterations and compiled time of
+    the attempts it did not take."""
+    rest = _rest(prob)
+    iterations, spent = 0, 0.0
+    for sense in (1.0, -1.0):
+        turned, _ = prob.solve(_turned(prob, rest, sense), np.zeros((2, prob.n)))
+        if accept(turned):
+            return turned, iterations, spent
+        iterations += turned.iterations
+        spent += turned.solve_time_s
+    return None, iterations, spent
+
+
 def _leave_unstable(prob: _Problem, res: GraspResult) -> GraspResult:
     """In place of the unstable equilibrium ``res``: the stable one reached from the rest shape
     turned a little about the pin (either sense), or ``res`` if neither start reaches one.
@@ -157,15 +172,14 @@ def _leave_unstable(prob: _Problem, res: GraspResult) -> GraspResult:
     (The deformed equilibrium itself turned does not fit between the fingers.) The iterations
     and solve time of every attempt are counted.
     """
-    iterations, spent = res.iterations, res.solve_time_s
-    rest = _rest(prob)
-    for sense in (1.0, -1.0):
-        turned, _ = prob.solve(_turned(prob, rest, sense), np.zeros((2, prob.n)))
-        iterations += turned.iterations
-        spent += turned.solve_time_s
-        if turned.converged and turned.stable:
-            return replace(turned, iterations=iterations, solve_time_s=spent)
-    return replace(res, iterations=iterations, solve_time_s=spent)
+    found, iterations, spent = _from_turned_rests(prob, lambda r: r.converged and r.stable)
+    iterations += res.iterations
+    spent += res.solve_time_s
+    answer = res if found is None else found
+    if found is not None:
+        iterations += found.iterations
+        spent += found.solve_time_s
+    return replace(answer, iterations=iterations, solve_time_s=spent)
 
 
 def _solve_newton(prob: _Problem) -> GraspResult:
@@ -195,16 +209,15 @@ def _solve_newton(prob: _Problem) -> GraspResult:
     # and cost up to 10 s each
     retry = (not res.converged and prob.torque_nm > 0 and res.inverted_triangles == 0
              and prob.n <= CONTINUATION_MAX_N)
-    for sense in (1.0, -1.0) if retry else ():
+    if retry:
         # two solves from turned rest shapes cost less than a continuation ramp
-        turned, _ = prob.solve(_turned(prob, _rest(prob), sense), np.zeros((2, prob.n)))
-        if turned.converged:
+        found, its, secs = _from_turned_rests(prob, lambda r: r.converged)
+        extra += its
+        spent += secs
+        if found is not None:
             extra += res.iterations
             spent += res.solve_time_s
-            res = turned
-            break
-        extra += turned.iterations
-        spent += turned.solve_time_s
+            res = found
     if not res.converged and retry:
         failed = res
         spent += failed.solve_time_s
