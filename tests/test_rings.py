@@ -7,6 +7,7 @@ the banded Newton matrix in its wider band, and checked equilibria of ring meshe
 
 from __future__ import annotations
 
+import importlib
 import math
 
 import numpy as np
@@ -384,3 +385,36 @@ def test_an_nhquad_scale_far_from_its_fitted_n_warns():
         assert calibration_scale(40, 2, "nhquad") == calibration_scale(56, 2, "nhquad")
     with pytest.warns(UserWarning, match="fitted at N = .*refine N and M together"):
         calibration_scale(200, 2, "nhquad")
+
+
+def test_a_fine_ring_mesh_starts_from_its_coarse_solution_and_reaches_the_same_grasp(
+        monkeypatch):
+    """Nested iteration on a ring mesh: N = 200 (> NESTED_ABOVE) starts from the N = 80
+    solution with every ring prolonged onto the coarse ring's chords. The start must already
+    be close to the fine answer (a ring interpolated into the wrong place would not be), and
+    the answer must be the one a solve from rest finds."""
+    sim = importlib.import_module("envs.solver.simulate")
+    scene, n, m = Scene.preset("paper-r070"), 200, 2
+    starts = []
+    solve = sim._Problem.solve
+
+    def recording(self, x0=None, lam0=None):
+        if self.n == n and x0 is not None:
+            starts.append(np.array(x0))
+        return solve(self, x0, lam0)
+
+    monkeypatch.setattr(sim._Problem, "solve", recording)
+    nested = simulate(scene, 0.2, n, n_rings=m, element="nhquad")
+    assert nested.converged and len(starts) == 1
+    monkeypatch.setattr(sim, "NESTED_ABOVE", 10 ** 6)
+    direct = simulate(scene, 0.2, n, n_rings=m, element="nhquad")
+    assert direct.converged and len(starts) == 1
+    r, centre = scene.disk.radius_m, scene.disk.center_m
+    answer = np.concatenate([((nested.points_m - centre) / r).ravel(),
+                             ((nested.interior_points_m - centre) / r).ravel()])
+    start = np.concatenate([starts[0][: 2 * n], starts[0][2 * n + 2:]])
+    # the chords of an 80-gon sit r (1 - cos(pi / 80)) ~ 8e-4 r inside the circle
+    assert np.max(np.abs(start - answer)) < 2e-3
+    assert np.allclose(nested.points_m, direct.points_m, atol=1e-9 * r)
+    assert np.allclose(nested.interior_points_m, direct.interior_points_m, atol=1e-9 * r)
+    assert nested.jaw_angles_rad == pytest.approx(direct.jaw_angles_rad, abs=1e-10)
