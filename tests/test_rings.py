@@ -193,7 +193,7 @@ def test_a_failed_solve_is_retried_from_a_turned_rest_shape():
     # the same disk past its bifurcation: from the rest shape the solve stays on the symmetric
     # saddle and fails; from the rest shape turned a quarter spacing it reaches the stable
     # grasp, and simulate reports it with every attempt's iterations
-    from envs.solver.simulate import _Problem, _rest, _turned
+    from envs.solver.simulate import TURNED_STARTS, _Problem, _rest, _turned
 
     scene = Scene.preset("paper-r050")
     res = simulate(scene, 1.734, 4, n_rings=2, element="nhquad")
@@ -203,7 +203,7 @@ def test_a_failed_solve_is_retried_from_a_turned_rest_shape():
                     res.model_scale)
     plain, _ = prob.solve()
     assert not plain.converged
-    turned, _ = prob.solve(_turned(prob, _rest(prob), 1.0), np.zeros((2, 4)))
+    turned, _ = prob.solve(_turned(prob, _rest(prob), TURNED_STARTS[0]), np.zeros((2, 4)))
     assert turned.converged
     np.testing.assert_allclose(res.jaw_angles_rad, turned.jaw_angles_rad, rtol=0, atol=1e-9)
     assert res.iterations == plain.iterations + turned.iterations
@@ -418,3 +418,14 @@ def test_a_fine_ring_mesh_starts_from_its_coarse_solution_and_reaches_the_same_g
     assert np.allclose(nested.points_m, direct.points_m, atol=1e-9 * r)
     assert np.allclose(nested.interior_points_m, direct.interior_points_m, atol=1e-9 * r)
     assert nested.jaw_angles_rad == pytest.approx(direct.jaw_angles_rad, abs=1e-10)
+
+
+def test_the_coarsest_four_ring_disk_ramps_to_forty_percent_strain():
+    # the stress grid's ramp (x1.25 steps from 0.02 N·m): at 5.675 N·m its warm-started step
+    # failed, and so did the rest shape turned a quarter spacing; an eighth reaches the grasp
+    torques = 0.02 * 1.25 ** np.arange(29)
+    results = simulate_ramp(Scene.preset("paper-r100"), torques, 4, n_rings=4,
+                            element="nhquad", until_peak_strain=0.40)
+    assert all(r.converged and r.kkt.passed for r in results)
+    assert all(r.inverted_triangles == 0 for r in results)
+    assert results[-1].peak_strain >= 0.40
