@@ -14,7 +14,7 @@ import pytest
 from envs import DesignBounds, SoftDisk, evaluate_designs
 from envs.solver import warmup
 
-UNITS = warmup._HELPER_UNITS + warmup._MAIN_UNITS
+UNITS = warmup._HELPER_UNITS + warmup._MAIN_UNITS + warmup._FINAL_UNITS
 
 
 @pytest.fixture(scope="module", autouse=True)

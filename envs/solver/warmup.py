@@ -9,8 +9,9 @@ solver's largest independent compile units in two processes at once (:func:`prec
 Why two processes: numba compiles in one thread, and a function it has cached is linked into a
 caller compiled later (its callees are not compiled again). The units below do not call one
 another, so a spawned process compiles one share into the cache while this one compiles the
-other; the first solve then compiles only what is left (``scripts/compile_profile.py`` shows
-the split: the Newton matrix alone is a quarter of the cold compile).
+other; then this process compiles the batch entry over both (``scripts/compile_profile.py``
+shows the split: the Newton matrix alone is a quarter of the cold compile), so that the first
+solve after the notice compiles nothing.
 """
 
 from __future__ import annotations
@@ -53,6 +54,12 @@ _MAIN_UNITS = (
     ("candidates", "_grow_candidates", "f1 f1 i f1 b2 b3 b b"),
     ("driver", "_finish", "f1 i f1 i1 i1 i1 i f1 f1 f i f2 f3 f1 f1"),
     ("driver", "_escape", "f1 f1 i f1 i1 i1 i1 i i f1 f"),
+)
+# Compiled last, here, once both shares are in the cache: the batch entry (the interior point
+# and the drivers inline into it). Inside the notice rather than in the first solve, so that an
+# optimizer's progress bar, its ETA and its evaluations per second start after the compile
+_FINAL_UNITS = (
+    ("driver", "solve_rows", "i i i f2 f1 f2 f3 f4 f2 b4 b3 f2"),
 )
 _announced = False  # announce_compile has run its compile in this process
 _lock = threading.Lock()
@@ -110,8 +117,9 @@ def precompile() -> bool:
     """On a cold cache, compile the solver's largest independent units, one share in a second
     Python process and the other here, and wait for both; returns whether it compiled.
 
-    Without it the first solve compiles everything in one process; a failed helper costs
-    nothing but the time (the first solve then compiles what is missing).
+    Then, in this process, the batch entry (``_FINAL_UNITS``), which calls both shares. Without
+    it the first solve compiles everything in one process; a failed helper costs nothing but
+    the time (the first solve then compiles what is missing).
     """
     if kernels_cached():
         return False
@@ -127,9 +135,15 @@ def precompile() -> bool:
                       "solve compiles the kernels in one process", RuntimeWarning, stacklevel=2)
         if helper is not None:
             helper.kill()
+        return True
     finally:
         if helper is not None:
             helper.wait()
+    try:
+        _compile_units(_FINAL_UNITS)
+    except Exception as exc:  # noqa: BLE001 - best effort, as above
+        warnings.warn(f"psm-grasp: the batch entry did not compile ahead of the first solve "
+                      f"({exc!r}); the first solve compiles it", RuntimeWarning, stacklevel=2)
     return True
 
 
