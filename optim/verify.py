@@ -237,7 +237,13 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
         print(f"  {name:12s}: {p}")
     if not s["best_confirmed"]:
         best = next(r for r in report["designs"] if r["psm_rank"] == 1)
+        psm, fem = best["psm"], best["fem"]
+        # the terms, so that a designer sees which one the models disagree on (the demo's
+        # light-touch optimum: the contact, a facet of the point model's contour flat on a face)
         print(f"psm-grasp: warning: the FEM does not confirm the run's best design (reward "
-              f"{best['fem']['reward']:.4f} against the point-spring model's "
-              f"{best['psm']['reward']:.4f}, more than {CONFIRM_RELATIVE:.0%} + "
-              f"{CONFIRM_ABSOLUTE:g} apart): check it before building it", file=sys.stderr)
+              f"{fem['reward']:.4f} against the point-spring model's "
+              f"{psm['reward']:.4f}, more than {CONFIRM_RELATIVE:.0%} + "
+              f"{CONFIRM_ABSOLUTE:g} apart; contact score {psm['contact_score']:.3f} against "
+              f"the FEM's {fem['contact_score']:.3f}, peak log strain "
+              f"{psm['peak_log_strain']:.4f} against {fem['peak_log_strain']:.4f}): check it "
+              "before building it", file=sys.stderr)

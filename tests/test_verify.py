@@ -90,7 +90,13 @@ def test_verify_warns_when_the_fem_does_not_confirm_the_best(run_dir, capsys, mo
     monkeypatch.setattr(verify, "CONFIRM_RELATIVE", 0.0)
     monkeypatch.setattr(verify, "CONFIRM_ABSOLUTE", 0.0)  # no two fidelities agree exactly
     assert main(["verify", str(run_dir), "--top", "1"]) == 0
-    assert "the FEM does not confirm the run's best design" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "the FEM does not confirm the run's best design" in err
+    # with the terms the models disagree on, from the report
+    report = json.loads((run_dir / "verify.json").read_text())
+    best = next(r for r in report["designs"] if r["psm_rank"] == 1)
+    assert (f"contact score {best['psm']['contact_score']:.3f} against the FEM's "
+            f"{best['fem']['contact_score']:.3f}") in err
 
 
 def test_verify_command_on_the_run_folder(run_dir, capsys):
