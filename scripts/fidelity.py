@@ -76,7 +76,8 @@ def parse_members(ap: argparse.ArgumentParser, values: list[str]) -> list[tuple[
             ap.error(f"--members takes NxM values (e.g. 96x6), got {text!r}")
         n_pts, rings = int(parts[0]), int(parts[1])
         try:
-            resolve_model(n_pts, rings, "nhquad", True)
+            # as evaluated below: the shipped scale where the ring count has one (M <= 6)
+            resolve_model(n_pts, rings, "nhquad", None)
         except ValueError as exc:
             ap.error(f"--members {text}: {exc}")
         members.append((n_pts, rings))

@@ -238,3 +238,16 @@ def test_compile_notice_only_when_the_kernels_are_not_cached(tmp_path, monkeypat
     assert warmup.announce_compile()
     assert "compiling the solver's kernels" in capsys.readouterr().err
     assert compiled == [True]  # and it starts the two-process compile
+
+
+def test_the_fidelity_script_accepts_its_default_members():
+    # session 12's validation required a shipped scale and refused the default 160x8 (8 rings
+    # have none; evaluated, a member takes the shipped scale where there is one)
+    import argparse
+
+    fidelity = _script("fidelity")
+    ap = argparse.ArgumentParser()
+    defaults = [f"{a}x{b}" for a, b in fidelity.MEMBERS]
+    assert fidelity.parse_members(ap, defaults) == list(fidelity.MEMBERS)
+    with pytest.raises(SystemExit):
+        fidelity.parse_members(ap, ["96x0"])
