@@ -25,8 +25,8 @@ bench: $(STAMP)
 	$(BIN)/python scripts/bench_solver.py
 	$(BIN)/python scripts/bench_env.py
 
-# numba's on-disk cache does not notice a change in a compiled callee defined in another file:
-# after editing a kernel, clear it (a fresh clone, as CI uses, has none)
+# the kernels are cached per version of the source (envs/_kernel_cache.py), so an edit needs no
+# clearing; this frees the disk (and clears numba's per-file caches of older checkouts)
 clean-cache:
 	find envs -name '*.nbi' -delete -o -name '*.nbc' -delete
 	rm -rf envs/__pycache__/numba-*

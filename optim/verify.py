@@ -36,7 +36,7 @@ CONFIRM_RELATIVE = 0.25
 CONFIRM_ABSOLUTE = 0.01
 MAX_TOP = 10  # what an OptimResult keeps
 # the finer member whose reward ranks random designs like the FEM's (Spearman 0.948 / 0.958 /
-# 0.951 on the paper disks against the default's 0.84-0.85; scripts/fidelity.py, README): the
+# 0.949 on the paper disks against the default's 0.84-0.86; scripts/fidelity.py, README): the
 # re-ranking to trust when the FEM is not at hand
 RANKING_MEMBER = {"n_triangles": 96, "n_rings": 6, "element": "nhquad", "calibrated": True}
 REPORTED = ("reward", "contact_score", "grip_share", "peak_log_strain", "converged",

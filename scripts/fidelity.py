@@ -2,10 +2,11 @@
 
 For each paper disk, ``--designs`` random designs of :class:`envs.evaluate.DesignBounds` are
 scored by :func:`envs.evaluate.evaluate_designs` at ``fidelity="psm"`` (the default model, the
-paper's springs-only fan and finer calibrated nh-quad members beside it, with their cost a
-design) and at ``fidelity="fem"`` (the finite-element reference,
-cached on disk per design). Over the designs valid at rest that converged at both fidelities
-(invalid designs get the same penalty at both and would only inflate the agreement) it reports:
+paper's springs-only fan and finer nh-quad members beside it, each with its shipped scale
+where its ring count has one, and their cost a design) and at ``fidelity="fem"`` (the
+finite-element reference, cached on disk per design). Over the designs valid at rest that
+converged at both fidelities (invalid designs get the same penalty at both and would only
+inflate the agreement) it reports:
 
 - the Spearman rank correlation of the PSM and FEM reward (target >= 0.95), and of each reward
   term that varies (the contact score, the peak strain);
