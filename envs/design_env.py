@@ -6,7 +6,6 @@ actions to designs, draws objects, builds observations and ``info``, and renders
 
 from __future__ import annotations
 
-import copy
 import math
 import textwrap
 from dataclasses import dataclass
@@ -115,7 +114,8 @@ class ObjectDistribution:
         # every field lies in a range validated at construction: a copy of the radius' validated
         # template with the drawn modulus, not a SoftDisk validated again (a vector env draws
         # one object per reset, hundreds per step)
-        disk = copy.copy(self._templates[k])
+        disk = object.__new__(SoftDisk)
+        disk.__dict__.update(self._templates[k].__dict__)  # copy.copy without its reduce protocol
         object.__setattr__(disk, "youngs_modulus_pa", modulus)
         return disk, limit
 
@@ -129,21 +129,46 @@ def observe(disk: SoftDisk, strain_limit: float) -> np.ndarray:
         If a value lies outside the observable range (the message names it).
     """
     check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
+    return observe_rows([disk], np.array([strain_limit], dtype=float))[0]
+
+
+def observe_rows(disks: list[SoftDisk], strain_limits: np.ndarray) -> np.ndarray:
+    """Normalized observations of B objects, float32 (B, 5) in [-1, 1]: :func:`observe` row by
+    row, as array operations (a vector env observes hundreds of new objects per step).
+
+    Raises
+    ------
+    ValueError
+        If a value lies outside the observable range (the message names it, and the row when
+        B > 1).
+    """
+    table = np.array([(d.radius_m, d.stiffness_scale * d.youngs_modulus_pa, d.thickness_m,
+                       d.poisson_ratio) for d in disks], dtype=float).reshape(len(disks), 4)
     values = {
-        "radius_m": disk.radius_m,
-        "effective_modulus_pa": disk.stiffness_scale * disk.youngs_modulus_pa,
-        "thickness_m": disk.thickness_m,
-        "poisson_ratio": disk.poisson_ratio,
-        "strain_limit": strain_limit,
+        "radius_m": table[:, 0],
+        "effective_modulus_pa": table[:, 1],
+        "thickness_m": table[:, 2],
+        "poisson_ratio": table[:, 3],
+        "strain_limit": np.asarray(strain_limits, dtype=float),
     }
-    obs = np.empty(len(OBS_FIELDS), dtype=np.float32)
+    limits = values["strain_limit"]
+    bad = np.flatnonzero(~((limits > 0.0) & (limits <= 1.0)))
+    if bad.size:
+        where = f" (row {int(bad[0])})" if len(disks) > 1 else ""
+        raise ValueError(f"strain_limit = {float(limits[bad[0]])!r}{where} must be in (0, 1]")
+    obs = np.empty((len(disks), len(OBS_FIELDS)), dtype=np.float32)
     for i, (name, transform, low, high) in enumerate(OBS_FIELDS):
         v = values[name]
-        t = math.log10(v) if transform == "log10" else v
-        if not low <= t <= high:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.log10(v) if transform == "log10" else v
+        bad = np.flatnonzero(~((low <= t) & (t <= high)))
+        if bad.size:
+            row = int(bad[0])
             shown = f"[{10**low:g}, {10**high:g}]" if transform == "log10" else f"[{low}, {high}]"
-            raise ValueError(f"{name} = {v!r} is outside the observable range {shown}")
-        obs[i] = 2.0 * (t - low) / (high - low) - 1.0
+            where = f" (row {row})" if len(disks) > 1 else ""
+            raise ValueError(f"{name} = {float(v[row])!r}{where} is outside the observable "
+                             f"range {shown}")
+        obs[:, i] = 2.0 * (t - low) / (high - low) - 1.0
     return np.clip(obs, -1.0, 1.0)
 
 
@@ -182,12 +207,19 @@ def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
     return options
 
 
-def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
-                 options: dict[str, Any]) -> tuple[SoftDisk, float, np.ndarray]:
+def _draw(rng: np.random.Generator, distribution: ObjectDistribution,
+          options: dict[str, Any]) -> tuple[SoftDisk, float]:
     # always draw, so the random stream does not depend on the options
     disk, limit = distribution.sample(rng)
     disk = options.get("disk", disk)
-    limit = float(options.get("strain_limit", limit))
+    if "strain_limit" in options:  # the distribution's own draws lie in its validated range
+        limit = check_range("strain_limit", options["strain_limit"], 0.0, 1.0, low_open=True)
+    return disk, limit
+
+
+def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
+                 options: dict[str, Any]) -> tuple[SoftDisk, float, np.ndarray]:
+    disk, limit = _draw(rng, distribution, options)
     return disk, limit, observe(disk, limit)
 
 
@@ -594,12 +626,15 @@ class GripperDesignVectorEnv(VectorEnv):
     # --- helpers -------------------------------------------------------------------------------
 
     def _reset_rows(self, rows: np.ndarray, seeds: list[int | None], options: dict) -> None:
-        for i in rows.tolist():
+        idx = rows.tolist()
+        for i in idx:
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(seeds[i])
-            disk, limit, obs = _draw_object(self._rngs[i], self.distribution, options)
-            self._disks[i], self._limits[i], self._obs[i] = disk, limit, obs
+            # every sub-env draws from its own stream, as GripperDesignEnv.reset does
+            disk, limit = _draw(self._rngs[i], self.distribution, options)
+            self._disks[i], self._limits[i] = disk, limit
             self._last_designs[i] = None
+        self._obs[rows] = observe_rows([self._disks[i] for i in idx], self._limits[rows])
         self._autoreset[rows] = False
 
     def _object_infos(self, rows: np.ndarray) -> dict[str, np.ndarray]:

@@ -384,6 +384,28 @@ def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
         env.reset(options={"colour": "red"})
 
 
+def test_vector_observations_are_the_single_objects_observations():
+    """The vector env observes its new objects in one array pass (observe_rows): each row is
+    what observe() gives that object, and a row outside the observable range is named."""
+    from envs.design_env import observe, observe_rows
+
+    vec = GripperDesignVectorEnv(5)
+    obs, info = vec.reset(seed=3)
+    for i in range(5):
+        disk = vec._disks[i]
+        assert np.array_equal(obs[i], observe(disk, float(vec._limits[i])))
+        assert info["youngs_modulus_pa"][i] == disk.youngs_modulus_pa
+    # and the same objects as five single envs seeded alike draw
+    for i in range(5):
+        single_obs, _ = GripperDesignEnv().reset(seed=3 + i)
+        assert np.array_equal(obs[i], single_obs)
+    disks = [DISK, SoftDisk(2.0, 0.0), DISK]
+    with pytest.raises(ValueError, match=r"radius_m = 2.0 \(row 1\) is outside"):
+        observe_rows(disks, np.array([0.1, 0.1, 0.1]))
+    with pytest.raises(ValueError, match=r"strain_limit = 0.0 \(row 2\)"):
+        observe_rows([DISK] * 3, np.array([0.1, 0.2, 0.0]))
+
+
 def test_render_rgb_array_and_grasp_figure(tmp_path):
     from envs.render import grasp_figure
 
