@@ -142,21 +142,32 @@ def observe_rows(disks: list[SoftDisk], strain_limits: np.ndarray) -> np.ndarray
         If a value lies outside the observable range (the message names it, and the row when
         B > 1).
     """
-    table = np.array([(d.radius_m, d.stiffness_scale * d.youngs_modulus_pa, d.thickness_m,
-                       d.poisson_ratio) for d in disks], dtype=float).reshape(len(disks), 4)
+    return _observe_table(_object_table(disks), np.asarray(strain_limits, dtype=float))
+
+
+def _object_table(disks: list[SoftDisk]) -> np.ndarray:
+    """The objects' fields, float (B, 5), columns as the first five of OBJECT_INFO_KEYS."""
+    return np.array([tuple(getattr(d, key) for key in OBJECT_INFO_KEYS[:-1]) for d in disks],
+                    dtype=float).reshape(len(disks), len(OBJECT_INFO_KEYS) - 1)
+
+
+def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
+    """:func:`observe_rows` of an object table (:func:`_object_table`) and strain limits."""
+    col = {key: table[:, k] for k, key in enumerate(OBJECT_INFO_KEYS[:-1])}
     values = {
-        "radius_m": table[:, 0],
-        "effective_modulus_pa": table[:, 1],
-        "thickness_m": table[:, 2],
-        "poisson_ratio": table[:, 3],
-        "strain_limit": np.asarray(strain_limits, dtype=float),
+        "radius_m": col["radius_m"],
+        "effective_modulus_pa": col["stiffness_scale"] * col["youngs_modulus_pa"],
+        "thickness_m": col["thickness_m"],
+        "poisson_ratio": col["poisson_ratio"],
+        "strain_limit": limits,
     }
+    n_rows = table.shape[0]
     limits = values["strain_limit"]
     bad = np.flatnonzero(~((limits > 0.0) & (limits <= 1.0)))
     if bad.size:
-        where = f" (row {int(bad[0])})" if len(disks) > 1 else ""
+        where = f" (row {int(bad[0])})" if n_rows > 1 else ""
         raise ValueError(f"strain_limit = {float(limits[bad[0]])!r}{where} must be in (0, 1]")
-    obs = np.empty((len(disks), len(OBS_FIELDS)), dtype=np.float32)
+    obs = np.empty((n_rows, len(OBS_FIELDS)), dtype=np.float32)
     for i, (name, transform, low, high) in enumerate(OBS_FIELDS):
         v = values[name]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -165,7 +176,7 @@ def observe_rows(disks: list[SoftDisk], strain_limits: np.ndarray) -> np.ndarray
         if bad.size:
             row = int(bad[0])
             shown = f"[{10**low:g}, {10**high:g}]" if transform == "log10" else f"[{low}, {high}]"
-            where = f" (row {row})" if len(disks) > 1 else ""
+            where = f" (row {row})" if n_rows > 1 else ""
             raise ValueError(f"{name} = {float(v[row])!r}{where} is outside the observable "
                              f"range {shown}")
         obs[:, i] = 2.0 * (t - low) / (high - low) - 1.0
@@ -608,6 +619,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._disks: list[SoftDisk | None] = [None] * n
         self._limits = np.zeros(n)
+        self._objects = np.zeros((n, len(OBJECT_INFO_KEYS)))
         self._obs = np.zeros((n, len(OBS_FIELDS)), dtype=np.float32)
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._last_designs: list[np.ndarray | None] = [None] * n
@@ -634,17 +646,18 @@ class GripperDesignVectorEnv(VectorEnv):
             disk, limit = _draw(self._rngs[i], self.distribution, options)
             self._disks[i], self._limits[i] = disk, limit
             self._last_designs[i] = None
-        self._obs[rows] = observe_rows([self._disks[i] for i in idx], self._limits[rows])
+        # the object infos' table (columns in OBJECT_INFO_KEYS order) and the observations
+        table = _object_table([self._disks[i] for i in idx])
+        self._objects[rows, :-1] = table
+        self._objects[rows, -1] = self._limits[rows]
+        self._obs[rows] = _observe_table(table, self._limits[rows])
         self._autoreset[rows] = False
 
     def _object_infos(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         info: dict[str, np.ndarray] = {}
-        idx = rows.tolist()
-        # one object info per row (not per row and key)
-        per_row = [_object_info(self._disks[i], self._limits[i]) for i in idx]
-        for key in OBJECT_INFO_KEYS:
+        for col, key in enumerate(OBJECT_INFO_KEYS):
             arr = np.zeros(self.num_envs)
-            arr[idx] = [row[key] for row in per_row]
+            arr[rows] = self._objects[rows, col]
             info[key] = arr
             info[f"_{key}"] = self._mask(rows)
         return info
