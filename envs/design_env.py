@@ -638,6 +638,12 @@ class GripperDesignVectorEnv(VectorEnv):
     # --- helpers -------------------------------------------------------------------------------
 
     def _reset_rows(self, rows: np.ndarray, seeds: list[int | None], options: dict) -> None:
+        if options:
+            # a fixed object or strain limit outside the observable range fails before any
+            # sub-env changes (the distribution's own draws are always observable)
+            dist = self.distribution
+            observe(options.get("disk", dist._templates[0]),
+                    options.get("strain_limit", dist.strain_limit_range[1]))
         idx = rows.tolist()
         for i in idx:
             if seeds[i] is not None or self._rngs[i] is None:

@@ -399,6 +399,16 @@ def test_vector_observations_are_the_single_objects_observations():
     for i in range(5):
         single_obs, _ = GripperDesignEnv().reset(seed=3 + i)
         assert np.array_equal(obs[i], single_obs)
+    # a fixed object outside the observable range leaves the vector env as it was
+    fresh = GripperDesignVectorEnv(3)
+    with pytest.raises(ValueError, match="radius_m"):
+        fresh.reset(seed=0, options={"disk": SoftDisk(2.0, 0.0)})
+    with pytest.raises(gym.error.ResetNeeded):
+        fresh.step(np.zeros((3, 6)))
+    obs_before = vec._obs.copy()
+    with pytest.raises(ValueError, match="strain_limit"):
+        vec.reset(options={"strain_limit": 1.5})
+    assert np.array_equal(vec._obs, obs_before) and vec._disks[0] is not None
     disks = [DISK, SoftDisk(2.0, 0.0), DISK]
     with pytest.raises(ValueError, match=r"radius_m = 2.0 \(row 1\) is outside"):
         observe_rows(disks, np.array([0.1, 0.1, 0.1]))
