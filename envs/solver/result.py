@@ -61,7 +61,9 @@ class GraspResult:
         Largest contour-point displacement divided by the radius [-].
     stable : bool
         The Newton matrix of the contact-constrained problem was positive definite (a strict
-        local minimum, not a saddle).
+        local minimum, not a saddle), up to 1e-8 of the stiffness scale: a softer mode, like
+        a fine one-ring fan's nearly free turn about the pin, counts as neutral
+        (:data:`envs.solver.polish.NEUTRAL`).
     kkt : KKTReport
         The independent equilibrium check.
     rounds : int
