@@ -153,16 +153,10 @@ def _object_table(disks: list[SoftDisk]) -> np.ndarray:
 
 def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
     """:func:`observe_rows` of an object table (:func:`_object_table`) and strain limits."""
-    col = {key: table[:, k] for k, key in enumerate(OBJECT_INFO_KEYS[:-1])}
-    values = {
-        "radius_m": col["radius_m"],
-        "effective_modulus_pa": col["stiffness_scale"] * col["youngs_modulus_pa"],
-        "thickness_m": col["thickness_m"],
-        "poisson_ratio": col["poisson_ratio"],
-        "strain_limit": limits,
-    }
+    values = {key: table[:, k] for k, key in enumerate(OBJECT_INFO_KEYS[:-1])}
+    values["effective_modulus_pa"] = values["stiffness_scale"] * values["youngs_modulus_pa"]
+    values["strain_limit"] = limits
     n_rows = table.shape[0]
-    limits = values["strain_limit"]
     bad = np.flatnonzero(~((limits > 0.0) & (limits <= 1.0)))
     if bad.size:
         where = f" (row {int(bad[0])})" if n_rows > 1 else ""
@@ -184,14 +178,10 @@ def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
 
 
 def _object_info(disk: SoftDisk, strain_limit: float) -> dict[str, float]:
-    return {
-        "radius_m": disk.radius_m,
-        "youngs_modulus_pa": disk.youngs_modulus_pa,
-        "poisson_ratio": disk.poisson_ratio,
-        "thickness_m": disk.thickness_m,
-        "stiffness_scale": disk.stiffness_scale,
-        "strain_limit": float(strain_limit),
-    }
+    # the disk's fields named in OBJECT_INFO_KEYS, then the strain limit (as _object_table)
+    info = {key: getattr(disk, key) for key in OBJECT_INFO_KEYS[:-1]}
+    info["strain_limit"] = float(strain_limit)
+    return info
 
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -638,25 +628,25 @@ class GripperDesignVectorEnv(VectorEnv):
     # --- helpers -------------------------------------------------------------------------------
 
     def _reset_rows(self, rows: np.ndarray, seeds: list[int | None], options: dict) -> None:
-        if options:
-            # a fixed object or strain limit outside the observable range fails before any
-            # sub-env changes (the distribution's own draws are always observable)
-            dist = self.distribution
-            observe(options.get("disk", dist._templates[0]),
-                    options.get("strain_limit", dist.strain_limit_range[1]))
         idx = rows.tolist()
-        for i in idx:
+        disks, limits = [], np.empty(len(idx))
+        for k, i in enumerate(idx):
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(seeds[i])
             # every sub-env draws from its own stream, as GripperDesignEnv.reset does
-            disk, limit = _draw(self._rngs[i], self.distribution, options)
-            self._disks[i], self._limits[i] = disk, limit
+            disk, limits[k] = _draw(self._rngs[i], self.distribution, options)
+            disks.append(disk)
+        # the object infos' table (columns in OBJECT_INFO_KEYS order) and the observations,
+        # which validate a fixed object from the options before any sub-env changes
+        table = _object_table(disks)
+        obs = _observe_table(table, limits)
+        for k, i in enumerate(idx):
+            self._disks[i] = disks[k]
             self._last_designs[i] = None
-        # the object infos' table (columns in OBJECT_INFO_KEYS order) and the observations
-        table = _object_table([self._disks[i] for i in idx])
+        self._limits[rows] = limits
         self._objects[rows, :-1] = table
-        self._objects[rows, -1] = self._limits[rows]
-        self._obs[rows] = _observe_table(table, self._limits[rows])
+        self._objects[rows, -1] = limits
+        self._obs[rows] = obs
         self._autoreset[rows] = False
 
     def _object_infos(self, rows: np.ndarray) -> dict[str, np.ndarray]:

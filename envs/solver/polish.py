@@ -142,10 +142,13 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         _rhs_to_band(grad, bidx, nb, rb, rt)
         shift = kreg
         ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
-        stable = ok or _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], NEUTRAL * kscale, rb,
-                                     rt, ob, ot)
+        if not ok:
+            # the first shifted factor is also the stability test's (and the step's if it holds)
+            shift = NEUTRAL * kscale
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+        stable = ok
         while not ok:
-            shift = max(shift * 8.0, 1e-8 * kscale)
+            shift *= 8.0
             if shift > 1e6 * kscale:
                 return False, False
             ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)

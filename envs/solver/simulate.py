@@ -115,7 +115,12 @@ def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarr
     x[: 2 * n] = ((prev.points_m - centre) / r).ravel()
     x[2 * n : 2 * n + 2] = np.asarray(prev.jaw_angles_rad) + WARM_OPENING_RAD
     x[2 * n + 2 :] = ((prev.interior_points_m - centre) / r).ravel()
-    return x, prev.contact_forces_n / (stiffness_unit(prob.rows[0]) * r)
+    return x, _scaled_forces(prob, prev)
+
+
+def _scaled_forces(prob: _Problem, res: GraspResult) -> np.ndarray:
+    """The face contact forces of ``res`` in the solver's units (a warm start's multipliers)."""
+    return res.contact_forces_n / (stiffness_unit(prob.rows[0]) * prob.scene.disk.radius_m)
 
 
 def _prolong(prob: _Problem, coarse: GraspResult) -> tuple[np.ndarray, np.ndarray]:
@@ -139,7 +144,7 @@ def _prolong(prob: _Problem, coarse: GraspResult) -> tuple[np.ndarray, np.ndarra
     rings = coarse.interior_points_m.reshape(prob.m - 1, nc, 2)  # ring by ring, by angle
     for ring, points_m in enumerate(rings):
         x[2 * n + 2 + 2 * n * ring : 2 * n + 2 + 2 * n * (ring + 1)] = on_chords(points_m)
-    _, lam_c = _warm_start(prob.at(prob.torque_nm, nc), coarse)
+    lam_c = _scaled_forces(prob, coarse)
     lam = ((1 - t.T) * lam_c[:, k] + t.T * lam_c[:, k1]) * nc / n
     return x, lam
 
