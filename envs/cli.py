@@ -120,7 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
                      "20 points, 1 ring); cst: constant-strain neo-Hookean triangles")
     sim.add_argument("--triangles", type=int, default=None,
                      help=f"contour points N, in [4, {MAX_TRIANGLES}] for the springs-only fan, "
-                     f"[4, {MAX_TRIANGLES_FAMILY}] otherwise (default 40 for nhquad, 20 else)")
+                     "cells 0.4-2.5 times as deep as wide for spring rings (M = 2: N <= 22, "
+                     f"M = 8: 11-62), [4, {MAX_TRIANGLES_FAMILY}] otherwise (default 40 for "
+                     "nhquad, 20 else)")
     sim.add_argument("--rings", type=int, default=None,
                      help=f"rings M of the point mesh, in [1, {MAX_RINGS}] (default 2 for "
                      "nhquad, 1 otherwise: the paper's fan)")

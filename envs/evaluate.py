@@ -36,12 +36,9 @@ from .model.defaults import (
     DEFAULT_STRAIN_LIMIT,
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
-    MAX_TRIANGLES,
-    MAX_TRIANGLES_FAMILY,
-    MIN_TRIANGLES,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
-from .model.family import resolve_model
+from .model.family import resolve_model, triangle_range
 from .model.geometry import bar_distance
 from .model.problem import REST_OK, SceneColumns, _clearance, rest_codes
 from .scene import (
@@ -735,10 +732,9 @@ def evaluate_designs(
     n_each = np.asarray(n_triangles, dtype=object)
     spec = resolve_model(None if n_each.ndim else n_triangles, n_rings,
                          DEFAULT_ELEMENT if element is None else element, calibrated)
-    n_max = MAX_TRIANGLES if (spec.n_rings, spec.element) == (1, "spring") \
-        else MAX_TRIANGLES_FAMILY
+    n_min, n_max = triangle_range(spec.n_rings, spec.element)
     n_tri = _per_row("n_triangles", spec.n_triangles if n_each.ndim == 0 else n_triangles,
-                     batch, MIN_TRIANGLES, n_max, low_open=False, integer=True)
+                     batch, n_min, n_max, low_open=False, integer=True)
     if n_each.ndim and spec.element == "cst" and spec.scale != 1.0:
         raise ValueError("a calibrated constant-strain member has one N (its scale depends on "
                          "N): pass a scalar n_triangles")

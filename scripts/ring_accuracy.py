@@ -15,9 +15,15 @@ fraction of the contour in contact (contour points for the PSM, rim nodes for th
 
 Writes ``out/ring_accuracy.json``.
 
+``--aspect-sweep`` instead measures where spring ring meshes stop being a model of the
+material: the hybrid spring members for M = 2-8 rings and N = 8-500 contour points on paper-r070
+and -r050 (the bound :data:`envs.model.defaults.MAX_SPRING_CELL_ASPECT` lifted for this run
+only), their RMS closing-angle error against cell aspect; writes ``out/spring_aspect.json``
+(about two minutes once the FEM references are cached).
+
 Usage::
 
-    python scripts/ring_accuracy.py [--out out] [--quick]
+    python scripts/ring_accuracy.py [--out out] [--quick | --aspect-sweep]
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from envs.accuracy import PAPER_SCENES, PAPER_TORQUES_NM, fem_reference  # noqa: E402
 from envs.accuracy.members import DEFAULT_MEMBERS, Member  # noqa: E402
+from envs.model import family  # noqa: E402
 from envs.scene import Scene  # noqa: E402
 from envs.solver.simulate import simulate_ramp  # noqa: E402
 
@@ -98,13 +105,60 @@ def member_errors(scene: Scene, ref, member: Member, fem=None) -> dict:
     }
 
 
+ASPECT_SCENES = ("paper-r070", "paper-r050")
+ASPECT_RINGS = (2, 3, 4, 6, 8)
+ASPECT_NS = (8, 12, 16, 20, 24, 32, 40, 64, 100, 200, 500)
+
+
+def aspect_sweep(out: Path) -> None:
+    """RMS closing-angle error of the hybrid spring ring members against their cell aspect
+    (:func:`envs.model.family.spring_cell_aspect`), beyond the accepted range too."""
+    bound = family.MAX_SPRING_CELL_ASPECT
+    family.MAX_SPRING_CELL_ASPECT = float("inf")  # measure past the bound, this process only
+    rows = []
+    try:
+        for name in ASPECT_SCENES:
+            scene = Scene.preset(name)
+            ref = fem_reference(scene, PAPER_TORQUES_NM)
+            for m in ASPECT_RINGS:
+                for n in ASPECT_NS:
+                    if m >= 6 and n > 200:
+                        continue  # minutes a ramp, and the trend is clear by N = 200
+                    res = member_errors(scene, ref, Member(n, m, "hybrid"))
+                    aspect = family.spring_cell_aspect(n, m)
+                    rows.append({"scene": name, "n_triangles": n, "n_rings": m,
+                                 "aspect": aspect, "accepted": 1 / bound <= aspect <= bound}
+                                | {k: res[k] for k in ("rms", "mean", "max", "converged",
+                                                       "torques", "compiled_ms_per_torque")})
+                    print(f"{name} M={m} N={n:4d} aspect {aspect:6.2f}: RMS "
+                          f"{100 * res['rms']:5.2f} %, mean {100 * res['mean']:6.2f} %, max "
+                          f"{100 * res['max']:5.2f} %, converged {res['converged']}/"
+                          f"{res['torques']}", flush=True)
+    finally:
+        family.MAX_SPRING_CELL_ASPECT = bound
+    for accepted in (True, False):
+        sel = [r["rms"] for r in rows if r["accepted"] == accepted and r["n_triangles"] >= 20]
+        print(f"N >= 20, aspect {'within' if accepted else 'outside'} "
+              f"[{1 / bound:.1f}, {bound:.1f}]: RMS {100 * min(sel):.1f}-{100 * max(sel):.1f} %, "
+              f"median {100 * float(np.median(sel)):.1f} % ({len(sel)} members x disks)")
+    (out / "spring_aspect.json").write_text(json.dumps({
+        "torques_nm": list(PAPER_TORQUES_NM), "max_spring_cell_aspect": bound, "rows": rows},
+        indent=1))
+    print(f"wrote {out / 'spring_aspect.json'}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="out", help="output folder")
     parser.add_argument("--quick", action="store_true", help="three members (smoke test)")
+    parser.add_argument("--aspect-sweep", action="store_true",
+                        help="spring ring members' error against their cell aspect")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.aspect_sweep:
+        aspect_sweep(out)
+        return 0
     scenes = {name: Scene.preset(name) for name in PAPER_SCENES} | heldout_scenes()
     refs = {}
     for name, scene in scenes.items():

@@ -270,6 +270,70 @@ def test_hybrid_scales_give_the_lame_moduli_on_the_equilateral_lattice(nu):
         assert energy / (a0 * t) == pytest.approx(want, rel=2e-4)
 
 
+@pytest.mark.parametrize("aspect", [0.4, 1.0, 2.5, 10.0])
+def test_a_diagonal_cut_cell_carries_shear_only_through_its_diagonal(aspect):
+    """Homogenisation of the ring mesh's cell (width w, depth a w, one diagonal; one node per
+    cell, so a uniform strain is its equilibrium): with the area-rule springs its energy under
+    pure shear is ``2 mu e_xy^2`` with ``mu = s E a^2 / (1 + a^2)^2``, 2/3 of the equilateral
+    lattice's 3/8 s E at a = 1 and falling like 1 / a^2: why a spring ring mesh is accepted
+    only for cells near square (``MAX_SPRING_CELL_ASPECT``); the area energy adds nothing."""
+    from envs.model.energy import area_energy, spring_energy
+    from envs.model.family import CAUCHY_SHEAR_PER_E
+
+    youngs, t, w = 1.0, 1.0, 1.0
+    d = aspect * w
+    cell = w * d
+    edges = ((w, 0.0), (0.0, d), (w, d))  # tangential, radial, diagonal: one each per cell
+    e_xy = 1e-5
+    eps = np.array([[0.0, e_xy], [e_xy, 0.0]])
+    energy = 0.0
+    for ex, ey in edges:
+        rest = math.hypot(ex, ey)
+        # every edge is shared by two triangles of area cell / 2: k = E t cell / L^2
+        dx, dy = (np.eye(2) + eps) @ np.array([ex, ey])
+        energy += spring_energy(dx, dy, youngs * t * cell / rest**2, rest)
+    # shear keeps both triangles' areas: the area energy is zero to second order
+    u, v = (np.eye(2) + eps) @ np.array([w, 0.0]), (np.eye(2) + eps) @ np.array([w, d])
+    sheared_area = 0.5 * (u[0] * v[1] - u[1] * v[0])
+    assert area_energy(sheared_area, youngs * t, 0.5 * cell) < 1e-6 * energy
+    mu = energy / (cell * t) / (2 * e_xy**2)
+    assert mu == pytest.approx(youngs * aspect**2 / (1 + aspect**2) ** 2, rel=1e-4)
+    if aspect == 1.0:
+        assert mu / CAUCHY_SHEAR_PER_E == pytest.approx(2 / 3, rel=1e-4)
+
+
+def test_spring_ring_meshes_are_refused_beyond_their_cell_aspect():
+    """A spring ring member is accepted while its cells are 0.4-2.5 times as deep as wide; the
+    message names the parameter, the range and the way out; the other members are not
+    affected."""
+    from envs.model.defaults import MAX_SPRING_CELL_ASPECT
+    from envs.model.family import resolve_model, spring_cell_aspect, triangle_range
+
+    for m in (2, 3, 4, 8, 16):
+        low, high = triangle_range(m, "spring")
+        assert spring_cell_aspect(high, m) <= MAX_SPRING_CELL_ASPECT
+        assert spring_cell_aspect(high + 1, m) > MAX_SPRING_CELL_ASPECT
+        assert low == 4 or spring_cell_aspect(low - 1, m) < 1 / MAX_SPRING_CELL_ASPECT
+        assert resolve_model(high, m, "spring").n_triangles == high
+        with pytest.raises(ValueError, match=r"n_triangles = \d+ .*\[\d+, \d+\].*nhquad"):
+            resolve_model(high + 1, m, "spring")
+    assert triangle_range(2, "spring") == (4, 22)
+    assert triangle_range(1, "spring") == (4, 500)
+    assert triangle_range(2, "cst") == triangle_range(2, "nhquad") == (4, 2000)
+    # the default N (the paper's 20) is a valid spring ring mesh for every ring count
+    assert all(resolve_model(None, m, "spring").n_triangles == 20 for m in range(1, 17))
+    with pytest.raises(ValueError, match="n_triangles"):
+        simulate(SCENE, 0.2, 100, n_rings=2, element="spring")
+    from envs.evaluate import evaluate_designs
+    g, disk = SCENE.gripper, SCENE.disk
+    design = [[g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m, 0.2,
+               disk.distance_m]]
+    assert evaluate_designs(design, disk, n_triangles=20, n_rings=2,
+                            element="spring")["converged"][0]
+    with pytest.raises(ValueError, match="n_triangles"):
+        evaluate_designs(design, disk, n_triangles=[20, 100], n_rings=2, element="spring")
+
+
 def test_hybrid_scales_validate_and_are_physical():
     from envs.model.family import hybrid_scales
 

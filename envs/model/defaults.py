@@ -20,6 +20,22 @@ MAX_TRIANGLES = 500
 # with 2 rings solved paper-r070 at 0.2 N·m with N = 1000 (34 Newton iterations) and N = 2000
 # (43); the model itself is defined up to MODEL_MAX_TRIANGLES.
 MAX_TRIANGLES_FAMILY = 2000
+# Spring ring meshes (element "spring", M >= 2) are accepted only for cells of depth over width
+# (envs.model.family.spring_cell_aspect) in [1 / MAX_SPRING_CELL_ASPECT, MAX_SPRING_CELL_ASPECT].
+# Why: a quad cell cut by a diagonal carries shear only through its diagonal spring, so the
+# lattice's shear modulus is s E a^2 / (1 + a^2)^2 for aspect a (affine homogenisation of the
+# area-rule springs): 2/3 of the equilateral value the hybrid scales assume at a = 1, a third at
+# a = 2.5, falling like 1 / a^2 beyond; the area energy cannot help (shear keeps areas). Measured
+# (hybrid scales, M = 2-8 rings, N = 8-500, paper-r070 and -r050, RMS closing-angle error against
+# the FEM over 0.05-0.5 N·m; `python scripts/ring_accuracy.py --aspect-sweep`, 2026-11-25): with
+# N >= 20 and a in [0.4, 2.5], 0.8-4.3 %, median 1.6 % (28 member-disks); outside, 2.6-10.9 %,
+# median 5.1 % (48), and the error grows as the member is refined in N at fixed M, too soft
+# (mean error positive): on r070 M = 4: N = 20 1.6 %, 40 5.9 %, 100 8.4 %; M = 8: N = 40 1.4 %,
+# 100 8.8 %, 200 10.9 %. At a ~ 70-200 (N = 1000-2000 with 2-4 rings) the exact Newton matrix
+# is indefinite at every iteration from the lightest torque on (compressed springs soften the
+# nearly shear-free slivers further) and the interior point crawls to its iteration limit.
+# Finer contours are the constant-strain and nh-quad members' job.
+MAX_SPRING_CELL_ASPECT = 2.5
 MODEL_MAX_TRIANGLES = 20000
 DEFAULT_N_TRIANGLES = 20  # the paper's mesh; ~3 % of the FEM closing angle after calibration
 PAPER_N_TRIANGLES = DEFAULT_N_TRIANGLES  # the paper's fan: N = 20, one ring, springs only

@@ -38,6 +38,7 @@ scale corrects the discretization (:func:`calibration_scale`, :func:`calibrated_
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import replace
 from typing import NamedTuple
@@ -47,16 +48,18 @@ from .defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_MODEL_N_TRIANGLES,
     DEFAULT_MODEL_RINGS,
+    MAX_SPRING_CELL_ASPECT,
+    MAX_TRIANGLES,
     MAX_TRIANGLES_FAMILY,
     MIN_TRIANGLES,
     PAPER_N_TRIANGLES,
 )
 from .energy import lame_per_e
-from .rings import MAX_RINGS
+from .rings import HUB_RADIUS, MAX_RINGS
 
 __all__ = ["CAUCHY_SHEAR_PER_E", "CST_SCALES", "NHQUAD_SCALES", "hybrid_scales", "hybrid_disk",
            "cst_disk", "calibration_scale", "calibrated_disk", "ModelSpec", "resolve_model",
-           "ELEMENTS"]
+           "ELEMENTS", "spring_cell_aspect", "triangle_range"]
 
 #: Element energies of the model family: springs (and the area energy), the constant-strain
 #: neo-Hookean triangle, or nh-quad (those triangles' deviatoric part and a volumetric term
@@ -80,6 +83,52 @@ class ModelSpec(NamedTuple):
                 "element": self.element, "calibrated": self.scale != 1.0}
 
 
+def spring_cell_aspect(n_triangles: int, n_rings: int) -> float:
+    """Depth over width of a cell of the spring ring mesh (``M >= 2``).
+
+    The rings are spaced geometrically from the hub (:mod:`envs.model.rings`), so every layer's
+    cells have the same shape: depth ``(1 - h^(1/M)) rho`` over width ``2 pi rho / N``.
+    """
+    return (1.0 - HUB_RADIUS ** (1.0 / n_rings)) * n_triangles / (2.0 * math.pi)
+
+
+def triangle_range(n_rings: int, element: str) -> tuple[int, int]:
+    """Contour points ``N`` a member with ``n_rings`` rings of ``element`` accepts.
+
+    The springs-only fan to :data:`MAX_TRIANGLES` (it stops converging reliably beyond); a
+    spring ring mesh only while its cells' aspect (:func:`spring_cell_aspect`) is within
+    :data:`MAX_SPRING_CELL_ASPECT` of square (its springs lose the shear stiffness the hybrid
+    scales assume, see ``envs/model/defaults.py``); the other members to
+    :data:`MAX_TRIANGLES_FAMILY`.
+    """
+    if element != "spring":
+        return MIN_TRIANGLES, MAX_TRIANGLES_FAMILY
+    if n_rings == 1:
+        return MIN_TRIANGLES, MAX_TRIANGLES
+    per_aspect = 2.0 * math.pi / (1.0 - HUB_RADIUS ** (1.0 / n_rings))
+    low = max(MIN_TRIANGLES, math.ceil(per_aspect / MAX_SPRING_CELL_ASPECT - 1e-9))
+    high = per_aspect * MAX_SPRING_CELL_ASPECT + 1e-9
+    return low, MAX_TRIANGLES_FAMILY if high >= MAX_TRIANGLES_FAMILY else math.floor(high)
+
+
+def _check_triangles(n_triangles, n_rings: int, element: str) -> int:
+    low, high = triangle_range(n_rings, element)
+    if element == "spring" and n_rings == 1:
+        return check_n_triangles(n_triangles)
+    if element == "spring":
+        n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY)
+        if not low <= n <= high:
+            raise ValueError(
+                f"n_triangles = {n} is outside the allowed range [{low}, {high}] for element "
+                f"'spring' with n_rings = {n_rings}: its cells would be "
+                f"{spring_cell_aspect(n, n_rings):.2f} times as deep as wide (allowed "
+                f"{1 / MAX_SPRING_CELL_ASPECT:.1f}-{MAX_SPRING_CELL_ASPECT:.1f}), where springs "
+                "lose the shear stiffness the model assumes; use more rings, or element "
+                "'nhquad' or 'cst' for a finer contour")
+        return n
+    return check_integer("n_triangles", n_triangles, low, high)
+
+
 def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
                   calibrated=None) -> ModelSpec:
     """Validate a member of the family, with the defaults filled in.
@@ -87,9 +136,11 @@ def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
     Parameters
     ----------
     n_triangles
-        Contour points ``N``: 4 to ``MAX_TRIANGLES`` = 500 for the springs-only fan (it stops
-        converging reliably beyond), to ``MAX_TRIANGLES_FAMILY`` = 2000 otherwise. ``None``:
-        40 for ``"nhquad"`` (the default model), the paper's 20 otherwise.
+        Contour points ``N`` in :func:`triangle_range`: 4 to ``MAX_TRIANGLES`` = 500 for the
+        springs-only fan (it stops converging reliably beyond), cells of aspect 0.4-2.5 for a
+        spring ring mesh (M = 2: N 4-22, M = 8: 11-62), 4 to ``MAX_TRIANGLES_FAMILY`` = 2000
+        otherwise. ``None``: 40 for ``"nhquad"`` (the default model), the paper's 20 otherwise
+        (within every spring ring mesh's range).
     n_rings
         Rings ``M``, 1 to 16 (2 to 16 for ``"nhquad"``). ``None``: 2 for ``"nhquad"``, 1 (the
         paper's fan) otherwise.
@@ -107,10 +158,8 @@ def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
         "n_rings", n_rings, 2 if quad else 1, MAX_RINGS)
     if n_triangles is None:
         n = DEFAULT_MODEL_N_TRIANGLES if quad else PAPER_N_TRIANGLES
-    elif m == 1 and element == "spring":
-        n = check_n_triangles(n_triangles)
     else:
-        n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY)
+        n = _check_triangles(n_triangles, m, element)
     if calibrated is None:
         try:
             scale = calibration_scale(n, m, element)

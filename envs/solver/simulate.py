@@ -332,12 +332,14 @@ def simulate(
         calibration (within 2 % RMS, 4 % max of the FEM closing angle on
         disks it was not fitted to). ``element="spring"`` alone gives the paper's fan (N = 20,
         one ring, springs only, the disk's own scale). ``n_triangles``: 4 to 500 for the
-        springs-only fan, to 2000 otherwise; ``n_rings``: 1 to 16 (rings and a rigid hub,
-        :mod:`envs.model.rings`; 2 or more for ``"nhquad"``); ``element``: ``"spring"``
-        (springs and the area energy), ``"cst"`` (constant-strain neo-Hookean triangles of the
-        disk's E and nu) or ``"nhquad"`` (those triangles' deviatoric part and a volumetric term
-        per quad, evenly spaced rings); ``calibrated``: ``None`` applies the member's shipped
-        scale where it has one, ``True`` requires it, ``False`` leaves the disk's scale as is.
+        springs-only fan, cells 0.4-2.5 times as deep as wide for spring rings
+        (:func:`envs.model.family.triangle_range`), to 2000 otherwise; ``n_rings``: 1 to 16
+        (rings and a rigid hub, :mod:`envs.model.rings`; 2 or more for ``"nhquad"``);
+        ``element``: ``"spring"`` (springs and the area energy), ``"cst"`` (constant-strain
+        neo-Hookean triangles of the disk's E and nu) or ``"nhquad"`` (those triangles'
+        deviatoric part and a volumetric term per quad, evenly spaced rings); ``calibrated``:
+        ``None`` applies the member's shipped scale where it has one, ``True`` requires it,
+        ``False`` leaves the disk's scale as is.
         Members other than the fan need ``method="newton"``.
     method
         ``"newton"`` (default), ``"slsqp"`` or ``"nelder-mead"``.
