@@ -33,11 +33,9 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from ring_accuracy import heldout_scenes  # noqa: E402
 
 from envs.accuracy import PAPER_SCENES, PAPER_TORQUES_NM, fem_reference  # noqa: E402
+from envs.accuracy.heldout import heldout_scenes  # noqa: E402
 from envs.scene import Scene  # noqa: E402
 from envs.solver.simulate import simulate_ramp  # noqa: E402
 

@@ -39,6 +39,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from envs.accuracy import PAPER_SCENES, PAPER_TORQUES_NM, fem_reference  # noqa: E402
+from envs.accuracy.heldout import heldout_scenes  # noqa: E402
 from envs.accuracy.members import DEFAULT_MEMBERS, Member  # noqa: E402
 from envs.model import family  # noqa: E402
 from envs.scene import Scene  # noqa: E402
@@ -47,20 +48,6 @@ from envs.solver.simulate import simulate_ramp  # noqa: E402
 MEMBERS = DEFAULT_MEMBERS + (Member(32, 4, "hybrid"), Member(32, 6, "hybrid"),
                              Member(24, 6, "calibrated", "cst"))
 QUICK_MEMBERS = (Member(20, 1), Member(20, 3, "hybrid"), Member(20, 3, "calibrated", "cst"))
-
-
-def heldout_scenes() -> dict[str, Scene]:
-    """Disks the hybrid scales were not derived on or looked at: other radii (rest gap ~1 mm
-    like the presets), moduli and Poisson ratios."""
-    r070 = Scene.preset("paper-r070")
-    return {
-        "r060": r070.with_changes(radius_m=0.06, distance_m=0.0082),
-        "r085": r070.with_changes(radius_m=0.085, distance_m=0.019),
-        "r070-E50k": r070.with_changes(youngs_modulus_pa=50e3),
-        "r070-E300k": r070.with_changes(youngs_modulus_pa=300e3),
-        "r070-nu0.30": r070.with_changes(poisson_ratio=0.30),
-        "r050-nu0.40": Scene.preset("paper-r050").with_changes(poisson_ratio=0.40),
-    }
 
 
 def fem_measures(scene: Scene) -> tuple[np.ndarray, np.ndarray]:

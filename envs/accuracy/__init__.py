@@ -43,9 +43,9 @@ from .choose import DEFAULT_CANDIDATES as DEFAULT_CANDIDATES
 from .choose import NChoice, NChoiceRow, choose_n_triangles, clear_n_cache
 from .curves import RETRY_FACTORS, PsmCurve, psm_curve
 from .errors import ErrorReport, closing_errors
-from .heldout import paper_heldout_cases
+from .heldout import heldout_scenes, paper_heldout_cases
 from .jsonable import jsonable
-from .members import DEFAULT_MEMBERS, Member, MemberRow, ModelChoice, choose_model
+from .members import DEFAULT_MEMBERS, DEFAULT_MODEL, Member, MemberRow, ModelChoice, choose_model
 from .paper import HELDOUT_TORQUES_NM, PAPER_SCENES, PAPER_TORQUES_NM
 from .pareto import pareto_front
 from .reference import ReferenceCurve, fem_reference
@@ -67,12 +67,14 @@ __all__ = [
     "closing_errors",
     "calibrate",
     "paper_heldout_cases",
+    "heldout_scenes",
     "choose_n_triangles",
     "choose_model",
     "Member",
     "MemberRow",
     "ModelChoice",
     "DEFAULT_MEMBERS",
+    "DEFAULT_MODEL",
     "clear_n_cache",
     "pareto_front",
     "jsonable",

@@ -1,4 +1,5 @@
-"""Held-out FEM cases of a calibration on one paper disk (:func:`paper_heldout_cases`)."""
+"""Held-out FEM cases of a calibration on one paper disk (:func:`paper_heldout_cases`) and the
+disks the model family's shipped scales were never fitted to (:func:`heldout_scenes`)."""
 
 from __future__ import annotations
 
@@ -52,3 +53,19 @@ def paper_heldout_cases(
             other = Scene.preset(name)
             cases[name] = (other, ref(other, torques_nm))
     return cases
+
+
+def heldout_scenes() -> dict[str, Scene]:
+    """Disks the family's shipped scales were not fitted to (nor the hybrid scales derived on):
+    other radii (rest gap ~1 mm like the presets), moduli and Poisson ratios, on the paper
+    gripper. The default model is the cheapest member within tolerance on all of them
+    (:func:`envs.accuracy.choose_model`)."""
+    r070 = Scene.preset("paper-r070")
+    return {
+        "r060": r070.with_changes(radius_m=0.06, distance_m=0.0082),
+        "r085": r070.with_changes(radius_m=0.085, distance_m=0.019),
+        "r070-E50k": r070.with_changes(youngs_modulus_pa=50e3),
+        "r070-E300k": r070.with_changes(youngs_modulus_pa=300e3),
+        "r070-nu0.30": r070.with_changes(poisson_ratio=0.30),
+        "r050-nu0.40": Scene.preset("paper-r050").with_changes(poisson_ratio=0.40),
+    }
