@@ -66,7 +66,9 @@ class ObjectDistribution:
     youngs_modulus_range_pa
         Young's modulus drawn log-uniformly in this range [Pa].
     strain_limit_range
-        Admissible strain drawn uniformly in this range [-], inside (0, 1].
+        Admissible compressive strain (a limit on the peak compression, see
+        :func:`envs.evaluate_designs`) drawn uniformly in this range [-], inside (0, 1]:
+        around the evaluator's default 0.10.
     poisson_ratio
         Poisson's ratio of every object [-].
     thickness_m
@@ -77,7 +79,7 @@ class ObjectDistribution:
 
     radii_m: tuple[float, ...] = (0.05, 0.07, 0.10)
     youngs_modulus_range_pa: tuple[float, float] = (30e3, 1e6)
-    strain_limit_range: tuple[float, float] = (0.05, 0.25)
+    strain_limit_range: tuple[float, float] = (0.03, 0.17)
     poisson_ratio: float = 0.45
     thickness_m: float = 0.01
     stiffness_scale: float = 1.0
@@ -372,7 +374,8 @@ class GripperDesignEnv(gym.Env):
 
     At reset an object is drawn from `distribution` (an :class:`ObjectDistribution`; default:
     radius uniformly among the paper disks {0.05, 0.07, 0.10} m, Young's modulus log-uniform in
-    [30 kPa, 1 MPa], strain limit uniform in [0.05, 0.25], `nu = 0.45`, `t = 0.01` m, `s = 1`).
+    [30 kPa, 1 MPa], strain limit (admissible compression) uniform in [0.03, 0.17],
+    `nu = 0.45`, `t = 0.01` m, `s = 1`).
     `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1})` fixes either or both (the
     disk's `distance_m` is ignored: `d_1` is part of the action).
 

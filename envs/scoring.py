@@ -58,25 +58,38 @@ def grip_share_rows(torque_nm, kf_nm_per_rad, rest_angle_rad, jaw_angles_rad, st
                              stop_torques_nm[i, 0], stop_torques_nm[i, 1])
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def contact_share(pressed, n_points, face_force_n, hertz_k):
+    """One face's share of the contour in contact: its pressed points over ``N``, at most the
+    Hertz width of its face force (:mod:`envs.model.contact_width`)."""
+    nodes = pressed / n_points
+    width = hertz_k * math.sqrt(face_force_n) if face_force_n > 0.0 else 0.0
+    return width if width < nodes else nodes
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
                      jaw_angles_rad, face_forces_n, corner_totals_n, stop_torques_nm,
-                     peak_strain, peak_log_strain, max_displacement_ratio, torque_nm,
-                     kf_nm_per_rad, rest_angle_rad, status, converged, iterations, stable,
-                     jaw_out, n_contacts, touching, total_force_n, contact_score, grip_share,
-                     peak_out, peak_log_out, displacement_out):
+                     peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
+                     hertz_k, torque_nm, kf_nm_per_rad, rest_angle_rad, status, converged,
+                     iterations, stable, jaw_out, n_contacts, touching, total_force_n,
+                     contact_score, grip_share, peak_out, peak_log_out, displacement_out,
+                     compression_out):
     """Write the point-spring metrics of solved rows ``rows`` (group order ``g``) into the
     output columns.
 
     A row counts as converged when the solver says so and its float metrics are finite
     (otherwise ``CHECK_FAILED``); failed rows keep their zeros. Contacts are the points with a
     positive face force, a finger touches with a face contact or a corner force, and the
-    contact score is ``grip_share * contacts / N``.
+    contact score is ``grip_share`` times the two faces' :func:`contact_share` (``hertz_k``:
+    :func:`envs.model.contact_width.hertz_arc_coefficient` of each row's disk).
     """
     for g in range(rows.shape[0]):
         r = rows[g]
         finite = (math.isfinite(peak_strain[g]) and math.isfinite(peak_log_strain[g])
-                  and math.isfinite(max_displacement_ratio[g]))
+                  and math.isfinite(max_displacement_ratio[g])
+                  and math.isfinite(peak_compression[g]))
+        shares = 0.0
         for j in range(2):
             corner = 0.0
             for k in range(corner_totals_n.shape[2]):
@@ -88,6 +101,7 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                 total += f
                 if f > 0.0:
                     cnt += 1
+            shares += contact_share(cnt, n_points, total, hertz_k[g])
             total += corner
             finite = finite and math.isfinite(jaw_angles_rad[g, j]) and math.isfinite(total)
             # written for every row; a failed row's are zeroed below
@@ -110,15 +124,16 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                             stop_torques_nm[g, 1])
         for j in range(2):
             jaw_out[r, j] = jaw_angles_rad[g, j]
-        contact_score[r] = share * (n_contacts[r, 0] + n_contacts[r, 1]) / n_points
+        contact_score[r] = share * shares
         grip_share[r] = share
         peak_out[r] = peak_strain[g]
         peak_log_out[r] = peak_log_strain[g]
         displacement_out[r] = max_displacement_ratio[g]
+        compression_out[r] = peak_compression[g]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def reward_rows(weights, valid, converged, contact_score, peak_log_strain, strain_limit,
+def reward_rows(weights, valid, converged, contact_score, peak_compression, strain_limit,
                 touching, finger_gap_m, radius_m, rest_violation, reward_contact,
                 reward_deform, penalty_miss, penalty_gap, penalty_invalid, penalty_fail, reward):
     """The reward terms of every row (:class:`envs.evaluate.RewardWeights`; ``weights`` in
@@ -130,7 +145,7 @@ def reward_rows(weights, valid, converged, contact_score, peak_log_strain, strai
         rc = rd = pm = pg = 0.0
         if ok:
             rc = weights[W_CONTACT] * _capped(contact_score[i], weights[W_CONTACT_CAP])
-            ratio = _capped(peak_log_strain[i] / strain_limit[i], weights[W_DEFORM_CAP])
+            ratio = _capped(peak_compression[i] / strain_limit[i], weights[W_DEFORM_CAP])
             rd = 0.0 - weights[W_DEFORM] * ratio
             missing = (not touching[i, 0]) + (not touching[i, 1])
             pm = 0.0 - weights[W_MISS] * missing

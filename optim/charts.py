@@ -127,7 +127,7 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     d, m = result.best_design, result.best_metrics
     title = (f"{result.method} (seed {result.seed}) best: reward {result.best_reward:.4f}, "
              f"contact {m.get('contact_score', math.nan):.2f}, "
-             f"log strain {m.get('peak_log_strain', math.nan):.3f}\n"
+             f"compression {m.get('peak_compression', math.nan):.3f}\n"
              f"l = {d['finger_length_m']:.3f} m, θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
              f"d3 = {d['joint_offset_m']:.4f} m\n"
              f"w = {d['finger_width_m']:.4f} m, T = {d['torque_nm']:.3f} N·m, "
@@ -155,7 +155,7 @@ def _front_picks(front: Sequence[dict[str, Any]], n: int) -> list[int]:
 def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
                   archive: dict[str, np.ndarray] | None = None,
                   others: Sequence[OptimResult] = (), n_drawn: int = 3) -> Figure:
-    """NSGA-II front (contact score up, peak strain down) with a few of its designs drawn.
+    """NSGA-II front (contact score up, peak compression down) with a few of its designs drawn.
 
     Parameters
     ----------
@@ -178,11 +178,11 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
     ax = fig.add_subplot(grid[0, 0])
     if archive is not None and len(archive["reward"]):
         ok = archive["feasible"]
-        ax.scatter(archive["peak_log_strain"][ok], archive["contact_score"][ok], s=4,
+        ax.scatter(archive["peak_compression"][ok], archive["contact_score"][ok], s=4,
                    color="0.75",
                    label="feasible evaluated")
     if front:
-        strain = [p["peak_log_strain"] for p in front]
+        strain = [p["peak_compression"] for p in front]
         contact = [p["contact_score"] for p in front]
         ax.step(strain, contact, where="post", color="tab:red", linewidth=1)
         ax.plot(strain, contact, "o", color="tab:red", markersize=4, label="NSGA-II front")
@@ -191,14 +191,14 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
                         xytext=(5, -10), fontsize=9, color="tab:red")
     for r in others:
         m = r.best_metrics
-        if "peak_log_strain" in m:
-            ax.plot(m["peak_log_strain"], m["contact_score"], "*", markersize=11,
+        if "peak_compression" in m:
+            ax.plot(m["peak_compression"], m["contact_score"], "*", markersize=11,
                     color=METHOD_COLOURS.get(r.method, "k"),
                     label=f"best {r.method} (s{r.seed}): {r.best_reward:.3f}")
     limit = result.object.get("strain_limit")
     if limit:
         ax.axvline(limit, color="k", linestyle=":", linewidth=1, label="strain limit")
-    ax.set_xlabel("peak principal log strain [-] (down)")
+    ax.set_xlabel("peak compression [-] (down)")
     ax.set_ylabel("contact score [-] (up)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
@@ -208,6 +208,6 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
         p = front[i]
         _draw_design_grasp(sub, p["design"], result.object,
                            f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
-                           f"strain {p['peak_log_strain']:.3f}", legend=k == 0)
+                           f"compression {p['peak_compression']:.3f}", legend=k == 0)
     fig.tight_layout()
     return _save(fig, path)

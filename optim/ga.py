@@ -6,10 +6,10 @@ The loop (rather than ``pymoo.optimize.minimize``) lets the last generation be t
 exactly ``budget`` evaluations are made, as for every driver.
 
 - GA: one objective, ``F = -reward``.
-- NSGA-II: two objectives, ``F = (-contact_score, peak_log_strain)`` (contact up, strain down), and
-  three inequality constraints ``G <= 0``: the grasp converged, both fingers touch the disk, the
-  peak strain is within the strain limit. The Pareto front of the result is the non-dominated
-  set of every feasible design evaluated in the run.
+- NSGA-II: two objectives, ``F = (-contact_score, peak_compression)`` (contact up, compression
+  down), and three inequality constraints ``G <= 0``: the grasp converged, both fingers touch
+  the disk, the peak compression is within the strain limit. The Pareto front of the result is
+  the non-dominated set of every feasible design evaluated in the run.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
     problem
         The design problem (counts the evaluations, keeps the history).
     n_obj
-        1: ``F = -reward``; 2: ``F = (-contact_score, peak_log_strain)`` with three constraints.
+        1: ``F = -reward``; 2: ``F = (-contact_score, peak_compression)`` with three constraints.
     """
     _import_pymoo()
     from pymoo.core.problem import Problem
@@ -59,12 +59,12 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
             if n_obj == 1:
                 out["F"] = -m["reward"][:, None]
                 return
-            out["F"] = np.column_stack([-m["contact_score"], m["peak_log_strain"]])
+            out["F"] = np.column_stack([-m["contact_score"], m["peak_compression"]])
             missing = np.count_nonzero(~m["touching"], axis=1)
             out["G"] = np.column_stack([
                 0.5 - m["converged"].astype(np.float64),  # <= 0 iff converged
                 missing - 0.5,  # <= 0 iff both fingers touch
-                (m["peak_log_strain"] - problem.strain_limit) / problem.strain_limit,
+                (m["peak_compression"] - problem.strain_limit) / problem.strain_limit,
             ])
 
     return _GraspDesign()

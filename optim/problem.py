@@ -57,6 +57,7 @@ DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design b
 BEST_METRIC_KEYS = (
     "valid_at_rest", "converged", "stable", "n_contacts", "touching", "total_force_n",
     "jaw_angles_rad", "contact_score", "peak_strain", "peak_log_strain", "max_displacement_ratio",
+    "peak_compression",
     "strain_limit",
     "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
     "reward",
@@ -105,7 +106,7 @@ def paper_design(scene: str | Scene = "paper-r070", torque_nm: float = 0.1) -> n
         A preset name (see :data:`envs.scene.PRESETS`) or a :class:`~envs.scene.Scene`.
     torque_nm
         Actuation torque ``T_a`` [N·m] (the paper does not fix one; 0.1 N·m grasps the r = 0.07
-        m disk without exceeding a 0.15 strain limit).
+        m disk with a peak compression of 0.033, within the default limit 0.10).
     """
     sc = Scene.preset(scene) if isinstance(scene, str) else scene
     g, d = sc.gripper, sc.disk
@@ -146,14 +147,15 @@ class DesignProblem:
     :class:`~envs.evaluate.DesignBounds`); values outside [-1, 1] are clipped. The objective of
     the single-objective methods is the reward of :func:`envs.evaluate.evaluate_designs`
     (maximized). A design is *feasible* (for NSGA-II) when its grasp converged, both fingers
-    touch the disk and the peak strain does not exceed the strain limit.
+    touch the disk and the peak compression does not exceed the strain limit.
 
     Parameters
     ----------
     disk
         The object (its ``distance_m`` is replaced by each design's ``distance_m``).
     strain_limit
-        Admissible strain of the object [-], in (0, 1].
+        Admissible compressive strain of the object [-], in (0, 1]: a limit on the peak
+        compression (:func:`envs.evaluate_designs`).
     torsion_stiffness_nm_per_rad
         Joint torsion spring ``k_f`` [N·m/rad], > 0.
     n_triangles, n_rings, element, calibrated
@@ -349,21 +351,22 @@ class DesignProblem:
             "x": x.copy(),
             "reward": reward.copy(),
             "contact_score": out["contact_score"].copy(),
-            "peak_log_strain": out["peak_log_strain"].copy(),
+            "peak_compression": out["peak_compression"].copy(),
             "feasible": self.feasible(out),
         })
         if self.progress is not None:
             self.progress(x.shape[0], self.best_reward)
 
     def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
-        """Grasps that converged, touch with both fingers and respect the strain limit."""
+        """Grasps that converged, touch with both fingers and keep their peak compression
+        within the strain limit."""
         return (out["converged"] & np.all(out["touching"], axis=1)
-                & (out["peak_log_strain"] <= self.strain_limit))
+                & (out["peak_compression"] <= self.strain_limit))
 
     def archive(self) -> dict[str, np.ndarray]:
         """Every evaluated point: ``x`` (n, 6), ``reward``, ``contact_score``,
-        ``peak_log_strain``, ``feasible`` (n,), in evaluation order."""
-        keys = ("x", "reward", "contact_score", "peak_log_strain", "feasible")
+        ``peak_compression``, ``feasible`` (n,), in evaluation order."""
+        keys = ("x", "reward", "contact_score", "peak_compression", "feasible")
         if not self._archive:
             return {k: np.zeros((0, N_DESIGN) if k == "x" else (0,)) for k in keys}
         return {k: np.concatenate([a[k] for a in self._archive]) for k in keys}
@@ -389,19 +392,19 @@ class DesignProblem:
                 for i in picked]
 
     def pareto_front(self) -> list[dict[str, Any]]:
-        """Non-dominated feasible evaluated designs (contact score up, peak strain down),
+        """Non-dominated feasible evaluated designs (contact score up, peak compression down),
         sorted by contact score."""
         arc = self.archive()
         rows = np.flatnonzero(arc["feasible"])
         if rows.size == 0:
             return []
-        obj = np.column_stack([-arc["contact_score"][rows], arc["peak_log_strain"][rows]])
+        obj = np.column_stack([-arc["contact_score"][rows], arc["peak_compression"][rows]])
         front = rows[pareto_mask(obj)]
         front = front[np.argsort(arc["contact_score"][front], kind="stable")]
         return [{
             "design": self.design_dict(arc["x"][i]),
             "contact_score": float(arc["contact_score"][i]),
-            "peak_log_strain": float(arc["peak_log_strain"][i]),
+            "peak_compression": float(arc["peak_compression"][i]),
             "reward": float(arc["reward"][i]),
         } for i in front.tolist()]
 

@@ -68,8 +68,8 @@ class OptimResult:
     object
         The fixed object: disk fields in SI units, ``strain_limit`` and the scene name if any.
     pareto_front
-        NSGA-II only: the non-dominated feasible designs (contact score up, peak strain down),
-        each ``{"design": {...}, "contact_score": ..., "peak_log_strain": ..., "reward": ...}``,
+        NSGA-II only: the non-dominated feasible designs (contact score up, peak compression down),
+        each ``{"design": {...}, "contact_score": ..., "peak_compression": ..., "reward": ...}``,
         sorted by contact score.
     options
         The method's options as used (population size, sigma0, ...).
@@ -171,6 +171,6 @@ class OptimResult:
         return (
             f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f} "
             f"(contact {m.get('contact_score', float('nan')):.3f}, "
-            f"peak log strain {m.get('peak_log_strain', float('nan')):.4f}) after "
+            f"peak compression {m.get('peak_compression', float('nan')):.4f}) after "
             f"{self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
         )

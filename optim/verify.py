@@ -39,7 +39,7 @@ MAX_TOP = 10  # what an OptimResult keeps
 # 0.949 on the paper disks against the default's 0.84-0.86; scripts/fidelity.py, README): the
 # re-ranking to trust when the FEM is not at hand
 RANKING_MEMBER = {"n_triangles": 96, "n_rings": 6, "element": "nhquad", "calibrated": True}
-REPORTED = ("reward", "contact_score", "grip_share", "peak_log_strain", "converged",
+REPORTED = ("reward", "contact_score", "grip_share", "peak_compression", "converged",
             "valid_at_rest", "status")
 
 
@@ -218,14 +218,14 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
               f"{member['n_rings']})")
     print("  design   PSM reward" + ("  member reward" if member else "") + "  FEM reward  "
           "PSM rank" + ("  member rank" if member else "") + "  FEM rank  FEM contact  "
-          "FEM log strain")
+          "FEM compression")
     for i, r in enumerate(report["designs"]):
         print(f"  #{i + 1:<6d} {r['psm']['reward']:10.4f}"
               + (f"  {r['ranking_member']['reward']:13.4f}" if member else "")
               + f"  {r['fem']['reward']:10.4f}  {r['psm_rank']:8d}"
               + (f"  {r['ranking_member_rank']:11d}" if member else "")
               + f"  {r['fem_rank']:8d}  {r['fem']['contact_score']:11.3f}  "
-              f"{r['fem']['peak_log_strain']:14.3f}")
+              f"{r['fem']['peak_compression']:14.3f}")
     s = report["summary"]
     print(f"  same best design: {s['same_best']}"
           + (f" (ranking member: {s['ranking_member_same_best']})" if member else "")
@@ -244,6 +244,6 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
               f"{fem['reward']:.4f} against the point-spring model's "
               f"{psm['reward']:.4f}, more than {CONFIRM_RELATIVE:.0%} + "
               f"{CONFIRM_ABSOLUTE:g} apart; contact score {psm['contact_score']:.3f} against "
-              f"the FEM's {fem['contact_score']:.3f}, peak log strain "
-              f"{psm['peak_log_strain']:.4f} against {fem['peak_log_strain']:.4f}): check it "
+              f"the FEM's {fem['contact_score']:.3f}, peak compression "
+              f"{psm['peak_compression']:.4f} against {fem['peak_compression']:.4f}): check it "
               "before building it", file=sys.stderr)

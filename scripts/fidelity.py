@@ -9,9 +9,11 @@ converged at both fidelities (invalid designs get the same penalty at both and w
 inflate the agreement) it reports:
 
 - the Spearman rank correlation of the PSM and FEM reward (target >= 0.95), and of each reward
-  term that varies (the contact score, the peak strain);
+  term that varies (the contact score, the peak compression) and of the strains beside them;
 - whether the PSM's best design is the FEM's best, and the FEM reward it gives away (regret);
-- the reward error (mean and largest |PSM - FEM|).
+- the reward error (mean and largest |PSM - FEM|);
+- the default model's reward Spearman at other strain limits (``--strain-limits``): how the
+  agreement depends on the weight of deformation against contact.
 
 Writes ``out/fidelity.json`` and ``out/fidelity.png`` (PSM against FEM reward per design, one
 panel per disk). The FEM costs ~0.3-1 s per design; ``--workers`` runs it in processes.
@@ -20,6 +22,7 @@ Usage::
 
     python scripts/fidelity.py [--designs 100] [--seed 0] [--workers 2] [--quick]
                                [--members 80x2 96x6 120x6 160x8]
+                               [--strain-limits 0.05 0.15 0.2]
 """
 
 from __future__ import annotations
@@ -44,7 +47,7 @@ MODELS = {"default": {}, "paper fan": {"element": "spring"}}
 # finer nh-quad members (N x rings; the shipped calibration where there is one, M <= 6): how
 # the ranking follows refinement, and its cost
 MEMBERS = ((80, 2), (96, 6), (120, 6), (160, 8))
-TERMS = ("reward", "contact_score", "peak_log_strain", "peak_strain")
+TERMS = ("reward", "contact_score", "peak_compression", "peak_log_strain", "peak_strain")
 
 
 def rank_agreement(psm: dict, fem: dict, rows: np.ndarray) -> dict:
@@ -93,7 +96,21 @@ def model_table(members) -> dict[str, dict]:
     return table
 
 
-def run_scene(name: str, n: int, seed: int, executor, models: dict) -> dict:
+def limit_sensitivity(designs: np.ndarray, scene: Scene, executor, limits) -> dict:
+    """Spearman of the default model's reward against the FEM's at other strain limits (the
+    weight of deformation against contact; the FEM is read from its cache)."""
+    out = {}
+    for lim in limits:
+        fem = evaluate_designs(designs, scene.disk, fidelity="fem", executor=executor,
+                               strain_limits=lim)
+        psm = evaluate_designs(designs, scene.disk, strain_limits=lim)
+        rows = np.flatnonzero(fem["valid_at_rest"] & fem["converged"] & psm["converged"])
+        out[str(lim)] = float(spearmanr(psm["reward"][rows], fem["reward"][rows]).statistic)
+    return out
+
+
+def run_scene(name: str, n: int, seed: int, executor, models: dict,
+              limits: tuple[float, ...] = ()) -> dict:
     scene = Scene.preset(name)
     designs = DesignBounds().sample(np.random.default_rng(seed), n, scene.disk)
     t0 = time.perf_counter()
@@ -117,6 +134,7 @@ def run_scene(name: str, n: int, seed: int, executor, models: dict) -> dict:
         }
     entry["fem_reward"] = fem["reward"].tolist()
     entry["fem_status"] = fem["status"].tolist()
+    entry["spearman_by_strain_limit"] = limit_sensitivity(designs, scene, executor, limits)
     return entry
 
 
@@ -161,6 +179,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="12 designs of paper-r070 only")
     ap.add_argument("--members", nargs="*", default=[f"{a}x{b}" for a, b in MEMBERS],
                     help="finer nh-quad members NxM scored beside the default (none: skip)")
+    ap.add_argument("--strain-limits", nargs="*", type=float, default=[0.05, 0.15, 0.2],
+                    help="also rank the default model at these strain limits (default 0.10)")
     ap.add_argument("--out", default="out")
     args = ap.parse_args(argv)
     scenes = ("paper-r070",) if args.quick else SCENES
@@ -176,10 +196,13 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     try:
         for name in scenes:
-            entry = run_scene(name, n, args.seed, executor, models)
+            entry = run_scene(name, n, args.seed, executor, models, tuple(args.strain_limits))
             results.append(entry)
             print(f"{name}: {entry['valid_at_rest']} of {n} valid, FEM "
                   f"{entry['fem_converged']} converged in {entry['fem_wall_s']:.0f} s")
+            if entry["spearman_by_strain_limit"]:
+                print("  default model at other strain limits: Spearman reward " + ", ".join(
+                    f"{lim} {rho:.3f}" for lim, rho in entry["spearman_by_strain_limit"].items()))
             for label, m in entry["models"].items():
                 terms = ", ".join(
                     f"{k} {m[f'spearman_{k}']:.3f}" for k in TERMS[1:]

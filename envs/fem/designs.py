@@ -34,15 +34,29 @@ def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], ring
             for scene, t in zip(scenes, torques_nm, strict=True)]
 
 
-def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray) -> dict[str, np.ndarray]:
+def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
+                centre_y_m: np.ndarray) -> dict[str, np.ndarray]:
     """Arrays of the FEM grasps' metrics, in the evaluator's keys (see
     :func:`envs.evaluate.evaluate_designs`); rows that did not converge hold NaN and
     ``converged`` False.
 
-    ``contact_fraction`` (B,) is the share of the rim's length in contact with either face
-    (each rim node with its share of the rim), ``n_contacts`` (B, 2) the rim nodes in contact.
+    ``contact_fractions`` (B, 2) is the share of the rim's length in contact with each face
+    (each rim node with its share of the rim), ``contact_fraction`` (B,) their sum,
+    ``n_contacts`` (B, 2) the rim nodes in contact, ``face_force_n`` (B, 2) the force each face
+    carries (the total without the tip corner's), ``peak_compression`` (B,) the largest
+    shortening of a radius ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C = (0,
+    centre_y_m)``, the disk centre), the point-spring model's same measure.
     """
     b = len(results)
+    radius_m = np.broadcast_to(np.asarray(radius_m, dtype=float), (b,))
+    centre_y_m = np.broadcast_to(np.asarray(centre_y_m, dtype=float), (b,))
+
+    compression = np.full(b, math.nan)
+    for i, r in enumerate(results):
+        if r.converged:
+            rim = np.asarray(r.contour_m, dtype=float)
+            dist = np.hypot(rim[:, 0], rim[:, 1] - centre_y_m[i])
+            compression[i] = max(0.0, float(np.max(radius_m[i] - dist))) / radius_m[i]
     ok = np.array([r.converged for r in results], dtype=bool)
 
     def column(get, width: int | None = None) -> np.ndarray:
@@ -62,6 +76,9 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray) -> dict[str,
         "tip_forces_n": column(lambda r: r.tip_forces_n, 2),
         "total_force_n": column(lambda r: r.contact_forces_n, 2),
         "contact_fraction": column(lambda r: sum(r.contact_fractions)),
+        "contact_fractions": column(lambda r: r.contact_fractions, 2),
+        "face_force_n": column(lambda r: np.subtract(r.contact_forces_n, r.tip_forces_n), 2),
+        "peak_compression": compression,
         "stop_torques_nm": column(lambda r: r.stop_torques_nm, 2),
         "peak_strain": column(lambda r: r.peak_stretch_strain),
         "peak_log_strain": column(lambda r: r.peak_strain),

@@ -27,7 +27,7 @@ from .rings import (
 )
 
 __all__ = ["M_PEAK_STRAIN", "M_DISPLACEMENT", "M_ENERGY", "M_INVERTED", "M_PEAK_LOG_STRAIN",
-           "N_METRICS", "state_metrics", "triangle_log_strain"]
+           "M_COMPRESSION", "N_METRICS", "state_metrics", "triangle_log_strain"]
 
 # metric vector layout
 M_PEAK_STRAIN = 0  # max |spring strain| [-]
@@ -35,7 +35,9 @@ M_DISPLACEMENT = 1  # max contour-point displacement / r [-]
 M_ENERGY = 2  # total energy [scaled: s E t r^2]
 M_INVERTED = 3  # mesh triangles turned over
 M_PEAK_LOG_STRAIN = 4  # max over triangles of the largest principal |ln lambda| [-]
-N_METRICS = 5
+# largest shortening of a radius: max over contour points of (r - |p - C|) / r, >= 0 [-]
+M_COMPRESSION = 5
+N_METRICS = 6
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -100,12 +102,17 @@ def state_metrics(x, n, prm, out):
             dx, dy = xb - xa, yb - ya
             peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / rest - 1.0))
     disp = 0.0
+    compression = 0.0
     for i in range(n):
         ax, ay = rest_xy(prm, n, m, m, i)
         ux, uy = x[2 * i] - ax, x[2 * i + 1] - ay
         disp = max(disp, math.sqrt(ux * ux + uy * uy))
+        # the contour points lie on the unit circle about the centre at rest: how far a
+        # finger has pushed one in (a rigid turn about the centre does not count)
+        compression = max(compression, 1.0 - math.sqrt(x[2 * i] ** 2 + x[2 * i + 1] ** 2))
     out[M_PEAK_STRAIN] = peak
     out[M_DISPLACEMENT] = disp
     out[M_ENERGY] = mesh_energy(x, n, prm)
     out[M_INVERTED] = folded_triangles(x, n, prm)
     out[M_PEAK_LOG_STRAIN] = _mesh_log_strain(x, n, m, prm)
+    out[M_COMPRESSION] = compression

@@ -54,6 +54,7 @@ from envs.model.layout import (
     default_options,
 )
 from envs.model.metrics import (
+    M_COMPRESSION,
     M_DISPLACEMENT,
     M_ENERGY,
     M_INVERTED,
@@ -91,6 +92,7 @@ class BatchSolution(NamedTuple):
     stop_torques_nm: np.ndarray  # (B, 2)
     peak_strain: np.ndarray  # (B,) max |spring strain|
     peak_log_strain: np.ndarray  # (B,) max over triangles of the largest principal |ln lambda|
+    peak_compression: np.ndarray  # (B,) largest shortening of a radius over r
     max_displacement_ratio: np.ndarray  # (B,)
     energy_j: np.ndarray  # (B,) total potential energy [J]
     inverted: np.ndarray  # (B,) int
@@ -321,6 +323,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         corner_forces_n=corner, corner_totals_n=totals, corner_edges=edges,
         stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         peak_log_strain=metrics[:, M_PEAK_LOG_STRAIN],
+        peak_compression=metrics[:, M_COMPRESSION],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY], inverted=inverted, check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,

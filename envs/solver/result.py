@@ -72,6 +72,11 @@ class GraspResult:
         Largest principal logarithmic (Hencky) strain ``max |ln lambda|`` over the fan
         triangles [-]: the FEM reference's measure (CONVENTIONS.md); infinite where a triangle
         has folded.
+    peak_compression : float
+        Largest shortening of a radius by the fingers, ``max (r - |p - C|) / r`` over the
+        contour points ``p`` (``C`` the disk's centre) [-]: how deep the grasp presses into
+        the object (the deformation the design reward penalises, see
+        :func:`envs.evaluate_designs`; a turn about the centre does not count).
     n_rings : int
         Rings ``M`` of the point mesh (1: the paper's fan).
     element : str
@@ -118,6 +123,7 @@ class GraspResult:
     element: str = "spring"
     model_scale: float = 1.0
     interior_points_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    peak_compression: float = math.nan
 
     @property
     def folded(self) -> bool:
@@ -168,6 +174,7 @@ class GraspResult:
             "jaw_angles_rad": list(self.jaw_angles_rad),
             "peak_strain": self.peak_strain,
             "peak_log_strain": self.peak_log_strain,
+            "peak_compression": self.peak_compression,
             "max_displacement_ratio": self.max_displacement_ratio,
             "n_contacts": list(self.n_contacts),
             "total_force_n": list(self.total_force_n),

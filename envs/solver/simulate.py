@@ -79,6 +79,7 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         element=element,
         model_scale=float(model_scale),
         interior_points_m=sol.interior_points_m[i],
+        peak_compression=float(sol.peak_compression[i]),
     )
 
 

@@ -1,0 +1,44 @@
+"""The width of a contact finer than the mesh: Hertz's line contact of the disk on a flat face.
+
+A contour of ``N`` points (or a FEM rim of nodes) resolves a contact only to one point spacing:
+a face that touches with a vanishing force still presses one or two points, a whole facet
+(``2 pi r / N``) of apparent contact. Below that resolution the physics gives the width: a
+cylinder of radius ``r`` pressed on a rigid flat by a force ``P`` per unit thickness touches
+over ``2 b`` with ``b = sqrt(4 P r / (pi E*))`` (Hertz, plane strain ``E* = E / (1 - nu^2)``;
+the same formula as :func:`envs.fem.hertz.hertz_line_compression`). The share of the contour
+in contact with one face is then at most ``2 b / (2 pi r) = k sqrt(F)`` with ``F = P t`` and
+``k`` from :func:`hertz_arc_coefficient`. The design evaluator counts each face's contact as
+the smaller of its pressed points (nodes) and this width, at both fidelities, so that a light
+touch scores its physical width and not the mesh's spacing; as the mesh refines, the count
+resolves the width and the cap stops binding.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["hertz_arc_coefficient"]
+
+
+def hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio):
+    """``k`` [N^-1/2] such that ``k sqrt(F)`` is the share of the contour in contact with a flat
+    face pressed by a force ``F`` [N] (Hertz line contact, plane strain, see the module).
+
+    Parameters
+    ----------
+    radius_m, thickness_m, youngs_modulus_pa, poisson_ratio
+        The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] (the modulus the grasp was solved with) and
+        ``nu`` [-]; scalars or arrays of one shape.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``sqrt(4 / (pi^3 r t E*))`` with ``E* = E / (1 - nu^2)``.
+    """
+    e_star = np.asarray(youngs_modulus_pa, dtype=float) / (
+        1.0 - np.asarray(poisson_ratio, dtype=float) ** 2)
+    k = np.sqrt(4.0 / (math.pi**3 * np.asarray(radius_m, dtype=float)
+                       * np.asarray(thickness_m, dtype=float) * e_star))
+    return float(k) if np.ndim(k) == 0 else k
