@@ -103,8 +103,8 @@ def table_rows(runs: dict[str, list[OptimResult]], reference: float) -> list[dic
             "median_evals_to_beat_paper": float(np.median(beat)),
             "median_contact_score": float(np.median(
                 [r.best_metrics.get("contact_score", np.nan) for r in results])),
-            "median_peak_strain": float(np.median(
-                [r.best_metrics.get("peak_log_strain", np.nan) for r in results])),
+            "median_peak_compression": float(np.median(
+                [r.best_metrics.get("peak_compression", np.nan) for r in results])),
             "median_wall_time_s": float(np.median([r.wall_time_s for r in results])),
             "median_evaluations_per_s": float(np.median([r.evaluations_per_s for r in results])),
         })
@@ -115,7 +115,7 @@ def table_rows(runs: dict[str, list[OptimResult]], reference: float) -> list[dic
 def format_table(rows: list[dict[str, Any]], reference: float, budget: int) -> str:
     """The table as aligned text."""
     head = (f"{'method':>7s} {'runs':>4s} {'median':>8s} {'IQR':>17s} {'min':>8s} {'max':>8s} "
-            f"{'beat paper':>10s} {'evals to beat':>13s} {'contact':>7s} {'strain':>7s} "
+            f"{'beat paper':>10s} {'evals to beat':>13s} {'contact':>7s} {'compr.':>7s} "
             f"{'time s':>7s} {'eval/s':>7s}")
     lines = [f"best reward after {budget} evaluations (the scene's own gripper: "
              f"{reference:.4f})", head,
@@ -127,7 +127,7 @@ def format_table(rows: list[dict[str, Any]], reference: float, budget: int) -> s
             f"[{r['q25_best']:7.4f},{r['q75_best']:7.4f}] {r['min_best']:8.4f} "
             f"{r['max_best']:8.4f} {r['runs_beating_paper']:>5d}/{r['runs']:<4d} "
             f"{'never' if math.isinf(beat) else f'{beat:.0f}':>13s} "
-            f"{r['median_contact_score']:7.3f} {r['median_peak_strain']:7.4f} "
+            f"{r['median_contact_score']:7.3f} {r['median_peak_compression']:7.4f} "
             f"{r['median_wall_time_s']:7.1f} {r['median_evaluations_per_s']:7.0f}")
     return "\n".join(lines)
 
@@ -137,7 +137,7 @@ def union_front(results: list[OptimResult]) -> list[dict[str, Any]]:
     points = [p for r in results for p in r.pareto_front]
     if not points:
         return []
-    obj = np.array([[-p["contact_score"], p["peak_log_strain"]] for p in points])
+    obj = np.array([[-p["contact_score"], p["peak_compression"]] for p in points])
     keep = np.flatnonzero(pareto_mask(obj))
     return sorted((points[i] for i in keep), key=lambda p: p["contact_score"])
 
@@ -167,24 +167,24 @@ def draw(runs: dict[str, list[OptimResult]], curves: dict[str, dict[str, dict]],
     axes[1].set_title("best so far vs wall time", fontsize=10)
     ax = axes[2]
     for r in runs.get("nsga2", []):
-        ax.plot([p["peak_log_strain"] for p in r.pareto_front],
+        ax.plot([p["peak_compression"] for p in r.pareto_front],
                 [p["contact_score"] for p in r.pareto_front], ".", color="tab:olive",
                 alpha=0.35, markersize=4)
     if front:
-        s = [p["peak_log_strain"] for p in front]
+        s = [p["peak_compression"] for p in front]
         c = [p["contact_score"] for p in front]
         ax.step(s, c, where="post", color="tab:red")
         ax.plot(s, c, "o", color="tab:red", markersize=4, label="NSGA-II front (all seeds)")
     for method, results in runs.items():
         if method == "nsga2":
             continue
-        ax.plot([r.best_metrics.get("peak_log_strain", np.nan) for r in results],
+        ax.plot([r.best_metrics.get("peak_compression", np.nan) for r in results],
                 [r.best_metrics.get("contact_score", np.nan) for r in results], "*",
                 markersize=10, color=METHOD_COLOURS.get(method), label=f"best {method} designs")
     limit = next(iter(runs.values()))[0].object.get("strain_limit")
     if limit:
         ax.axvline(limit, color="k", linestyle=":", linewidth=1, label="strain limit")
-    ax.set_xlabel("peak strain [-] (down)")
+    ax.set_xlabel("peak compression [-] (down)")
     ax.set_ylabel("contact score [-] (up)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
@@ -269,9 +269,9 @@ def main(argv: list[str] | None = None) -> int:
     print(text)
     if front:
         print(f"\nNSGA-II front (union of {len(runs['nsga2'])} seeds), contact score vs peak "
-              "strain:")
+              "compression:")
         for p in front:
-            print(f"  contact {p['contact_score']:.2f}  strain {p['peak_strain']:.4f}  "
+            print(f"  contact {p['contact_score']:.2f}  compression {p['peak_compression']:.4f}  "
                   f"reward {p['reward']:.4f}")
     for method, rows_r in regret.items():
         print(f"\n{method} policy regret against CMA-ES ({args.budget} evaluations per object):")

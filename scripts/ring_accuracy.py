@@ -50,9 +50,11 @@ MEMBERS = DEFAULT_MEMBERS + (Member(32, 4, "hybrid"), Member(32, 6, "hybrid"),
 QUICK_MEMBERS = (Member(20, 1), Member(20, 3, "hybrid"), Member(20, 3, "calibrated", "cst"))
 
 
-def fem_measures(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The FEM's peak log strain and contact fraction at the paper torques (its disk cache)."""
+def fem_measures(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The FEM's peak log strain, contact fraction and peak compression at the paper torques
+    (its disk cache)."""
     from envs.fem import fem_grasp
+    from envs.fem.designs import fem_metrics
 
     results = fem_grasp(scene.with_changes(stiffness_scale=1.0), list(PAPER_TORQUES_NM))
     # rim nodes of the P2 mesh: 6 k^2 elements on k rings, 6 k rim edges, two nodes each
@@ -60,7 +62,9 @@ def fem_measures(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     rim_nodes = 2 * 6 * rings
     strain = np.array([r.peak_strain if r.converged else np.nan for r in results])
     contact = np.array([sum(r.contact_node_counts) / rim_nodes for r in results])
-    return strain, contact
+    r = scene.disk.radius_m
+    compression = fem_metrics(results, r, scene.disk.distance_m + r)["peak_compression"]
+    return strain, contact, compression
 
 
 def member_errors(scene: Scene, ref, member: Member, fem=None) -> dict:
@@ -80,8 +84,13 @@ def member_errors(scene: Scene, ref, member: Member, fem=None) -> dict:
         strain = np.array([r.peak_log_strain for r in out])
         contact = np.array([sum(r.n_contacts) / member.n_triangles for r in out])
         s_err = strain / fem[0] - 1.0
+        compression = np.array([r.peak_compression for r in out])
+        c_err = compression / fem[2] - 1.0
         extra = {"peak_log_strain": strain.tolist(), "fem_peak_log_strain": fem[0].tolist(),
                  "strain_rms": float(np.sqrt(np.nanmean(s_err**2))),
+                 "peak_compression": compression.tolist(),
+                 "fem_peak_compression": fem[2].tolist(),
+                 "compression_rms": float(np.sqrt(np.nanmean(c_err**2))),
                  "contact_fraction": contact.tolist(), "fem_contact_fraction": fem[1].tolist()}
     return extra | {
         "converged": int(sum(r.converged for r in out)), "torques": len(out),
@@ -182,8 +191,10 @@ def main(argv: list[str] | None = None) -> int:
               f"{row['compiled_ms_per_torque']:6.2f} ms compiled / "
               f"{row['wall_ms_per_torque']:6.2f} ms wall per torque, "
               f"all converged: {row['all_converged']}", flush=True)
-        print("    peak log strain vs FEM (RMS of the relative error): " + ", ".join(
-            f"{k[-4:]} {100 * per[k]['strain_rms']:.0f} %" for k in PAPER_SCENES)
+        print("    peak compression (the reward's deformation) and peak log strain vs FEM "
+              "(RMS of the relative error): " + ", ".join(
+                  f"{k[-4:]} {100 * per[k]['compression_rms']:.1f} % / "
+                  f"{100 * per[k]['strain_rms']:.0f} %" for k in PAPER_SCENES)
             + "; contour fraction in contact at 0.5 N·m, PSM/FEM: " + ", ".join(
                 f"{k[-4:]} {per[k]['contact_fraction'][-1]:.2f}/"
                 f"{per[k]['fem_contact_fraction'][-1]:.2f}" for k in PAPER_SCENES), flush=True)
