@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -49,6 +50,7 @@ def test_verify_rescores_the_run_and_writes_its_files(run_dir):
     best_fem = max(range(3), key=lambda i: rows[i]["fem"]["reward"])
     assert rows[best_fem]["fem_rank"] == 1
     assert report["summary"]["same_best"] == (rows[0]["fem_rank"] == 1)
+    assert not report["summary"]["tied"]  # random search: three different grasps
     assert -1.0 <= report["summary"]["spearman"] <= 1.0
     diff = max(abs(r["psm"]["reward"] - r["fem"]["reward"]) for r in rows)
     assert report["summary"]["max_reward_difference"] == pytest.approx(diff)
@@ -56,6 +58,25 @@ def test_verify_rescores_the_run_and_writes_its_files(run_dir):
     gap = abs(best["psm"]["reward"] - best["fem"]["reward"])
     assert report["summary"]["best_confirmed"] == (gap <= 0.25 * abs(best["psm"]["reward"])
                                                    + 0.01)
+
+
+def test_designs_whose_rewards_tie_get_no_rank_correlation(run_dir, tmp_path, monkeypatch,
+                                                           capsys):
+    """A converged optimizer's best designs often differ only in fields the grasp ignores:
+    rewards within TIE_REWARD at a fidelity are a tie, reported as such, not as a Spearman."""
+    import optim.verify as verify
+
+    result = OptimResult.from_json(run_dir / "random_seed4_result.json")
+    spread = np.ptp([t["reward"] for t in result.top_designs[:3]])
+    monkeypatch.setattr(verify, "TIE_REWARD", 2 * spread + 1e-9)
+    report = verify.verify_result(result, top=3)
+    assert report["summary"]["tied"]
+    assert "spearman" not in report["summary"]
+    assert "ranking_member_spearman" not in report["summary"]
+    copy = tmp_path / "run"  # the other tests read the run's own verify.json
+    shutil.copytree(run_dir, copy)
+    assert main(["verify", str(copy), "--top", "3"]) == 0
+    assert "a tie, their order is not a finding" in capsys.readouterr().out
 
 
 def test_verify_reranks_with_the_finer_member(run_dir):
