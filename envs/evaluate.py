@@ -418,29 +418,20 @@ def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: 
 
 
 def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int,
-                cols: SceneColumns, hertz_k: np.ndarray) -> None:
+                cols: SceneColumns, model_scale: float) -> None:
     """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
-    what happened; :func:`envs.scoring.psm_metrics_rows`); ``hertz_k`` of each row's disk
-    (:func:`_hertz_k`)."""
+    what happened; :func:`envs.scoring.psm_metrics_rows`); ``model_scale``: the member's
+    calibration factor in ``cols.stiffness_scale`` (the contact width takes the disk's own)."""
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
         sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, sol.peak_strain,
-        sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression, hertz_k,
-        cols.torque_nm, cols.torsion_stiffness_nm_per_rad, cols.rest_angle_rad, out["status"],
-        out["converged"], out["iterations"], out["stable"], out["jaw_angles_rad"],
-        out["n_contacts"], out["touching"], out["total_force_n"], out["contact_score"],
-        out["grip_share"], out["peak_strain"], out["peak_log_strain"],
+        sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression, cols.radius_m,
+        cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
+        cols.stiffness_scale / model_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
+        cols.rest_angle_rad, out["status"], out["converged"], out["iterations"], out["stable"],
+        out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
+        out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
         out["max_displacement_ratio"], out["peak_compression"])
-
-
-def _hertz_k(disk: np.ndarray, with_scale: bool) -> np.ndarray:
-    """Hertz contact-width coefficient of each row of a :func:`_disk_table` (before any member
-    calibration): with the modulus the grasp is solved with, ``s E`` for the point-spring
-    model (``with_scale``; ``s`` the disk's own material scale), ``E`` for the FEM."""
-    young = disk[:, DISK_YOUNG] * (disk[:, DISK_SCALE] if with_scale else 1.0)
-    return np.ascontiguousarray(hertz_arc_coefficient(
-        disk[:, DISK_RADIUS], disk[:, DISK_THICKNESS], young, disk[:, DISK_POISSON]),
-        dtype=np.float64)
 
 
 def rest_violation(cols: SceneColumns) -> np.ndarray:
@@ -510,9 +501,11 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings),
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
-    # each face's share of the rim, at most the Hertz width of its force (as for the PSM)
-    hertz = _hertz_k(disk[rows], with_scale=False)[:, None] * np.sqrt(
-        np.maximum(fem["face_force_n"], 0.0))
+    # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
+    # with the physical E the FEM solves with)
+    k = np.array([hertz_arc_coefficient(r[DISK_RADIUS], r[DISK_THICKNESS], r[DISK_YOUNG],
+                                        r[DISK_POISSON]) for r in disk[rows]])
+    hertz = k[:, None] * np.sqrt(np.maximum(fem["face_force_n"], 0.0))
     shares = np.minimum(fem["contact_fractions"], hertz).sum(axis=1)
     with np.errstate(invalid="ignore"):
         grip = grip_share(cols, fem["jaw_angles_rad"], fem["stop_torques_nm"])
@@ -554,7 +547,6 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
     out["n_triangles"][:] = n_tri
     out["strain_limit"][:] = limits
     out["status"][:] = NOT_SOLVED
-    hertz_k = _hertz_k(disk, with_scale=True) if fidelity == "psm" else None
     if model_scale != 1.0:
         disk = disk.copy()
         disk[:, DISK_SCALE] *= model_scale
@@ -578,7 +570,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
                             element=element)
-        _fill_group(out, rows, sol, n, group, hertz_k[rows])
+        _fill_group(out, rows, sol, n, group, model_scale)
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
     if rows.size:

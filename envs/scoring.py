@@ -14,6 +14,7 @@ import math
 
 from numba import njit
 
+from .model.contact_width import hertz_arc_coefficient
 from .solver.status import CHECK_FAILED
 
 # layout of the weights vector of :func:`reward_rows` (RewardWeights.vector())
@@ -71,7 +72,8 @@ def contact_share(pressed, n_points, face_force_n, hertz_k):
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
                      jaw_angles_rad, face_forces_n, corner_totals_n, stop_torques_nm,
                      peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
-                     hertz_k, torque_nm, kf_nm_per_rad, rest_angle_rad, status, converged,
+                     radius_m, thickness_m, youngs_modulus_pa, poisson_ratio, material_scale,
+                     torque_nm, kf_nm_per_rad, rest_angle_rad, status, converged,
                      iterations, stable, jaw_out, n_contacts, touching, total_force_n,
                      contact_score, grip_share, peak_out, peak_log_out, displacement_out,
                      compression_out):
@@ -81,8 +83,10 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     A row counts as converged when the solver says so and its float metrics are finite
     (otherwise ``CHECK_FAILED``); failed rows keep their zeros. Contacts are the points with a
     positive face force, a finger touches with a face contact or a corner force, and the
-    contact score is ``grip_share`` times the two faces' :func:`contact_share` (``hertz_k``:
-    :func:`envs.model.contact_width.hertz_arc_coefficient` of each row's disk).
+    contact score is ``grip_share`` times the two faces' :func:`contact_share`, the Hertz width
+    (:func:`envs.model.contact_width.hertz_arc_coefficient`) with the modulus the row was
+    solved with, ``material_scale`` times E (the disk's own scale, without a member's
+    discretization scale).
     """
     for g in range(rows.shape[0]):
         r = rows[g]
@@ -90,6 +94,9 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                   and math.isfinite(max_displacement_ratio[g])
                   and math.isfinite(peak_compression[g]))
         shares = 0.0
+        hertz_k = hertz_arc_coefficient(radius_m[g], thickness_m[g],
+                                        material_scale[g] * youngs_modulus_pa[g],
+                                        poisson_ratio[g])
         for j in range(2):
             corner = 0.0
             for k in range(corner_totals_n.shape[2]):
@@ -101,7 +108,7 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                 total += f
                 if f > 0.0:
                     cnt += 1
-            shares += contact_share(cnt, n_points, total, hertz_k[g])
+            shares += contact_share(cnt, n_points, total, hertz_k)
             total += corner
             finite = finite and math.isfinite(jaw_angles_rad[g, j]) and math.isfinite(total)
             # written for every row; a failed row's are zeroed below

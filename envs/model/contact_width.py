@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+from numba import njit
 
 __all__ = ["hertz_arc_coefficient"]
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
 def hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio):
     """``k`` [N^-1/2] such that ``k sqrt(F)`` is the share of the contour in contact with a flat
     face pressed by a force ``F`` [N] (Hertz line contact, plane strain, see the module).
@@ -30,15 +31,12 @@ def hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_rati
     ----------
     radius_m, thickness_m, youngs_modulus_pa, poisson_ratio
         The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] (the modulus the grasp was solved with) and
-        ``nu`` [-]; scalars or arrays of one shape.
+        ``nu`` [-] (compiled: called per row by the design evaluator's metric loop).
 
     Returns
     -------
-    float or numpy.ndarray
+    float
         ``sqrt(4 / (pi^3 r t E*))`` with ``E* = E / (1 - nu^2)``.
     """
-    e_star = np.asarray(youngs_modulus_pa, dtype=float) / (
-        1.0 - np.asarray(poisson_ratio, dtype=float) ** 2)
-    k = np.sqrt(4.0 / (math.pi**3 * np.asarray(radius_m, dtype=float)
-                       * np.asarray(thickness_m, dtype=float) * e_star))
-    return float(k) if np.ndim(k) == 0 else k
+    e_star = youngs_modulus_pa / (1.0 - poisson_ratio * poisson_ratio)
+    return math.sqrt(4.0 / (math.pi**3 * radius_m * thickness_m * e_star))

@@ -161,10 +161,9 @@ def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
     else:
         n = _check_triangles(n_triangles, m, element)
     if calibrated is None:
-        try:
-            scale = calibration_scale(n, m, element)
-        except ValueError:
-            scale = 1.0
+        # (no try/except: raising for every fan costs a call ~2 us)
+        shipped = m in NHQUAD_SCALES if quad else (element == "cst" and (n, m) in CST_SCALES)
+        scale = calibration_scale(n, m, element) if shipped else 1.0
     elif isinstance(calibrated, bool):
         scale = calibration_scale(n, m, element) if calibrated else 1.0
     else:

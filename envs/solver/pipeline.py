@@ -105,6 +105,12 @@ class BatchSolution(NamedTuple):
 
 _OPTIONS = default_options()  # shared by every solve: the kernels only read it
 
+# per-row columns the finish writes for BatchSolution: counts (int64) and flags (bool)
+C_ITERATIONS, C_ROUNDS, C_INVERTED = range(3)
+N_COUNTS = 3
+F_CONVERGED, F_FOLDED, F_STABLE = range(3)
+N_FLAGS = 3
+
 
 @functools.cache
 def _prepare_kernels() -> None:
@@ -236,12 +242,25 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
 @njit(cache=True, error_model="numpy", nogil=True)
 def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
                  points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
-                 status):
+                 status, counts, flags, jaw):
+    """Finish rows ``start .. stop_row - 1``: SI answers, metrics, the check, the public
+    status, and the per-row columns of :class:`BatchSolution` (``counts`` and ``flags`` one
+    row a column, layouts ``C_*`` and ``F_*``; here rather than in numpy: a one-row call paid
+    ~5 us for a dozen small array operations)."""
     for b in range(start, stop_row):
-        status[b] = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b],
-                                lam_stop[b], infos[b], points[b], interior[b], face[b],
-                                corner[b], stop[b], totals[b], edges[b], metrics[b], ck[b],
-                                verdict[b])
+        st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
+                         infos[b], points[b], interior[b], face[b], corner[b], stop[b],
+                         totals[b], edges[b], metrics[b], ck[b], verdict[b])
+        status[b] = st
+        inverted = int(metrics[b, M_INVERTED])
+        counts[C_ITERATIONS, b] = int(infos[b, I_ITERATIONS])
+        counts[C_ROUNDS, b] = int(infos[b, I_ROUNDS])
+        counts[C_INVERTED, b] = inverted
+        flags[F_CONVERGED, b] = st == OK
+        flags[F_FOLDED, b] = inverted > 0 and verdict[b, check.OUT_PASSED] > 0.0
+        flags[F_STABLE, b] = infos[b, I_STABLE] != 0.0
+        jaw[b, 0] = xs[b, 2 * n]
+        jaw[b, 1] = xs[b, 2 * n + 1]
 
 
 def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
@@ -311,21 +330,23 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     ck = np.zeros((b, check.N_CK))
     verdict = np.zeros((b, check.N_OUT))
     status = np.empty(b, dtype=np.int64)
+    # one row per column (not per scene), so that each column is a contiguous array
+    counts = np.empty((N_COUNTS, b), dtype=np.int64)
+    flags = np.empty((N_FLAGS, b), dtype=np.bool_)
+    jaw = np.empty((b, 2))
     run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
-             interior, face, corner, stop, totals, edges, metrics, ck, verdict, status)
-    inverted = metrics[:, M_INVERTED].astype(np.int64)
-    passed = verdict[:, check.OUT_PASSED] > 0.0
+             interior, face, corner, stop, totals, edges, metrics, ck, verdict, status, counts,
+             flags, jaw)
     return BatchSolution(
-        status=status, converged=status == OK, folded=(inverted > 0) & passed,
-        iterations=infos[:, I_ITERATIONS].astype(np.int64),
-        rounds=infos[:, I_ROUNDS].astype(np.int64), stable=infos[:, I_STABLE] != 0.0,
-        jaw_angles_rad=xs[:, 2 * n : 2 * n + 2].copy(), points_m=points, face_forces_n=face,
+        status=status, converged=flags[F_CONVERGED], folded=flags[F_FOLDED],
+        iterations=counts[C_ITERATIONS], rounds=counts[C_ROUNDS],
+        stable=flags[F_STABLE], jaw_angles_rad=jaw, points_m=points, face_forces_n=face,
         corner_forces_n=corner, corner_totals_n=totals, corner_edges=edges,
         stop_torques_nm=stop, peak_strain=metrics[:, M_PEAK_STRAIN],
         peak_log_strain=metrics[:, M_PEAK_LOG_STRAIN],
         peak_compression=metrics[:, M_COMPRESSION],
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
-        energy_j=metrics[:, M_ENERGY], inverted=inverted, check=verdict,
+        energy_j=metrics[:, M_ENERGY], inverted=counts[C_INVERTED], check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,
         interior_points_m=interior,
     )
