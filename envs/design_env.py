@@ -348,12 +348,13 @@ class GripperDesignEnv(gym.Env):
     - w_gap g / (1 + g) - [invalid] (w_invalid + w_violation v / (1 + v))
     - w_fail [not converged]*
 
-    - `c`: contact score, `s (contacts on the right face + contacts on the left face) / N`,
-      the fraction of the contour in contact, nearly independent of `N`, times the grip share
-      `s`: the part of the actuation torque that grips the object, not taken by the torsion
-      springs or the joint stops (0 for fingers that merely touch it) (`w_contact = 1`,
-      `c_max = 0.5`);
-    - `eps`: peak spring strain, `eps_max` the object's strain limit (`w_deform = 0.25`,
+    - `c`: contact score, the fraction of the contour in contact (each face's share the
+      smaller of its pressed points over `N` and the Hertz width of its force, so a light
+      touch counts its physical width, not a facet) times the grip share `s`: the part of the
+      actuation torque that grips the object, not taken by the torsion springs or the joint
+      stops (0 for fingers that merely touch it) (`w_contact = 1`, `c_max = 0.5`);
+    - `eps`: peak compression, the largest shortening of a radius by the fingers over r (how
+      deep the grasp presses in), `eps_max` the object's strain limit (`w_deform = 0.25`,
       `q_max = 4`);
     - `m`: number of fingers that do not touch the disk (`w_miss = 0.5`);
     - `g`: the largest distance between a finger that does not touch and the disk, in disk
