@@ -30,7 +30,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .model.contact_width import hertz_arc_coefficient
+from .model.contact_width import contact_share, hertz_arc_coefficient
 from .model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_PHASE_RAD,
@@ -418,16 +418,17 @@ def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: 
 
 
 def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int,
-                cols: SceneColumns, model_scale: float) -> None:
+                cols: SceneColumns, material_scale: np.ndarray) -> None:
     """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
-    what happened; :func:`envs.scoring.psm_metrics_rows`); ``model_scale``: the member's
-    calibration factor in ``cols.stiffness_scale`` (the contact width takes the disk's own)."""
+    what happened; :func:`envs.scoring.psm_metrics_rows`); ``material_scale``: the rows' own
+    disk scale, without the member's calibration factor that ``cols.stiffness_scale`` carries
+    (the contact width takes the material's modulus)."""
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
         sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, sol.peak_strain,
         sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
-        cols.stiffness_scale / model_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
+        material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
         cols.rest_angle_rad, out["status"], out["converged"], out["iterations"], out["stable"],
         out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
         out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
@@ -502,11 +503,13 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
     # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
-    # with the physical E the FEM solves with)
-    k = np.array([hertz_arc_coefficient(r[DISK_RADIUS], r[DISK_THICKNESS], r[DISK_YOUNG],
-                                        r[DISK_POISSON]) for r in disk[rows]])
-    hertz = k[:, None] * np.sqrt(np.maximum(fem["face_force_n"], 0.0))
-    shares = np.minimum(fem["contact_fractions"], hertz).sum(axis=1)
+    # with the physical E the FEM solves with); NaN (not converged) stays NaN
+    shares = np.empty(rows.size)
+    for i, d in enumerate(disk[rows]):
+        k = hertz_arc_coefficient(d[DISK_RADIUS], d[DISK_THICKNESS], d[DISK_YOUNG],
+                                  d[DISK_POISSON])
+        shares[i] = sum(contact_share(float(f), float(force), k) for f, force in
+                        zip(fem["contact_fractions"][i], fem["face_force_n"][i], strict=True))
     with np.errstate(invalid="ignore"):
         grip = grip_share(cols, fem["jaw_angles_rad"], fem["stop_torques_nm"])
         metrics = {
@@ -547,6 +550,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
     out["n_triangles"][:] = n_tri
     out["strain_limit"][:] = limits
     out["status"][:] = NOT_SOLVED
+    material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
         disk = disk.copy()
         disk[:, DISK_SCALE] *= model_scale
@@ -570,7 +574,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
                             element=element)
-        _fill_group(out, rows, sol, n, group, model_scale)
+        _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
     if rows.size:

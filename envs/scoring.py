@@ -14,7 +14,7 @@ import math
 
 from numba import njit
 
-from .model.contact_width import hertz_arc_coefficient
+from .model.contact_width import contact_share, hertz_arc_coefficient
 from .solver.status import CHECK_FAILED
 
 # layout of the weights vector of :func:`reward_rows` (RewardWeights.vector())
@@ -59,15 +59,6 @@ def grip_share_rows(torque_nm, kf_nm_per_rad, rest_angle_rad, jaw_angles_rad, st
                              stop_torques_nm[i, 0], stop_torques_nm[i, 1])
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def contact_share(pressed, n_points, face_force_n, hertz_k):
-    """One face's share of the contour in contact: its pressed points over ``N``, at most the
-    Hertz width of its face force (:mod:`envs.model.contact_width`)."""
-    nodes = pressed / n_points
-    width = hertz_k * math.sqrt(face_force_n) if face_force_n > 0.0 else 0.0
-    return width if width < nodes else nodes
-
-
 @njit(cache=True, error_model="numpy", _nrt=False)
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
                      jaw_angles_rad, face_forces_n, corner_totals_n, stop_torques_nm,
@@ -83,7 +74,8 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     A row counts as converged when the solver says so and its float metrics are finite
     (otherwise ``CHECK_FAILED``); failed rows keep their zeros. Contacts are the points with a
     positive face force, a finger touches with a face contact or a corner force, and the
-    contact score is ``grip_share`` times the two faces' :func:`contact_share`, the Hertz width
+    contact score is ``grip_share`` times the two faces'
+    :func:`~envs.model.contact_width.contact_share`, the Hertz width
     (:func:`envs.model.contact_width.hertz_arc_coefficient`) with the modulus the row was
     solved with, ``material_scale`` times E (the disk's own scale, without a member's
     discretization scale).
@@ -108,7 +100,7 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                 total += f
                 if f > 0.0:
                     cnt += 1
-            shares += contact_share(cnt, n_points, total, hertz_k)
+            shares += contact_share(cnt / n_points, total, hertz_k)
             total += corner
             finite = finite and math.isfinite(jaw_angles_rad[g, j]) and math.isfinite(total)
             # written for every row; a failed row's are zeroed below

@@ -8,9 +8,9 @@ over ``2 b`` with ``b = sqrt(4 P r / (pi E*))`` (Hertz, plane strain ``E* = E / 
 the same formula as :func:`envs.fem.hertz.hertz_line_compression`). The share of the contour
 in contact with one face is then at most ``2 b / (2 pi r) = k sqrt(F)`` with ``F = P t`` and
 ``k`` from :func:`hertz_arc_coefficient`. The design evaluator counts each face's contact as
-the smaller of its pressed points (nodes) and this width, at both fidelities, so that a light
-touch scores its physical width and not the mesh's spacing; as the mesh refines, the count
-resolves the width and the cap stops binding.
+the smaller of its pressed points' (nodes') share and this width (:func:`contact_share`), at
+both fidelities, so that a light touch scores its physical width and not the mesh's spacing; as
+the mesh refines, the count resolves the width and the cap stops binding.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import math
 
 from numba import njit
 
-__all__ = ["hertz_arc_coefficient"]
+__all__ = ["hertz_arc_coefficient", "contact_share"]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -40,3 +40,11 @@ def hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_rati
     """
     e_star = youngs_modulus_pa / (1.0 - poisson_ratio * poisson_ratio)
     return math.sqrt(4.0 / (math.pi**3 * radius_m * thickness_m * e_star))
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def contact_share(node_share, face_force_n, hertz_k):
+    """One face's share of the contour in contact: the share its pressed points (nodes) stand
+    for, at most the Hertz width ``hertz_k sqrt(F)`` of its face force ``F`` [N]."""
+    width = hertz_k * math.sqrt(face_force_n) if face_force_n > 0.0 else 0.0
+    return width if width < node_share else node_share

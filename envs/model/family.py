@@ -112,21 +112,19 @@ def triangle_range(n_rings: int, element: str) -> tuple[int, int]:
 
 
 def _check_triangles(n_triangles, n_rings: int, element: str) -> int:
-    low, high = triangle_range(n_rings, element)
     if element == "spring" and n_rings == 1:
         return check_n_triangles(n_triangles)
-    if element == "spring":
-        n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY)
-        if not low <= n <= high:
-            raise ValueError(
-                f"n_triangles = {n} is outside the allowed range [{low}, {high}] for element "
-                f"'spring' with n_rings = {n_rings}: its cells would be "
-                f"{spring_cell_aspect(n, n_rings):.2f} times as deep as wide (allowed "
-                f"{1 / MAX_SPRING_CELL_ASPECT:.1f}-{MAX_SPRING_CELL_ASPECT:.1f}), where springs "
-                "lose the shear stiffness the model assumes; use more rings, or element "
-                "'nhquad' or 'cst' for a finer contour")
-        return n
-    return check_integer("n_triangles", n_triangles, low, high)
+    n = check_integer("n_triangles", n_triangles, MIN_TRIANGLES, MAX_TRIANGLES_FAMILY)
+    low, high = triangle_range(n_rings, element)
+    if not low <= n <= high:  # only a spring ring mesh has a narrower range
+        raise ValueError(
+            f"n_triangles = {n} is outside the allowed range [{low}, {high}] for element "
+            f"'spring' with n_rings = {n_rings}: its cells would be "
+            f"{spring_cell_aspect(n, n_rings):.2f} times as deep as wide (allowed "
+            f"{1 / MAX_SPRING_CELL_ASPECT:.1f}-{MAX_SPRING_CELL_ASPECT:.1f}), where springs "
+            "lose the shear stiffness the model assumes; use more rings, or element "
+            "'nhquad' or 'cst' for a finer contour")
+    return n
 
 
 def resolve_model(n_triangles=None, n_rings=None, element=DEFAULT_ELEMENT,
