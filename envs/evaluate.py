@@ -369,6 +369,14 @@ def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open:
         return np.full(batch, one, dtype=np.int64 if integer else np.float64)
     if arr.shape != (batch,):
         raise ValueError(f"{name} must be a scalar or have shape ({batch},), got {arr.shape}")
+    if not integer and arr.dtype.kind in "fiu":
+        # a numeric column (a vector env's strain limits each step): checked as one array; the
+        # row loop below only runs to name the first bad row
+        vals = arr.astype(np.float64)
+        with np.errstate(invalid="ignore"):
+            inside = (vals > low if low_open else vals >= low) & (vals <= high)
+        if np.all(inside & np.isfinite(vals)):
+            return vals
     out = np.empty(batch, dtype=np.int64 if integer else np.float64)
     for i, v in enumerate(arr.tolist()):
         out[i] = (check_integer(f"{name}[{i}]", v, int(low), int(high)) if integer

@@ -62,15 +62,24 @@ def _scatter_info(info: dict[str, Any], infos: list[dict[str, Any]]) -> None:
     trailing-shape keys become small arrays (views of a private copy, so they do not alias the
     vector env's buffers).
     """
+    # keys present for every env are written row by row with one dict.update each (a
+    # key-by-key loop costs a Python assignment per key and env: ~10k per step of 256 envs)
+    full_keys: list[str] = []
+    full_columns: list[list[Any]] = []
     for key, value in info.items():
         if key.startswith("_"):
             continue
         mask = info.get(f"_{key}")
-        rows = range(len(infos)) if mask is None else np.flatnonzero(mask).tolist()
         arr = np.asarray(value)
         values = arr.tolist() if arr.ndim == 1 and arr.dtype != object else list(arr.copy())
-        for i in rows:
+        if mask is None or np.all(mask):
+            full_keys.append(key)
+            full_columns.append(values)
+            continue
+        for i in np.flatnonzero(mask).tolist():
             infos[i][key] = values[i]
+    for env_info, row in zip(infos, zip(*full_columns, strict=True), strict=False):
+        env_info.update(zip(full_keys, row, strict=True))
 
 
 def _option_groups(options: list[dict[str, Any]]) -> list[tuple[dict[str, Any], list[int]]]:

@@ -218,6 +218,17 @@ def test_malformed_inputs_raise():
         evaluate_designs(paper_designs([0.1]), DISK, n_triangles=3, element="spring")
     with pytest.raises(ValueError):
         evaluate_designs(paper_designs([0.1]), DISK, strain_limits=0.0)
+    # a column of per-row values is checked as one array; a bad row is still named
+    limits = np.full(4, 0.1)
+    designs = paper_designs([0.1] * 4)
+    np.testing.assert_array_equal(
+        evaluate_designs(designs, DISK, strain_limits=limits)["strain_limit"], limits)
+    for bad in (0.0, 1.5, np.nan, np.inf):
+        limits[2] = bad
+        with pytest.raises(ValueError, match=r"strain_limits\[2\]"):
+            evaluate_designs(designs, DISK, strain_limits=limits)
+    with pytest.raises(ValueError, match=r"torsion_stiffness_nm_per_rad\[1\]"):
+        evaluate_designs(designs, DISK, torsion_stiffness_nm_per_rad=[0.07, -1.0, 0.07, 0.07])
 
 
 def test_bounds_scale_round_trip():
@@ -606,3 +617,34 @@ def test_fingers_that_merely_touch_score_no_contact():
     shares = np.minimum(squeeze["n_contacts"][0] / 40, k * np.sqrt(squeeze["total_force_n"][0]))
     assert squeeze["contact_score"][0] == pytest.approx(
         squeeze["grip_share"][0] * shares.sum(), rel=1e-12)
+
+
+def test_object_draws_follow_the_stated_distribution():
+    """Radius uniform over the listed radii, modulus log-uniform, strain limit uniform (KS
+    tests at 4000 draws), every draw inside its range; a degenerate range gives its value."""
+    from scipy import stats
+
+    from envs.design_env import ObjectDistribution
+
+    dist = ObjectDistribution(radii_m=(0.04, 0.06, 0.09, 0.12),
+                              youngs_modulus_range_pa=(2e4, 3e6), strain_limit_range=(0.05, 0.2))
+    rng = np.random.default_rng(5)
+    draws = [dist.sample(rng) for _ in range(4000)]
+    radii = np.array([d.radius_m for d, _ in draws])
+    moduli = np.array([d.youngs_modulus_pa for d, _ in draws])
+    limits = np.array([lim for _, lim in draws])
+    counts = np.array([np.count_nonzero(radii == r) for r in dist.radii_m])
+    assert counts.sum() == 4000
+    assert stats.chisquare(counts).pvalue > 1e-3
+    assert np.all((moduli >= 2e4) & (moduli <= 3e6))
+    u = (np.log(moduli) - math.log(2e4)) / (math.log(3e6) - math.log(2e4))
+    assert stats.kstest(u, "uniform").pvalue > 1e-3
+    assert stats.kstest((limits - 0.05) / 0.15, "uniform").pvalue > 1e-3
+    # the drawn disk is the radius' template with the drawn modulus: the rest is the
+    # distribution's
+    disk, _ = draws[0]
+    assert (disk.poisson_ratio, disk.thickness_m, disk.distance_m) == (0.45, 0.01, 0.0)
+    fixed = ObjectDistribution(radii_m=(0.07,), youngs_modulus_range_pa=(5e4, 5e4),
+                               strain_limit_range=(0.1, 0.1))
+    disk, limit = fixed.sample(rng)
+    assert disk.youngs_modulus_pa == pytest.approx(5e4, rel=1e-12) and limit == 0.1
