@@ -27,7 +27,7 @@ from .assembly import (
     _gauge_stretch,
 )
 from .banded import (
-    _factor_solve,
+    _solve_factored,
 )
 from .contact import (
     _all_gaps,
@@ -66,13 +66,13 @@ def _gauge_reanchor(x, prm, alpha):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _gauge_holds_saddle(x, n, prm, bidx, ab, bb, dd, lb, ybuf, shift, rb, rt, wb, wt):
+def _gauge_holds_saddle(x, n, prm, bidx, bb, dd, lb, ybuf, shift, rb, rt, wb, wt):
     """Does the gauge spring hold up a mode that is unstable without it?
 
     With W the Newton matrix (gauge included, positive definite with this ``shift``) and t the
     gauge's direction (point 0 along the contour's tangent), ``W - k t t^T`` is not positive
-    definite exactly when ``k t^T W^-1 t > 1`` (a rank-one downdate): one more factor and
-    solve of the matrix just built.
+    definite exactly when ``k t^T W^-1 t > 1`` (a rank-one downdate): one more solve with the
+    factor ``lb`` of W the caller has just made (with the same ``shift``).
 
     Returns
     -------
@@ -81,7 +81,7 @@ def _gauge_holds_saddle(x, n, prm, bidx, ab, bb, dd, lb, ybuf, shift, rb, rt, wb
         ``W^-1 t`` (points in band order, then the angles): the response to a tangential push
         on point 0, the shape of the unstable mode. ``rb``, ``rt`` are overwritten.
     """
-    nb = ab.shape[0]  # the fan's 2N rows (the gauge holds only the fan)
+    nb = lb.shape[0]  # the fan's 2N rows (the gauge holds only the fan)
     tx, ty, _ = _gauge_stretch(x, prm)
     for p in range(nb):
         rb[p] = 0.0
@@ -89,7 +89,7 @@ def _gauge_holds_saddle(x, n, prm, bidx, ab, bb, dd, lb, ybuf, shift, rb, rt, wb
     rb[bidx[0] + 1] = ty
     rt[0] = 0.0
     rt[1] = 0.0
-    if not _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, wb, wt):
+    if not _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, wb, wt):
         return 0.0
     return prm[P_GAUGE] * (tx * wb[bidx[0]] + ty * wb[bidx[0] + 1])
 
@@ -157,8 +157,8 @@ def _leave_saddle(x, n, prm, bidx, kinds, fj, fidx, mcount, shift, work):
 
     Returns whether ``x`` was moved (the gauge is then proximal).
     """
-    ratio = _gauge_holds_saddle(x, n, prm, bidx, work.ab, work.bb, work.dd, work.lb,
-                                work.ybuf, shift, work.rb, work.rt, work.wb, work.wt)
+    ratio = _gauge_holds_saddle(x, n, prm, bidx, work.bb, work.dd, work.lb, work.ybuf,
+                                shift, work.rb, work.rt, work.wb, work.wt)
     if not ratio > 1.0 + SADDLE_MARGIN:
         return False
     return _turn_from_saddle(x, work.xt, n, prm, bidx, kinds, fj, fidx, mcount, work.g,
