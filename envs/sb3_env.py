@@ -78,8 +78,9 @@ def _scatter_info(info: dict[str, Any], infos: list[dict[str, Any]]) -> None:
             continue
         for i in np.flatnonzero(mask).tolist():
             infos[i][key] = values[i]
-    for env_info, row in zip(infos, zip(*full_columns, strict=True), strict=False):
-        env_info.update(zip(full_keys, row, strict=True))
+    if full_keys:
+        for env_info, row in zip(infos, zip(*full_columns, strict=True), strict=True):
+            env_info.update(zip(full_keys, row, strict=True))
 
 
 def _option_groups(options: list[dict[str, Any]]) -> list[tuple[dict[str, Any], list[int]]]:

@@ -80,20 +80,24 @@ def measure(count: int, disk_name: str, n: int, seed: int) -> dict:
             continue
         rows.append((mirror_kind(base.points_m, disk.radius_m), base.iterations,
                      turned.iterations))
+    if not rows:
+        raise ValueError(f"none of the {count} random designs on {disk_name} is valid at rest "
+                         "and converged from both starts: draw more (--designs)")
     report = {"disk": disk_name, "n_triangles": n, "element": "spring", "designs": len(rows),
               "kinds": {}}
     its = np.array([r[1:] for r in rows], dtype=float).reshape(-1, 2)
     for kind in KINDS:
         sel = np.array([r[0] == kind for r in rows], dtype=bool)
         report["kinds"][kind] = {
-            "share": float(sel.mean()) if rows else 0.0,
+            "share": float(sel.mean()),
             "mean_iterations_default_start": float(its[sel, 0].mean()) if sel.any() else None,
             "mean_iterations_turned_start": float(its[sel, 1].mean()) if sel.any() else None,
         }
     report["mean_iterations_default_start"] = float(its[:, 0].mean())
     report["mean_iterations_best_of_two_starts"] = float(its.min(axis=1).mean())
     point = its[[r[0] == "point-centred" for r in rows], 0]
-    report["mean_iterations_if_all_cost_as_point_centred"] = float(point.mean())
+    report["mean_iterations_if_all_cost_as_point_centred"] = (float(point.mean()) if point.size
+                                                              else None)
     return report
 
 
@@ -119,7 +123,7 @@ def main(argv: list[str] | None = None) -> dict:
     ideal = report["mean_iterations_if_all_cost_as_point_centred"]
     print(f"mean: default start {report['mean_iterations_default_start']:.1f}, best of the two "
           f"starts (oracle) {report['mean_iterations_best_of_two_starts']:.1f}, every design as "
-          f"cheap as a point-centred one {ideal:.1f}")
+          f"cheap as a point-centred one {'-' if ideal is None else f'{ideal:.1f}'}")
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "saddle_classes.json"
     path.write_text(json.dumps(report, indent=2))

@@ -640,6 +640,9 @@ def test_object_draws_follow_the_stated_distribution():
     u = (np.log(moduli) - math.log(2e4)) / (math.log(3e6) - math.log(2e4))
     assert stats.kstest(u, "uniform").pvalue > 1e-3
     assert stats.kstest((limits - 0.05) / 0.15, "uniform").pvalue > 1e-3
+    # three independent draws, not one number reused (|r| ~ 0.016 for independent ones)
+    for a, b in ((radii, u), (radii, limits), (u, limits)):
+        assert abs(np.corrcoef(a, b)[0, 1]) < 0.08
     # the drawn disk is the radius' template with the drawn modulus: the rest is the
     # distribution's
     disk, _ = draws[0]

@@ -58,11 +58,15 @@ def test_rank_one_saddle_test_matches_the_dense_eigenvalues(scale, k_gauge):
     t = np.zeros(nb + 2)
     t[0], t[1] = -math.sin(prm[K.P_PHASE]), math.cos(prm[K.P_PHASE])
     wb, wt = np.zeros(nb), np.zeros(2)
-    ratio = K._gauge_holds_saddle(x, n, prm, bidx, ab, bb, dd, np.zeros((nb, K.BW + 1)),
-                                  np.zeros((nb, 2)), 0.0, np.zeros(nb), np.zeros(2), wb, wt)
-    if np.linalg.eigvalsh(w)[0] <= 0.0:
-        assert ratio == 0.0  # W itself not positive definite: no test
+    # the interior point tests the matrix it has just factored (and only one it could factor)
+    lb, ybuf = np.zeros((nb, K.BW + 1)), np.zeros((nb, 2))
+    factored = K._factor_solve(ab, bb, dd, lb, ybuf, nb, 0.0, np.zeros(nb), np.zeros(2),
+                               np.zeros(nb), np.zeros(2))
+    assert factored == (np.linalg.eigvalsh(w)[0] > 0.0)
+    if not factored:
         return
+    ratio = K._gauge_holds_saddle(x, n, prm, bidx, bb, dd, lb, ybuf, 0.0, np.zeros(nb),
+                                  np.zeros(2), wb, wt)
     sol = np.linalg.solve(w, t)
     assert ratio == pytest.approx(k_gauge * t @ sol, rel=1e-9)
     # W^-1 t, the unstable mode's shape, in band order (perm: natural dof -> band index)
