@@ -572,3 +572,35 @@ def test_nhquad_members_converge_to_the_fem_under_refinement(poisson_ratio):
     assert rate > 1.2, (rms, rate)
     assert rms[-1] < 0.005, rms  # within 0.5 % of the FEM closing angle, with no fit
     assert rms[-1] < rms[0] / 10, rms
+
+
+@pytest.mark.parametrize("bw", [1, 2, 5, 11, 17])
+def test_scalar_banded_cholesky_matches_the_dense_factor(bw):
+    """The ring meshes' banded Cholesky (two partial sums per dot product) against numpy's
+    dense factor, every parity of the dot products' lengths included; an indefinite matrix
+    is refused."""
+    from envs.solver.banded import _chol_general
+
+    rng = np.random.default_rng(bw)
+    nb = 4 * bw + 7
+    full = np.zeros((nb, nb))
+    for d in range(1, bw + 1):
+        off = rng.standard_normal(nb - d)
+        full += np.diag(off, -d) + np.diag(off, d)
+    full += np.eye(nb) * (2.0 * bw + 1.0)
+    ab = np.zeros((nb, bw + 1))
+    for j in range(nb):
+        for d in range(min(j, bw) + 1):
+            ab[j, d] = full[j, j - d]
+    shift = 0.25
+    lb = np.zeros_like(ab)
+    assert _chol_general(ab, lb, nb, shift)
+    want = np.linalg.cholesky(full + shift * np.eye(nb))
+    got = np.zeros((nb, nb))
+    for j in range(nb):
+        got[j, j] = 1.0 / lb[j, bw]  # the diagonal is kept as its reciprocal
+        for k in range(max(0, j - bw), j):
+            got[j, k] = lb[j, bw - j + k]
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    ab[nb // 2, 0] = -10.0 * nb  # one diagonal entry made hugely negative
+    assert not _chol_general(ab, np.zeros_like(ab), nb, shift)

@@ -179,14 +179,32 @@ def _chol_general(ab, lb, nb, shift):
         oj = bw - j  # lb[j, oj + k] = L[j, k]
         for i in range(j0, j):
             oi = bw - i
-            s = ab[j, j - i]
-            for k in range(max(j0, i - bw), i):
-                s -= lb[j, oj + k] * lb[i, oi + k]
-            lb[j, oj + i] = s * lb[i, bw]
-        d = ab[j, 0] + shift
-        for k in range(j0, j):
-            v = lb[j, oj + k]
-            d -= v * v
+            # two partial sums (even and odd k): one running sum is a chain of dependent
+            # subtractions, latency-bound (the factor of a 2-ring mesh took 18.7 us, 12.3 with
+            # two)
+            s0 = ab[j, j - i]
+            s1 = 0.0
+            k = max(j0, i - bw)
+            while k + 1 < i:
+                s0 -= lb[j, oj + k] * lb[i, oi + k]
+                s1 -= lb[j, oj + k + 1] * lb[i, oi + k + 1]
+                k += 2
+            if k < i:
+                s0 -= lb[j, oj + k] * lb[i, oi + k]
+            lb[j, oj + i] = (s0 + s1) * lb[i, bw]
+        d0 = ab[j, 0] + shift
+        d1 = 0.0
+        k = j0
+        while k + 1 < j:
+            v0 = lb[j, oj + k]
+            v1 = lb[j, oj + k + 1]
+            d0 -= v0 * v0
+            d1 -= v1 * v1
+            k += 2
+        if k < j:
+            v0 = lb[j, oj + k]
+            d0 -= v0 * v0
+        d = d0 + d1
         if not d > 0.0:
             return False
         lb[j, bw] = 1.0 / math.sqrt(d)
