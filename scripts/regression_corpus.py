@@ -9,7 +9,12 @@ Stores in ``tests/data/regression_corpus.npz``:
   :func:`envs.evaluate_designs`: status, converged flag, jaw angles, contacts, peak strain and
   reward of each row;
 * every preset at four torques through :func:`envs.simulate` (N = 20, and N = 8 / 40 on
-  paper-r070): converged flag, jaw angles, contour points and face forces.
+  paper-r070): converged flag, jaw angles, contour points and face forces;
+* the default model (nh-quad, 40 points on 2 rings, its shipped calibration): 700 random designs
+  of the object-relative box (:class:`envs.DesignBounds`) on the three paper disks, and every
+  preset at three torques, with the same answers (keys ``default_*``). The fan rows above were
+  stored when the fan was the default; the ring meshes have their own kernels (element energies,
+  the scalar banded factor), which these rows pin.
 
 ``tests/test_regression.py`` recomputes every answer and compares. Rerun this script only for
 an intended change of answers, and say in the commit which rows changed and why.
@@ -35,6 +40,10 @@ EXTRA_N = {"paper-r070": (8, 40)}
 CORPUS_LOW = np.array([0.05, np.radians(15.0), 0.0, 0.002, 0.0, 0.0])
 CORPUS_HIGH = np.array([0.30, np.radians(75.0), 0.05, 0.03, 1.0, 0.06])
 DESIGN_KEYS = ("status", "converged", "jaw_angles_rad", "n_contacts", "peak_strain", "reward")
+DEFAULT_SEED = 20261125
+DEFAULT_DESIGN_ROWS = {"paper-r070": 300, "paper-r050": 200, "paper-r100": 200}
+DEFAULT_TORQUES_REL = (0.2, 0.5, 1.0)  # of the preset's reference torque
+DEFAULT_DESIGN_KEYS = DESIGN_KEYS + ("peak_compression", "contact_score")
 
 
 def design_inputs() -> tuple[np.ndarray, np.ndarray]:
@@ -69,6 +78,51 @@ def simulate_case(name: str, torque_nm: float, n: int):
     return envs.simulate(envs.Scene.preset(name), torque_nm, n, element="spring")
 
 
+def default_design_inputs() -> tuple[np.ndarray, np.ndarray]:
+    """Designs (B, 6) of the object-relative box and the preset name of each row's disk."""
+    rng = np.random.default_rng(DEFAULT_SEED)
+    rows, names = [], []
+    for name, count in DEFAULT_DESIGN_ROWS.items():
+        rows.append(envs.DesignBounds().sample(rng, count, envs.Scene.preset(name).disk))
+        names.extend([name] * count)
+    return np.concatenate(rows), np.array(names)
+
+
+def evaluate_default_designs(designs: np.ndarray, names: np.ndarray) -> dict[str, np.ndarray]:
+    """Evaluate designs with the default model, each on its preset's disk."""
+    disks = [envs.Scene.preset(str(name)).disk for name in names]
+    return envs.evaluate_designs(designs, disks)
+
+
+def default_preset_cases() -> list[tuple[str, float]]:
+    """(preset, torque [N·m]) of every default-model simulate case."""
+    return [(name, rel * REFERENCE_TORQUE_NM[name.split("-")[0]])
+            for name in sorted(envs.PRESETS) for rel in DEFAULT_TORQUES_REL]
+
+
+def simulate_default_case(name: str, torque_nm: float):
+    """The default model's simulate answer of one case."""
+    return envs.simulate(envs.Scene.preset(name), torque_nm)
+
+
+def default_model_data() -> dict[str, np.ndarray]:
+    """The default model's rows of the corpus (keys ``default_*``)."""
+    designs, names = default_design_inputs()
+    out = evaluate_default_designs(designs, names)
+    data = {"default_designs": designs, "default_disks": names}
+    data.update({f"default_design_{k}": out[k] for k in DEFAULT_DESIGN_KEYS})
+    cases = default_preset_cases()
+    results = [simulate_default_case(*c) for c in cases]
+    data["default_case_names"] = np.array([c[0] for c in cases])
+    data["default_case_torques_nm"] = np.array([c[1] for c in cases])
+    data["default_case_converged"] = np.array([r.converged for r in results])
+    data["default_case_jaw_angles_rad"] = np.array([r.jaw_angles_rad for r in results])
+    data["default_case_points_m"] = np.array([r.points_m for r in results])
+    data["default_case_interior_points_m"] = np.array([r.interior_points_m for r in results])
+    data["default_case_face_forces_n"] = np.array([r.contact_forces_n for r in results])
+    return data
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="tests/data/regression_corpus.npz")
@@ -87,11 +141,16 @@ def main() -> None:
     # ragged (N differs): stored flat with offsets
     data["case_points_m"] = np.concatenate([r.points_m.ravel() for r in results])
     data["case_face_forces_n"] = np.concatenate([r.contact_forces_n.ravel() for r in results])
+    data.update(default_model_data())
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
     conv = int(out["converged"].sum())
     print(f"{args.out}: {len(designs)} designs ({conv} converged), {len(cases)} simulate cases "
-          f"({int(data['case_converged'].sum())} converged)")
+          f"({int(data['case_converged'].sum())} converged); default model: "
+          f"{data['default_designs'].shape[0]} designs "
+          f"({int(data['default_design_converged'].sum())} converged), "
+          f"{data['default_case_names'].size} simulate cases "
+          f"({int(data['default_case_converged'].sum())} converged)")
 
 
 if __name__ == "__main__":

@@ -76,3 +76,39 @@ def test_preset_answers_unchanged(corpus, gen):
                                    err_msg=f"{name} {torque} {n}")
         offset_p += 2 * n
         offset_f += 2 * n
+
+
+def test_default_model_inputs_are_reproducible(corpus, gen):
+    designs, names = gen.default_design_inputs()
+    np.testing.assert_array_equal(designs, corpus["default_designs"])
+    np.testing.assert_array_equal(names, corpus["default_disks"])
+    assert len(gen.default_preset_cases()) == corpus["default_case_names"].size
+
+
+def test_default_model_design_answers_unchanged(corpus, gen):
+    out = gen.evaluate_default_designs(corpus["default_designs"], corpus["default_disks"])
+    for key in ("status", "converged", "n_contacts"):
+        np.testing.assert_array_equal(out[key], corpus[f"default_design_{key}"], err_msg=key)
+    for key in ("jaw_angles_rad", "peak_strain", "reward", "peak_compression", "contact_score"):
+        np.testing.assert_allclose(out[key], corpus[f"default_design_{key}"], rtol=0, atol=TOL,
+                                   err_msg=key)
+    # not trivial: nearly every design of the object-relative box is a converged grasp
+    assert corpus["default_design_converged"].mean() > 0.9
+
+
+def test_default_model_preset_answers_unchanged(corpus, gen):
+    for k, (name, torque) in enumerate(gen.default_preset_cases()):
+        res = gen.simulate_default_case(name, torque)
+        radius = envs.Scene.preset(name).disk.radius_m
+        where = f"{name} {torque}"
+        assert res.converged == bool(corpus["default_case_converged"][k]), where
+        np.testing.assert_allclose(res.jaw_angles_rad, corpus["default_case_jaw_angles_rad"][k],
+                                   rtol=0, atol=TOL, err_msg=where)
+        for key, got in (("points_m", res.points_m),
+                         ("interior_points_m", res.interior_points_m)):
+            np.testing.assert_allclose(got, corpus[f"default_case_{key}"][k], rtol=0,
+                                       atol=TOL * radius, err_msg=f"{where} {key}")
+        face = corpus["default_case_face_forces_n"][k]
+        scale = max(float(np.abs(face).max()), 1e-30)
+        np.testing.assert_allclose(res.contact_forces_n, face, rtol=0, atol=1e-7 * scale,
+                                   err_msg=where)
