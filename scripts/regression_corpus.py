@@ -105,6 +105,15 @@ def simulate_default_case(name: str, torque_nm: float):
     return envs.simulate(envs.Scene.preset(name), torque_nm)
 
 
+def _case_data(prefix: str, cases: list[tuple], results: list) -> dict[str, np.ndarray]:
+    """Keys ``<prefix>case_*`` of simulate cases: names, torques, converged flags, jaw angles
+    (points and forces are stored by the caller: ragged for the fan's several N)."""
+    return {f"{prefix}case_names": np.array([c[0] for c in cases]),
+            f"{prefix}case_torques_nm": np.array([c[1] for c in cases]),
+            f"{prefix}case_converged": np.array([r.converged for r in results]),
+            f"{prefix}case_jaw_angles_rad": np.array([r.jaw_angles_rad for r in results])}
+
+
 def default_model_data() -> dict[str, np.ndarray]:
     """The default model's rows of the corpus (keys ``default_*``)."""
     designs, names = default_design_inputs()
@@ -113,10 +122,7 @@ def default_model_data() -> dict[str, np.ndarray]:
     data.update({f"default_design_{k}": out[k] for k in DEFAULT_DESIGN_KEYS})
     cases = default_preset_cases()
     results = [simulate_default_case(*c) for c in cases]
-    data["default_case_names"] = np.array([c[0] for c in cases])
-    data["default_case_torques_nm"] = np.array([c[1] for c in cases])
-    data["default_case_converged"] = np.array([r.converged for r in results])
-    data["default_case_jaw_angles_rad"] = np.array([r.jaw_angles_rad for r in results])
+    data.update(_case_data("default_", cases, results))
     data["default_case_points_m"] = np.array([r.points_m for r in results])
     data["default_case_interior_points_m"] = np.array([r.interior_points_m for r in results])
     data["default_case_face_forces_n"] = np.array([r.contact_forces_n for r in results])
@@ -133,11 +139,8 @@ def main() -> None:
     data.update({f"design_{k}": out[k] for k in DESIGN_KEYS})
     cases = preset_cases()
     results = [simulate_case(*c) for c in cases]
-    data["case_names"] = np.array([c[0] for c in cases])
-    data["case_torques_nm"] = np.array([c[1] for c in cases])
+    data.update(_case_data("", cases, results))
     data["case_n"] = np.array([c[2] for c in cases])
-    data["case_converged"] = np.array([r.converged for r in results])
-    data["case_jaw_angles_rad"] = np.array([r.jaw_angles_rad for r in results])
     # ragged (N differs): stored flat with offsets
     data["case_points_m"] = np.concatenate([r.points_m.ravel() for r in results])
     data["case_face_forces_n"] = np.concatenate([r.contact_forces_n.ravel() for r in results])
