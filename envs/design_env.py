@@ -190,9 +190,8 @@ def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
 
 def _object_info(disk: SoftDisk, strain_limit: float) -> dict[str, float]:
     # the disk's fields named in OBJECT_INFO_KEYS, then the strain limit (as _object_table)
-    info = {key: getattr(disk, key) for key in OBJECT_INFO_KEYS[:-1]}
-    info["strain_limit"] = float(strain_limit)
-    return info
+    return {**dict(zip(OBJECT_INFO_KEYS[:-1], _OBJECT_FIELDS(disk), strict=True)),
+            "strain_limit": float(strain_limit)}
 
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:

@@ -76,9 +76,9 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     positive face force, a finger touches with a face contact or a corner force, and the
     contact score is ``grip_share`` times the two faces'
     :func:`~envs.model.contact_width.contact_share`, the Hertz width
-    (:func:`envs.model.contact_width.hertz_arc_coefficient`) with the modulus the row was
-    solved with, ``material_scale`` times E (the disk's own scale, without a member's
-    discretization scale).
+    (:func:`envs.model.contact_width.hertz_arc_coefficient`) with the object's modulus,
+    ``material_scale`` times E: the disk's own scale, not a member's discretization scale
+    (which the solve's stiffness carries, and which is not part of the material).
     """
     for g in range(rows.shape[0]):
         r = rows[g]

@@ -105,24 +105,44 @@ def simulate_default_case(name: str, torque_nm: float):
     return envs.simulate(envs.Scene.preset(name), torque_nm)
 
 
-def _case_data(prefix: str, cases: list[tuple], results: list) -> dict[str, np.ndarray]:
-    """Keys ``<prefix>case_*`` of simulate cases: names, torques, converged flags, jaw angles
-    (points and forces are stored by the caller: ragged for the fan's several N)."""
-    return {f"{prefix}case_names": np.array([c[0] for c in cases]),
-            f"{prefix}case_torques_nm": np.array([c[1] for c in cases]),
-            f"{prefix}case_converged": np.array([r.converged for r in results]),
-            f"{prefix}case_jaw_angles_rad": np.array([r.jaw_angles_rad for r in results])}
+def _rows_data(prefix: str, designs: np.ndarray, disk_key: str, disks: np.ndarray,
+               out: dict[str, np.ndarray], keys: tuple[str, ...], cases: list[tuple],
+               results: list) -> dict[str, np.ndarray]:
+    """One member's design rows (``<prefix>designs``, the disks under ``disk_key``, the
+    answers ``<prefix>design_<key>``) and the common keys of its simulate cases
+    (``<prefix>case_*``: names, torques, converged flags, jaw angles; points and forces are
+    stored by the caller, ragged for the fan's several N)."""
+    data = {f"{prefix}designs": designs, disk_key: disks}
+    data.update({f"{prefix}design_{k}": out[k] for k in keys})
+    data[f"{prefix}case_names"] = np.array([c[0] for c in cases])
+    data[f"{prefix}case_torques_nm"] = np.array([c[1] for c in cases])
+    data[f"{prefix}case_converged"] = np.array([r.converged for r in results])
+    data[f"{prefix}case_jaw_angles_rad"] = np.array([r.jaw_angles_rad for r in results])
+    return data
+
+
+def fan_data() -> dict[str, np.ndarray]:
+    """The fan's rows of the corpus."""
+    designs, radii = design_inputs()
+    cases = preset_cases()
+    results = [simulate_case(*c) for c in cases]
+    data = _rows_data("", designs, "radii", radii, evaluate_corpus_designs(designs, radii),
+                      DESIGN_KEYS, cases, results)
+    data["case_n"] = np.array([c[2] for c in cases])
+    # ragged (N differs): stored flat with offsets
+    data["case_points_m"] = np.concatenate([r.points_m.ravel() for r in results])
+    data["case_face_forces_n"] = np.concatenate([r.contact_forces_n.ravel() for r in results])
+    return data
 
 
 def default_model_data() -> dict[str, np.ndarray]:
     """The default model's rows of the corpus (keys ``default_*``)."""
     designs, names = default_design_inputs()
-    out = evaluate_default_designs(designs, names)
-    data = {"default_designs": designs, "default_disks": names}
-    data.update({f"default_design_{k}": out[k] for k in DEFAULT_DESIGN_KEYS})
     cases = default_preset_cases()
     results = [simulate_default_case(*c) for c in cases]
-    data.update(_case_data("default_", cases, results))
+    data = _rows_data("default_", designs, "default_disks", names,
+                      evaluate_default_designs(designs, names), DEFAULT_DESIGN_KEYS, cases,
+                      results)
     data["default_case_points_m"] = np.array([r.points_m for r in results])
     data["default_case_interior_points_m"] = np.array([r.interior_points_m for r in results])
     data["default_case_face_forces_n"] = np.array([r.contact_forces_n for r in results])
@@ -133,23 +153,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="tests/data/regression_corpus.npz")
     args = parser.parse_args()
-    designs, radii = design_inputs()
-    out = evaluate_corpus_designs(designs, radii)
-    data = {"designs": designs, "radii": radii}
-    data.update({f"design_{k}": out[k] for k in DESIGN_KEYS})
-    cases = preset_cases()
-    results = [simulate_case(*c) for c in cases]
-    data.update(_case_data("", cases, results))
-    data["case_n"] = np.array([c[2] for c in cases])
-    # ragged (N differs): stored flat with offsets
-    data["case_points_m"] = np.concatenate([r.points_m.ravel() for r in results])
-    data["case_face_forces_n"] = np.concatenate([r.contact_forces_n.ravel() for r in results])
-    data.update(default_model_data())
+    data = {**fan_data(), **default_model_data()}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
-    conv = int(out["converged"].sum())
-    print(f"{args.out}: {len(designs)} designs ({conv} converged), {len(cases)} simulate cases "
-          f"({int(data['case_converged'].sum())} converged); default model: "
+    print(f"{args.out}: {data['designs'].shape[0]} designs "
+          f"({int(data['design_converged'].sum())} converged), {data['case_n'].size} simulate "
+          f"cases ({int(data['case_converged'].sum())} converged); default model: "
           f"{data['default_designs'].shape[0]} designs "
           f"({int(data['default_design_converged'].sum())} converged), "
           f"{data['default_case_names'].size} simulate cases "

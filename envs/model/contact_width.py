@@ -30,7 +30,8 @@ def hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_rati
     Parameters
     ----------
     radius_m, thickness_m, youngs_modulus_pa, poisson_ratio
-        The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] (the modulus the grasp was solved with) and
+        The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] (the object's modulus: the FEM's physical
+        E, the PSM's disk stiffness scale times E, without a member's discretization scale) and
         ``nu`` [-] (compiled: called per row by the design evaluator's metric loop).
 
     Returns
