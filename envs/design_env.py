@@ -27,9 +27,9 @@ from .evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from .model.defaults import DEFAULT_ELEMENT, PAPER_TORSION_STIFFNESS_NM_PER_RAD
+from .model.defaults import DEFAULT_ELEMENT
 from .model.family import ModelSpec, resolve_model
-from .scene import Design, SoftDisk
+from .scene import Design, SoftDisk, joint_spring
 from .validation import check_range
 
 __all__ = [
@@ -249,6 +249,15 @@ def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element
                                     DEFAULT_ELEMENT if element is None else element, calibrated))
 
 
+def _spring_kwargs(rel, absolute) -> dict[str, float]:
+    """The joint spring as the keyword argument of :func:`~envs.evaluate.evaluate_designs`
+    (validated by :func:`envs.scene.joint_spring`; default: relative to each object)."""
+    rel, absolute = joint_spring(rel, absolute)
+    if rel is None:
+        return {"torsion_stiffness_nm_per_rad": absolute}
+    return {"torsion_stiffness_rel": rel}
+
+
 def _spaces() -> tuple[spaces.Box, spaces.Box]:
     action = spaces.Box(-1.0, 1.0, shape=(N_DESIGN,), dtype=np.float32)
     obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
@@ -263,7 +272,7 @@ def _info_value(v: np.ndarray):
 
 
 def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float,
-                  model: ModelSpec, torsion: float, cache: dict) -> np.ndarray:
+                  model: ModelSpec, spring: dict[str, float], cache: dict) -> np.ndarray:
     """Off-screen frame (uint8 H x W x 3) of a design on a disk; re-solves with simulate()."""
     from matplotlib.figure import Figure
 
@@ -279,13 +288,13 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
     chosen = Design.from_array(design)
     try:
         # the one Design -> Scene mapping, the one evaluate_designs scored
-        scene = chosen.to_scene(disk, torsion)
+        scene = chosen.to_scene(disk, **spring)
     except ValueError as exc:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
         draw_design(fig.add_subplot(), design, disk.radius_m,
                     title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
         return figure_rgb_array(fig)
-    key = (tuple(design.tolist()), disk, model, torsion)
+    key = (tuple(design.tolist()), disk, model, tuple(spring.items()))
     if cache.get("key") != key:
         cache.clear()
         cache["key"], cache["result"] = key, simulate(scene, chosen.torque_nm,
@@ -415,8 +424,11 @@ class GripperDesignEnv(gym.Env):
       `N = 40` contour points, 2 rings and its shipped calibration, within 2 % RMS and 4 % max
       of the FEM closing angle; `element="spring"` is the paper's fan with `N = 20`, about 5x
       cheaper and 30-40 % off the FEM at `s = 1`). `self.model` holds the resolved member.
-    - `torsion_stiffness_nm_per_rad`: joint torsion spring `k_f` [N·m/rad] (default: the paper
-      gripper's 0.073).
+    - `torsion_stiffness_rel`: joint torsion spring `k_f` in the object's torque unit
+      `s E t r^2` per radian (default: the paper gripper's 0.073 N·m/rad on its r = 0.07 m
+      disk, 0.0149 per radian: the spring scales with each object like the torque, so an
+      action means the same grasp for every object); `torsion_stiffness_nm_per_rad`: an
+      absolute spring [N·m/rad] instead. `self.joint_spring` holds the one given.
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
@@ -440,7 +452,8 @@ class GripperDesignEnv(gym.Env):
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
         n_triangles: int | None = None,
-        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        torsion_stiffness_rel: float | None = None,
+        torsion_stiffness_nm_per_rad: float | None = None,
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
@@ -451,9 +464,7 @@ class GripperDesignEnv(gym.Env):
         self.render_mode = render_mode
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
-        self.torsion_stiffness_nm_per_rad = check_range(
-            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
-            low_open=True)
+        self.joint_spring = _spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces()
         self._disk: SoftDisk | None = None
         self._strain_limit = 0.0
@@ -489,8 +500,7 @@ class GripperDesignEnv(gym.Env):
         design = self.bounds.scale(act, self._disk)
         out = evaluate_designs(
             design[None, :], self._disk, strain_limits=self._strain_limit,
-            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
-            weights=self.weights, **self.model.kwargs(),
+            weights=self.weights, **self.joint_spring, **self.model.kwargs(),
         )
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
@@ -508,7 +518,7 @@ class GripperDesignEnv(gym.Env):
         if self._disk is None:
             raise ResetNeeded("call reset() before render()")
         frame = _render_frame(self._last_design, self._disk, self._strain_limit,
-                              self.model, self.torsion_stiffness_nm_per_rad,
+                              self.model, self.joint_spring,
                               self._render_cache)
         if self.render_mode == "rgb_array":
             return frame
@@ -569,8 +579,8 @@ class GripperDesignVectorEnv(VectorEnv):
         Number of sub-environments.
     render_mode
         ``None`` or ``"rgb_array"`` (``render()`` returns one frame per sub-env).
-    bounds, distribution, weights, n_triangles, torsion_stiffness_nm_per_rad, n_rings, element,
-    calibrated
+    bounds, distribution, weights, n_triangles, torsion_stiffness_rel,
+    torsion_stiffness_nm_per_rad, n_rings, element, calibrated
         As for :class:`GripperDesignEnv`.
     max_episode_steps
         ``None`` (the registered value) or an integer >= 1; see ``truncated`` above.
@@ -590,7 +600,8 @@ class GripperDesignVectorEnv(VectorEnv):
         distribution: ObjectDistribution | None = None,
         weights: RewardWeights | None = None,
         n_triangles: int | None = None,
-        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        torsion_stiffness_rel: float | None = None,
+        torsion_stiffness_nm_per_rad: float | None = None,
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
@@ -610,9 +621,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
-        self.torsion_stiffness_nm_per_rad = check_range(
-            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
-            low_open=True)
+        self.joint_spring = _spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.max_episode_steps = max_episode_steps
         self.single_action_space, self.single_observation_space = _spaces()
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -680,8 +689,7 @@ class GripperDesignVectorEnv(VectorEnv):
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_designs(
             designs, [self._disks[i] for i in rows.tolist()], strain_limits=self._limits[rows],
-            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
-            weights=self.weights, **self.model.kwargs(),
+            weights=self.weights, **self.joint_spring, **self.model.kwargs(),
         )
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
@@ -770,7 +778,7 @@ class GripperDesignVectorEnv(VectorEnv):
             raise ResetNeeded("call reset() before render()")
         return tuple(
             _render_frame(self._last_designs[i], self._disks[i], float(self._limits[i]),
-                          self.model, self.torsion_stiffness_nm_per_rad,
+                          self.model, self.joint_spring,
                           self._render_caches[i])
             for i in range(self.num_envs)
         )

@@ -37,7 +37,7 @@ from .model.defaults import (
     DEFAULT_STRAIN_LIMIT,
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
-    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+    PAPER_TORSION_STIFFNESS_REL,
 )
 from .model.family import resolve_model, triangle_range
 from .model.geometry import bar_distance
@@ -384,6 +384,23 @@ def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open:
     return out
 
 
+def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
+    """The joint spring ``k_f`` [N·m/rad] of every row: an absolute one as given, a relative
+    one (default :data:`PAPER_TORSION_STIFFNESS_REL`) times the row's torque unit ``s E t r^2``
+    with the disk's own scale (see :func:`envs.scene.joint_spring`)."""
+    if absolute is not None:
+        if rel is not None:
+            raise ValueError("give the joint spring once: torsion_stiffness_rel (relative to the "
+                             "object) or torsion_stiffness_nm_per_rad (absolute), not both")
+        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0, math.inf,
+                        low_open=True)
+    rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,
+                   batch, 0.0, math.inf, low_open=True)
+    unit = (disk[:, DISK_SCALE] * disk[:, DISK_YOUNG] * disk[:, DISK_THICKNESS]
+            * disk[:, DISK_RADIUS] ** 2)
+    return rel * unit
+
+
 # ---------------------------------------------------------------------------------------------
 # scenes, solve and metrics
 
@@ -619,7 +636,8 @@ def evaluate_designs(
     designs,
     disks,
     *,
-    torsion_stiffness_nm_per_rad=PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+    torsion_stiffness_rel=None,
+    torsion_stiffness_nm_per_rad=None,
     n_triangles=None,
     weights: RewardWeights | None = None,
     strain_limits=None,
@@ -642,8 +660,18 @@ def evaluate_designs(
         One :class:`~envs.scene.SoftDisk` for all rows or a sequence of B disks. Their radius,
         material and thickness are used; their ``distance_m`` is replaced by the design's
         ``distance_m`` column.
+    torsion_stiffness_rel
+        Joint torsion spring ``k_f`` relative to each row's object: in its torque unit
+        ``s E t r^2`` per radian [1/rad] (:attr:`~envs.scene.SoftDisk.torque_unit_nm`, with the
+        disk's own ``s``), > 0; scalar or shape (B,). The default (with
+        ``torsion_stiffness_nm_per_rad`` also ``None``) is the paper gripper's 0.073 N·m/rad on
+        its r = 0.07 m disk, 0.0149 per radian
+        (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`): the spring scales like the
+        torque, so a relative design scores the same on every object whatever its size and
+        stiffness (the model is scale invariant).
     torsion_stiffness_nm_per_rad
-        Joint torsion spring ``k_f`` [N·m/rad], > 0; scalar or shape (B,).
+        An absolute joint spring ``k_f`` [N·m/rad] instead, > 0; scalar or shape (B,). Not
+        with ``torsion_stiffness_rel``.
     n_triangles
         Contour points ``N``; scalar or shape (B,); ``None``: the member's default. Rows are
         grouped by N and each group is solved with one call of
@@ -778,8 +806,7 @@ def evaluate_designs(
     model = (spec.n_rings, spec.element, spec.scale)
     limits = _per_row("strain_limits", DEFAULT_STRAIN_LIMIT if strain_limits is None
                       else strain_limits, batch, 0.0, 1.0, low_open=True)
-    kf = _per_row("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, batch, 0.0,
-                  math.inf, low_open=True)
+    kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:

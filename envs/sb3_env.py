@@ -200,7 +200,7 @@ class _BatchedVecEnvMethods:
 
     # --- attributes and methods ----------------------------------------------------------------
     # The sub-envs are rows of ONE batched env, so their attributes (bounds, distribution,
-    # weights, n_triangles, torsion_stiffness_nm_per_rad, render_mode, ...) are shared: reading
+    # weights, n_triangles, joint_spring, render_mode, ...) are shared: reading
     # returns the shared value for each index, writing or calling affects every sub-env and is
     # therefore refused for a strict subset of them rather than silently applied to all.
 
@@ -266,7 +266,9 @@ _CLASS_DOC = """A stable-baselines3 ``VecEnv`` of GripperDesign-v0 stepped with 
         Number of sub-environments, >= 1.
     **env_kwargs
         ``render_mode``, ``bounds``, ``distribution``, ``weights``, ``n_triangles``,
-        ``torsion_stiffness_nm_per_rad``: as for :class:`~envs.design_env.GripperDesignVectorEnv`.
+        ``torsion_stiffness_rel`` (the joint spring relative to each object, the default) or
+        ``torsion_stiffness_nm_per_rad`` (absolute), ...: as for
+        :class:`~envs.design_env.GripperDesignVectorEnv`.
 
     Notes
     -----
@@ -313,7 +315,8 @@ def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs: Any):
         with ``seed``. An SB3 model built with its own ``seed`` re-seeds the env the same way.
     **env_kwargs
         ``render_mode`` (``None`` or ``"rgb_array"``), ``bounds``, ``distribution``,
-        ``weights``, ``n_triangles``, ``torsion_stiffness_nm_per_rad``: as for
+        ``weights``, ``n_triangles``, ``torsion_stiffness_rel`` (the joint spring relative to
+        each object, the default) or ``torsion_stiffness_nm_per_rad`` (absolute), ...: as for
         :class:`~envs.design_env.GripperDesignVectorEnv`.
 
     Returns

@@ -21,6 +21,7 @@ from .model.defaults import (
     DEFAULT_THICKNESS_M,
     DEFAULT_YOUNGS_MODULUS_PA,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+    PAPER_TORSION_STIFFNESS_REL,
 )
 from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
@@ -45,6 +46,8 @@ __all__ = [
     "PRESETS",
     "design_from_relative",
     "relative_from_design",
+    "joint_spring",
+    "joint_spring_nm_per_rad",
 ]
 
 # A design is six numbers in SI units, in this column order.
@@ -319,17 +322,19 @@ class Design:
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
 
-    def to_scene(self, disk: SoftDisk,
-                 torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD
-                 ) -> Scene:
+    def to_scene(self, disk: SoftDisk, torsion_stiffness_nm_per_rad: float | None = None, *,
+                 torsion_stiffness_rel: float | None = None) -> Scene:
         """The scene of this design with a disk (its ``distance_m`` replaced by the design's).
 
-        The batch evaluator maps design rows to scenes the same way
+        The joint spring is relative to the disk unless given in N·m/rad
+        (:func:`joint_spring`; default: the paper gripper's ratio to its r = 0.07 m disk's
+        torque unit). The batch evaluator maps design rows to scenes the same way
         (:func:`envs.evaluate.evaluate_designs`); raises ``ValueError`` for a design invalid at
         rest, as :class:`Scene` does.
         """
+        kf = joint_spring_nm_per_rad(disk, torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         gripper = Gripper(self.finger_length_m, self.rest_angle_rad, self.joint_offset_m,
-                          self.finger_width_m, torsion_stiffness_nm_per_rad)
+                          self.finger_width_m, kf)
         return Scene(gripper, replace(disk, distance_m=self.distance_m))
 
     @classmethod
@@ -350,6 +355,40 @@ class Design:
         if arr.shape != (N_DESIGN,):
             raise ValueError(f"a design needs shape ({N_DESIGN},), got {arr.shape}")
         return cls(*arr.tolist())
+
+
+def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
+                 ) -> tuple[float | None, float | None]:
+    """The joint torsion spring of a design problem, validated: ``(rel, None)`` or
+    ``(None, nm_per_rad)``.
+
+    A design space relative to its object needs a joint spring that scales like its torque:
+    ``torsion_stiffness_rel`` is ``k_f`` in the object's torque unit ``s E t r^2`` per radian
+    [1/rad] (:attr:`SoftDisk.torque_unit_nm`), the default (both ``None``) the paper gripper's
+    ``0.073 N·m/rad`` over its r = 0.07 m disk's 4.9 N·m
+    (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`). An absolute spring is asked for
+    by name, ``torsion_stiffness_nm_per_rad`` [N·m/rad]. Both must be positive and finite.
+
+    Raises
+    ------
+    ValueError
+        When both are given, or a value is not a positive finite number.
+    """
+    if torsion_stiffness_nm_per_rad is not None:
+        if torsion_stiffness_rel is not None:
+            raise ValueError("give the joint spring once: torsion_stiffness_rel (relative to the "
+                             "object) or torsion_stiffness_nm_per_rad (absolute), not both")
+        return None, check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad,
+                                 0.0, math.inf, low_open=True)
+    rel = PAPER_TORSION_STIFFNESS_REL if torsion_stiffness_rel is None else torsion_stiffness_rel
+    return check_range("torsion_stiffness_rel", rel, 0.0, math.inf, low_open=True), None
+
+
+def joint_spring_nm_per_rad(disk: SoftDisk, torsion_stiffness_rel=None,
+                            torsion_stiffness_nm_per_rad=None) -> float:
+    """The joint spring ``k_f`` [N·m/rad] for a disk (see :func:`joint_spring`)."""
+    rel, absolute = joint_spring(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+    return absolute if rel is None else rel * disk.torque_unit_nm
 
 
 def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:

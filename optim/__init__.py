@@ -18,13 +18,14 @@ from __future__ import annotations
 
 from .optimize import METHODS, Optimizer, get_optimizer, optimize
 from .problem import DEFAULT_STRAIN_LIMIT, BudgetExhaustedError, DesignProblem, paper_design
-from .result import OptimResult
+from .result import NoGraspWarning, OptimResult
 
 __all__ = [
     "METHODS",
     "DEFAULT_STRAIN_LIMIT",
     "BudgetExhaustedError",
     "DesignProblem",
+    "NoGraspWarning",
     "OptimResult",
     "Optimizer",
     "get_optimizer",

@@ -15,7 +15,7 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import replace
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +35,7 @@ from .problem import (
     check_strain_limit,
     paper_design,
 )
-from .result import OptimResult
+from .result import NoGraspWarning, OptimResult, no_grasp_reason
 from .verify import DEFAULT_TOP, MAX_TOP
 
 __all__ = ["add_optimize_parser", "add_verify_parser", "run_optimize", "run_demo",
@@ -171,10 +171,12 @@ def run_optimize(
         problem = DesignProblem.from_scene(scene, strain_limit, executor=executor,
                                            progress=hook, **model.kwargs())
         try:
-            result = driver(problem, budget=budget, seed=seed, **options)
+            with warnings.catch_warnings():
+                # said once below, with the files written
+                warnings.simplefilter("ignore", NoGraspWarning)
+                result = driver(problem, budget=budget, seed=seed, **options)
         finally:
             bar.close()
-        result = replace(result, extra={**result.extra, "grasp_found": grasp_found(result)})
         reference = paper_reference(problem, scene)
         paths = write_outputs(result, out_dir, prefix, problem,
                               None if reference is None else reference[0])
@@ -182,28 +184,10 @@ def run_optimize(
         _print_summary(result, reference, paths)
     if not result.extra["grasp_found"]:
         print(f"psm-grasp: warning: {method} found no grasp in {result.n_evaluations} "
-              f"evaluations: its best design {no_grasp_reason(result)} (reward "
+              f"evaluations: its best design {no_grasp_reason(result.best_metrics)} (reward "
               f"{result.best_reward:.4f}); the files in {str(out_dir)!r} describe that design",
               file=sys.stderr)
     return result, paths
-
-
-def grasp_found(result: OptimResult) -> bool:
-    """Whether a run's best design is a grasp: valid at rest, converged, both fingers touching.
-    """
-    m = result.best_metrics
-    touching = m.get("touching") or [False, False]
-    return bool(m.get("valid_at_rest") and m.get("converged") and all(touching))
-
-
-def no_grasp_reason(result: OptimResult) -> str:
-    """Why a run's best design is not a grasp, in words."""
-    m = result.best_metrics
-    if not m.get("valid_at_rest"):
-        return "is invalid at rest (the fingers overlap the disk, ...)"
-    if not m.get("converged"):
-        return "did not converge"
-    return "does not touch the disk with both fingers"
 
 
 def _optimize_command(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -25,16 +26,12 @@ from envs.evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from envs.model.defaults import (
-    DEFAULT_ELEMENT,
-    DEFAULT_STRAIN_LIMIT,
-    PAPER_TORSION_STIFFNESS_NM_PER_RAD,
-)
+from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_STRAIN_LIMIT
 from envs.model.family import resolve_model
-from envs.scene import PRESETS, Scene, SoftDisk
+from envs.scene import PRESETS, Scene, SoftDisk, joint_spring
 from envs.validation import check_range
 
-from .result import OptimResult, to_jsonable
+from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
 
 __all__ = [
     "DEFAULT_STRAIN_LIMIT",
@@ -156,8 +153,14 @@ class DesignProblem:
     strain_limit
         Admissible compressive strain of the object [-], in (0, 1]: a limit on the peak
         compression (:func:`envs.evaluate_designs`).
+    torsion_stiffness_rel
+        Joint torsion spring ``k_f`` in the object's torque unit ``s E t r^2`` per radian
+        [1/rad], > 0 (:func:`envs.scene.joint_spring`). Default (with
+        ``torsion_stiffness_nm_per_rad`` also ``None``): the paper gripper's ratio on its
+        r = 0.07 m disk, 0.0149 per radian, so that the spring scales with the object like
+        every other column of the relative design space.
     torsion_stiffness_nm_per_rad
-        Joint torsion spring ``k_f`` [N·m/rad], > 0.
+        An absolute joint spring [N·m/rad] instead, > 0 (not with ``torsion_stiffness_rel``).
     n_triangles, n_rings, element, calibrated
         The member of the model family that solves each grasp, as in :func:`envs.simulate`
         (default: the default model; ``element="spring"``: the paper's fan). ``self.model``
@@ -185,7 +188,8 @@ class DesignProblem:
         disk: SoftDisk,
         strain_limit: float = DEFAULT_STRAIN_LIMIT,
         *,
-        torsion_stiffness_nm_per_rad: float = PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+        torsion_stiffness_rel: float | None = None,
+        torsion_stiffness_nm_per_rad: float | None = None,
         n_triangles: int | None = None,
         bounds: DesignBounds | None = None,
         weights: RewardWeights | None = None,
@@ -201,9 +205,8 @@ class DesignProblem:
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
         self.disk = disk
         self.strain_limit = check_strain_limit(strain_limit)
-        self.torsion_stiffness_nm_per_rad = check_range(
-            "torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0, math.inf,
-            low_open=True)
+        self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
+            torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
                                    DEFAULT_ELEMENT if element is None else element, calibrated)
         self.n_triangles = self.model.n_triangles
@@ -219,10 +222,27 @@ class DesignProblem:
         self.name = name
         self.start(None)
 
+    @property
+    def torsion_stiffness_nm_per_rad(self) -> float:
+        """The joint spring ``k_f`` on this object [N·m/rad] (a relative one times the object's
+        torque unit)."""
+        if self.torsion_stiffness_rel is None:
+            return self._torsion_absolute
+        return self.torsion_stiffness_rel * self.disk.torque_unit_nm
+
+    def joint_spring_kwargs(self) -> dict[str, float]:
+        """The joint spring as keyword arguments of :func:`envs.evaluate_designs` and the envs
+        (relative or absolute, as given)."""
+        if self.torsion_stiffness_rel is None:
+            return {"torsion_stiffness_nm_per_rad": self._torsion_absolute}
+        return {"torsion_stiffness_rel": self.torsion_stiffness_rel}
+
     @classmethod
     def from_scene(cls, scene: str | Scene = "paper-r070",
                    strain_limit: float = DEFAULT_STRAIN_LIMIT, **kwargs: Any) -> DesignProblem:
         """The object and the joint spring of a scene preset (or a :class:`Scene`).
+
+        The scene's gripper keeps its own spring, in N·m/rad, unless a spring is given.
 
         Raises
         ------
@@ -236,8 +256,9 @@ class DesignProblem:
             scene = Scene.preset(scene)
         if not isinstance(scene, Scene):
             raise ValueError(f"scene must be a preset name or a Scene, got {scene!r}")
-        kwargs.setdefault("torsion_stiffness_nm_per_rad",
-                          scene.gripper.torsion_stiffness_nm_per_rad)
+        if kwargs.get("torsion_stiffness_rel") is None:
+            kwargs.setdefault("torsion_stiffness_nm_per_rad",
+                              scene.gripper.torsion_stiffness_nm_per_rad)
         return cls(scene.disk, strain_limit, **kwargs)
 
     # --- bookkeeping --------------------------------------------------------------------------
@@ -290,8 +311,7 @@ class DesignProblem:
         """Evaluate physical designs (B, 6) on this object without counting them."""
         designs = np.asarray(designs, dtype=np.float64)
         return evaluate_designs(
-            designs, self.disk, strain_limits=self.strain_limit,
-            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            designs, self.disk, strain_limits=self.strain_limit, **self.joint_spring_kwargs(),
             weights=self.weights, executor=self.executor, **self.model.kwargs(),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
@@ -420,14 +440,27 @@ class DesignProblem:
             "stiffness_scale": d.stiffness_scale,
             "contour_stiffness_ratio": d.contour_stiffness_ratio,
             "strain_limit": self.strain_limit,
+            "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **self.model.kwargs(),
         }
 
     def result(self, method: str, seed: int, *, options: dict[str, Any] | None = None,
                pareto: bool = False, extra: dict[str, Any] | None = None) -> OptimResult:
-        """Freeze the bookkeeping of the current run into an :class:`OptimResult`."""
+        """Freeze the bookkeeping of the current run into an :class:`OptimResult`.
+
+        Its ``extra["grasp_found"]`` tells whether the best design is a grasp; when it is not,
+        a :class:`~optim.result.NoGraspWarning` says why (a design for a small or soft object
+        that never touches it must not pass for an answer).
+        """
         best_design = ({} if self.best_x is None else self.design_dict(self.best_x))
+        found = grasp_found(self.best_metrics)
+        if not found:
+            warnings.warn(
+                f"{method} found no grasp of {self.name or 'the object'} in "
+                f"{self.n_evaluations} evaluations: its best design "
+                f"{no_grasp_reason(self.best_metrics)} (reward {self.best_reward:.4f})",
+                NoGraspWarning, stacklevel=3)
         return OptimResult(
             method=method,
             seed=seed,
@@ -445,5 +478,5 @@ class DesignProblem:
             top_designs=tuple(self.top_designs()),
             options=to_jsonable(dict(options or {})),
             executor=_describe_executor(self.executor),
-            extra=to_jsonable(dict(extra or {})),
+            extra=to_jsonable({**(extra or {}), "grasp_found": found}),
         )

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["OptimResult", "to_jsonable"]
+__all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable"]
 
 RESULT_VERSION = 1
 
@@ -28,6 +28,29 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
     return value
+
+
+class NoGraspWarning(UserWarning):
+    """An optimization's best design does not grasp its object (invalid, not converged, or a
+    finger that does not touch): the run's answer is not a gripper to build."""
+
+
+def grasp_found(metrics: dict[str, Any]) -> bool:
+    """Whether a design's metrics (:attr:`OptimResult.best_metrics`) are a grasp: valid at
+    rest, converged, both fingers touching."""
+    touching = metrics.get("touching") or [False, False]
+    return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching))
+
+
+def no_grasp_reason(metrics: dict[str, Any]) -> str:
+    """Why a design's metrics are not a grasp, in words."""
+    if not metrics:
+        return "was never evaluated"
+    if not metrics.get("valid_at_rest"):
+        return "is invalid at rest (the fingers overlap the disk, ...)"
+    if not metrics.get("converged"):
+        return "did not converge"
+    return "does not touch the disk with both fingers"
 
 
 @dataclass(frozen=True)
@@ -80,7 +103,9 @@ class OptimResult:
         How the populations were evaluated (``"in-process"``, ``"processes(2)"``,
         ``"dask(tcp://...)"``).
     extra
-        Method-specific extras (e.g. the number of CMA-ES restarts).
+        Method-specific extras (e.g. the number of CMA-ES restarts), and from every driver
+        ``grasp_found``: whether the best design is a grasp (:func:`grasp_found`; when it is
+        not, the run also warns with :class:`NoGraspWarning`).
     """
 
     method: str

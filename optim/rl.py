@@ -212,7 +212,7 @@ def train_policy(
         bounds=problem.bounds,
         distribution=training_distribution(problem),
         weights=problem.weights,
-        torsion_stiffness_nm_per_rad=problem.torsion_stiffness_nm_per_rad,
+        **problem.joint_spring_kwargs(),
         **problem.model.kwargs(),
     ))
     threads = torch.get_num_threads()
@@ -264,9 +264,9 @@ def _as_problem(obj: Any, template: DesignProblem | None) -> DesignProblem:
                 f"got {obj!r}") from None
     kwargs: dict[str, Any] = {}
     if template is not None:
-        kwargs = {"torsion_stiffness_nm_per_rad": template.torsion_stiffness_nm_per_rad,
-                  "bounds": template.bounds, "weights": template.weights,
-                  "executor": template.executor, **template.model.kwargs()}
+        kwargs = {**template.joint_spring_kwargs(), "bounds": template.bounds,
+                  "weights": template.weights, "executor": template.executor,
+                  **template.model.kwargs()}
         if limit is None:
             limit = template.strain_limit
     if limit is None:

@@ -247,17 +247,55 @@ def test_bounds_scale_round_trip():
 
 
 def test_relative_box_scales_with_the_object():
-    # the same actions on a 70 mm foam disk and a 2 mm TPU bead: the same grasp in radii
+    # the same actions on a 70 mm foam disk and a 2 mm TPU bead: the same grasp in radii, with
+    # every default (the joint spring too is relative to the object)
     bounds = DesignBounds()
     small = SoftDisk(0.002, 0.0, 29e6, stiffness_scale=0.033)
     a = np.random.default_rng(1).uniform(-1, 1, (40, 6))
-    big = evaluate_designs(bounds.scale(a, DISK), DISK, torsion_stiffness_nm_per_rad=0.073)
-    kf_small = 0.073 * small.torque_unit_nm / DISK.torque_unit_nm
-    tiny = evaluate_designs(bounds.scale(a, small), small, torsion_stiffness_nm_per_rad=kf_small)
+    big = evaluate_designs(bounds.scale(a, DISK), DISK)
+    tiny = evaluate_designs(bounds.scale(a, small), small)
     assert big["valid_at_rest"].all() and tiny["valid_at_rest"].all()
     np.testing.assert_array_equal(big["converged"], tiny["converged"])
     np.testing.assert_allclose(big["jaw_angles_rad"], tiny["jaw_angles_rad"], atol=1e-7)
     np.testing.assert_allclose(big["reward"], tiny["reward"], atol=1e-6)
+    # an absolute spring is still possible by name: on the bead the paper's 0.073 N·m/rad is
+    # twice the bead's torque unit, and one design in 40 closes on it (30 with the default)
+    stiff = evaluate_designs(bounds.scale(a, small), small, torsion_stiffness_nm_per_rad=0.073)
+    assert stiff["touching"].all(axis=1).sum() <= 2 < 20 <= tiny["touching"].all(axis=1).sum()
+    with pytest.raises(ValueError, match="not both"):
+        evaluate_designs(bounds.scale(a, small), small, torsion_stiffness_rel=0.01,
+                         torsion_stiffness_nm_per_rad=0.073)
+
+
+def test_every_default_scores_relative_designs_alike_on_objects_far_apart():
+    """The paper's r = 0.07 m disk and one 20x smaller and 50x softer: 64 relative designs score
+    the same through evaluate_designs, DesignProblem, the single and the vector env, each with
+    its defaults (an absolute default spring made them differ by up to 1.3 in reward)."""
+    from envs.design_env import GripperDesignEnv, GripperDesignVectorEnv
+    from optim.problem import DesignProblem
+
+    paper = Scene.preset("paper-r070").disk
+    small = SoftDisk(0.0035, 0.0, youngs_modulus_pa=2e3, poisson_ratio=0.45, thickness_m=0.01)
+    a = np.random.default_rng(7).uniform(-1, 1, (64, 6))
+    rewards = []
+    for disk in (paper, small):
+        bounds = DesignBounds()
+        out = evaluate_designs(bounds.scale(a, disk), disk)
+        by_batch = out["reward"]
+        assert out["touching"].all(axis=1).mean() > 0.5  # grasps, not 64 misses scoring alike
+        problem = DesignProblem(disk)
+        by_problem = problem.evaluate(a)["reward"]
+        env = GripperDesignEnv()
+        env.reset(seed=0, options={"disk": disk, "strain_limit": 0.1})
+        by_env = np.array([env.step(row)[1] for row in a[:4]])
+        vec = GripperDesignVectorEnv(4)
+        vec.reset(seed=0, options={"disk": disk, "strain_limit": 0.1})
+        by_vec = vec.step(a[:4])[1]
+        # (float64 actions: a float32 cast moves a design near a bifurcation onto another branch)
+        for other in (by_problem, by_env, by_vec):
+            np.testing.assert_array_equal(other, by_batch[: other.size])
+        rewards.append(by_batch)
+    np.testing.assert_allclose(rewards[0], rewards[1], atol=1e-6)
 
 
 def test_default_box_is_valid_for_every_preset():
@@ -551,7 +589,7 @@ def test_rendered_grasp_is_the_scored_grasp_with_calibration_fields():
     out = evaluate_designs(design[None, :], disk)
     assert out["converged"][0]
     cache: dict = {}
-    frame = _render_frame(design, disk, 0.15, model, 0.073, cache)
+    frame = _render_frame(design, disk, 0.15, model, {}, cache)  # the default spring
     assert frame.ndim == 3 and frame.shape[2] == 3
     assert cache["result"].converged
     np.testing.assert_allclose(cache["result"].jaw_angles_rad, out["jaw_angles_rad"][0],

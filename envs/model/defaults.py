@@ -69,6 +69,16 @@ DEFAULT_POISSON_RATIO = 0.45
 DEFAULT_THICKNESS_M = 0.01
 DEFAULT_STIFFNESS_SCALE = 1.0
 DEFAULT_CONTOUR_STIFFNESS_RATIO = 1.0  # the plain stiffness rule
+# The joint spring of a design relative to its object: k_f over the object's torque unit
+# s E t r^2 [1/rad]. The design space is relative to the object (lengths in radii, the torque in
+# s E t r^2), and the model is invariant under that scaling only if the joint spring scales
+# like the torque: an absolute 0.073 N·m/rad is ~100 times the largest torque of the design box
+# on a 4 mm, 8 kPa tissue sample, whose designs then never reach it. Default: the paper
+# gripper's spring on its r = 0.07 m disk (E = 100 kPa, t = 0.01 m, s = 1: torque unit
+# 4.9 N·m), so every answer on that disk stays as it was.
+PAPER_R070_TORQUE_UNIT_NM = DEFAULT_STIFFNESS_SCALE * DEFAULT_YOUNGS_MODULUS_PA \
+    * DEFAULT_THICKNESS_M * 0.07**2
+PAPER_TORSION_STIFFNESS_REL = PAPER_TORSION_STIFFNESS_NM_PER_RAD / PAPER_R070_TORQUE_UNIT_NM
 # c_A of the area energy: 0 keeps the paper's springs-only fan the default until the
 # calibrated members of the model family (interior rings) ship
 DEFAULT_AREA_STIFFNESS_SCALE = 0.0

@@ -1,0 +1,238 @@
+"""Objects from files: a TOML ``[object]`` table (and, for one grasp, a ``[gripper]`` table).
+
+A designer's own object is four numbers and, optionally, what the design must respect::
+
+    [object]
+    name = "cherry tomato"        # optional (default: the file's name)
+    radius_m = 0.012
+    youngs_modulus_pa = 150e3
+    poisson_ratio = 0.45
+    thickness_m = 0.024
+    stiffness_scale = 1.0         # optional: calibration scale s of the point-spring model
+    strain_limit = 0.08           # optional: admissible peak compression (default 0.10)
+    friction_coefficient = 0.5    # optional: Coulomb coefficient of the finger pads on it
+
+    [gripper]                     # optional, for one grasp (psm-grasp simulate)
+    finger_length_m = 0.05
+    rest_angle_deg = 30           # or rest_angle_rad
+    joint_offset_m = 0.002
+    finger_width_m = 0.004
+    distance_m = 0.01             # d_1: the joints' line to the nearest point of the object
+    torque_nm = 0.02              # optional (default: the command's --torque)
+    torsion_stiffness_nm_per_rad = 0.001  # optional (default: relative to the object)
+
+Every key is checked before any work: an unknown key, a missing key or a bad value is one
+``ValueError`` naming the file, the table, the key and the allowed range.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .model.defaults import DEFAULT_STIFFNESS_SCALE
+from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
+from .validation import check_range
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["ObjectSpec", "GripperSpec", "load_object", "OBJECT_KEYS", "GRIPPER_KEYS"]
+
+# key -> (low, high, low_open, high_open, required) of the [object] table
+OBJECT_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
+    "radius_m": (0.0, math.inf, True, False, True),
+    "youngs_modulus_pa": (0.0, math.inf, True, False, True),
+    "poisson_ratio": (-1.0, 0.5, True, True, True),
+    "thickness_m": (0.0, math.inf, True, False, True),
+    "stiffness_scale": (0.0, math.inf, True, False, False),
+    "strain_limit": (0.0, 1.0, True, False, False),
+    "friction_coefficient": (0.0, math.inf, False, False, False),
+}
+# key -> (low, high, low_open, high_open, required) of the [gripper] table
+GRIPPER_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
+    "finger_length_m": (0.0, math.inf, True, False, True),
+    "rest_angle_deg": (0.0, 90.0, True, True, False),
+    "rest_angle_rad": (0.0, math.pi / 2, True, True, False),
+    "joint_offset_m": (0.0, math.inf, False, False, True),
+    "finger_width_m": (0.0, math.inf, True, False, True),
+    "distance_m": (-math.inf, math.inf, False, False, True),
+    "torque_nm": (0.0, math.inf, False, False, False),
+    "torsion_stiffness_nm_per_rad": (0.0, math.inf, True, False, False),
+}
+TABLES = ("object", "gripper")
+
+
+@dataclass(frozen=True)
+class GripperSpec:
+    """A ``[gripper]`` table: one gripper and the object's placement, SI units.
+
+    ``torsion_stiffness_nm_per_rad`` ``None``: the joint spring relative to the object
+    (:func:`envs.scene.joint_spring`); ``torque_nm`` ``None``: the caller's torque.
+    """
+
+    finger_length_m: float
+    rest_angle_rad: float
+    joint_offset_m: float
+    finger_width_m: float
+    distance_m: float
+    torque_nm: float | None = None
+    torsion_stiffness_nm_per_rad: float | None = None
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """An object read from a file.
+
+    Parameters
+    ----------
+    name
+        The object's name (the file's stem unless the table names it).
+    disk
+        The disk (its ``distance_m`` is 0, or the ``[gripper]`` table's placement).
+    strain_limit
+        Admissible peak compression [-], or ``None`` (the caller's default).
+    friction_coefficient
+        Coulomb friction coefficient between the fingers and the object [-], or ``None``.
+    gripper
+        The ``[gripper]`` table, or ``None``.
+    path
+        The file read.
+    """
+
+    name: str
+    disk: SoftDisk
+    strain_limit: float | None = None
+    friction_coefficient: float | None = None
+    gripper: GripperSpec | None = None
+    path: Path | None = None
+
+    def scene(self) -> Scene:
+        """The scene of the ``[gripper]`` table and this object.
+
+        Raises
+        ------
+        ValueError
+            Without a ``[gripper]`` table, or for a gripper that overlaps the object at rest.
+        """
+        if self.gripper is None:
+            raise ValueError(f"{self._where()}: no [gripper] table to build a scene from")
+        g = self.gripper
+        disk = SoftDisk(self.disk.radius_m, g.distance_m, self.disk.youngs_modulus_pa,
+                        self.disk.poisson_ratio, self.disk.thickness_m, self.disk.stiffness_scale)
+        kf = joint_spring_nm_per_rad(disk, None, g.torsion_stiffness_nm_per_rad)
+        gripper = Gripper(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+                          g.finger_width_m, kf)
+        try:
+            return Scene(gripper, disk)
+        except ValueError as exc:
+            raise ValueError(f"{self._where()}: [gripper]: {exc}") from None
+
+    def info(self) -> dict[str, Any]:
+        """The object's fields as plain data (what a result JSON records)."""
+        d = self.disk
+        return {"name": self.name, "radius_m": d.radius_m,
+                "youngs_modulus_pa": d.youngs_modulus_pa, "poisson_ratio": d.poisson_ratio,
+                "thickness_m": d.thickness_m, "stiffness_scale": d.stiffness_scale,
+                "strain_limit": self.strain_limit,
+                "friction_coefficient": self.friction_coefficient,
+                "file": None if self.path is None else str(self.path)}
+
+    def _where(self) -> str:
+        return str(self.path) if self.path is not None else self.name
+
+
+def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bool, bool]
+            ) -> float:
+    low, high, low_open, high_open, _ = rule
+    # TOML has booleans and strings: neither is a number here (True is not 1 m)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{where}: {key} must be a number, got {value!r}")
+    try:
+        return check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = ()
+           ) -> dict[str, float]:
+    unknown = sorted(set(data) - set(rules) - set(extra))
+    if unknown:
+        raise ValueError(f"{where}: unknown key {unknown[0]!r}; allowed: "
+                         f"{', '.join([*extra, *rules])}")
+    missing = [k for k, rule in rules.items() if rule[-1] and k not in data]
+    if missing:
+        raise ValueError(f"{where}: missing key {missing[0]!r} (required: "
+                         f"{', '.join(k for k, r in rules.items() if r[-1])})")
+    return {k: _number(where, k, v, rules[k]) for k, v in data.items() if k in rules}
+
+
+def _gripper(where: str, data: Any) -> GripperSpec:
+    if not isinstance(data, dict):
+        raise ValueError(f"{where}: must be a table")
+    values = _table(where, data, GRIPPER_KEYS)
+    if ("rest_angle_deg" in values) == ("rest_angle_rad" in values):
+        raise ValueError(f"{where}: give the rest angle once, as rest_angle_deg or "
+                         "rest_angle_rad")
+    angle = values.pop("rest_angle_rad", None)
+    if angle is None:
+        angle = math.radians(values.pop("rest_angle_deg"))
+    return GripperSpec(rest_angle_rad=angle, **values)
+
+
+def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
+                 path: Path | None = None) -> ObjectSpec:
+    """An :class:`ObjectSpec` of parsed TOML data (see :func:`load_object`)."""
+    unknown = sorted(set(data) - set(TABLES))
+    if unknown:
+        raise ValueError(f"{where}: unknown table or key {unknown[0]!r}; allowed: [object], "
+                         "[gripper]")
+    if "object" not in data:
+        raise ValueError(f"{where}: missing the [object] table")
+    table = data["object"]
+    if not isinstance(table, dict):
+        raise ValueError(f"{where}: object must be a table ([object])")
+    name = table.get("name", default_name)
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"{where}: [object] name must be a non-empty string, got {name!r}")
+    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name",))
+    disk = SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
+                    values["poisson_ratio"], values["thickness_m"],
+                    values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE))
+    gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
+    return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
+                      values.get("friction_coefficient"), gripper, path)
+
+
+def load_object(path: str | Path) -> ObjectSpec:
+    """Read an object file (TOML with an ``[object]`` and an optional ``[gripper]`` table).
+
+    Parameters
+    ----------
+    path
+        The file: see this module's docstring for its keys and units.
+
+    Raises
+    ------
+    ValueError
+        A file that cannot be read or parsed, an unknown table or key, a missing key or a bad
+        value: one line naming the file, the table and the key.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"{str(p)!r}: cannot read the object file ({exc.strerror or exc})"
+                         ) from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{str(p)!r}: not a text (TOML) file") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{p}: not valid TOML: {exc}") from None
+    return parse_object(data, str(p), p.stem, p)
