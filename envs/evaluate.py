@@ -33,14 +33,17 @@ import numpy as np
 from .model.contact_width import contact_share, hertz_arc_coefficient
 from .model.defaults import (
     DEFAULT_ELEMENT,
+    DEFAULT_FRICTION_COEFFICIENT,
     DEFAULT_PHASE_RAD,
     DEFAULT_STRAIN_LIMIT,
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
+    MAX_FRICTION_COEFFICIENT,
     PAPER_TORSION_STIFFNESS_REL,
 )
 from .model.family import resolve_model, triangle_range
 from .model.geometry import bar_distance
+from .model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y
 from .model.problem import REST_OK, SceneColumns, _clearance, rest_codes
 from .scene import (
     DESIGN_FIELDS,
@@ -61,6 +64,7 @@ from .scoring import (
     W_GAP,
     W_INVALID,
     W_MISS,
+    W_SLIP,
     W_VIOLATION,
     grip_share_rows,
     psm_metrics_rows,
@@ -108,10 +112,16 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
     "max_displacement_ratio": (np.float64, ()),
     "peak_compression": (np.float64, ()),
     "strain_limit": (np.float64, ()),
+    "pin_force_n": (np.float64, (2,)),
+    "pin_moment_nm": (np.float64, ()),
+    "required_friction": (np.float64, ()),
+    "friction_coefficient": (np.float64, ()),
+    "holds": (np.bool_, ()),
     "finger_gap_m": (np.float64, (2,)),
     "rest_violation": (np.float64, ()),
     "reward_contact": (np.float64, ()),
     "reward_deform": (np.float64, ()),
+    "penalty_slip": (np.float64, ()),
     "penalty_miss": (np.float64, ()),
     "penalty_gap": (np.float64, ()),
     "penalty_invalid": (np.float64, ()),
@@ -238,21 +248,28 @@ class DesignBounds:
 class RewardWeights:
     """Weights of the named reward terms of :func:`evaluate_designs`.
 
-    ``reward = contact * min(contact_score, contact_cap)
-    - deform * min(peak_compression / strain_limit, deform_cap)
-    - miss * (fingers not touching) - gap * g / (1 + g)
-    - [invalid at rest] * (invalid + violation * v / (1 + v))
-    - fail * [not converged]``
+    The reward ranks outcomes in tiers, each graded so that an optimizer is pointed towards
+    the tier above, and every outcome of a tier below every outcome of the tiers above:
 
-    with ``g`` the largest gap between a finger that does not touch and the disk, in disk
-    radii, and ``v`` how far an invalid design is from a valid one (overlap depth and the
-    other violated limits, in radii or radians; :func:`rest_violation`). Both graded terms
-    point an optimizer towards a grasp: closer fingers, less overlap.
+    1. a grasp that **holds** (converged, both fingers touching, ``required_friction`` within
+       the object's friction coefficient ``mu``):
+       ``contact * min(contact_score, contact_cap) - deform * min(peak_compression /
+       strain_limit, deform_cap)``, in ``[-F, contact * contact_cap]`` with ``F = deform *
+       deform_cap`` (-1 with the defaults);
+    2. a grasp that would **slip** (it needs more friction than ``mu``):
+       ``-F - slip * x / (1 + x)``, ``x = required_friction / mu - 1`` (1 for an infinite
+       need), in ``(-F - slip, -F)``: the less friction it needs, the higher;
+    3. a **miss** (converged, a finger not touching the object):
+       ``-F - slip - miss * m - gap * g / (1 + g)`` with ``m`` the fingers not touching and
+       ``g`` the largest gap of such a finger to the disk, in radii: closer fingers score
+       higher, in ``(-F - slip - 2 miss - gap, -F - slip - miss]``;
+    4. a solver **failure** on a valid design: ``-fail``, at most the worst miss;
+    5. a design **invalid** at rest: ``-invalid - violation * v / (1 + v)``, with ``v`` how far
+       it is from valid (overlap depth and the other violated limits, in radii or radians;
+       :func:`rest_violation`); ``invalid`` at least ``fail``.
 
-    Outcomes are ordered: a valid converged grasp scores above ``-(deform * deform_cap
-    + 2 miss + gap)`` (-2.5 with the defaults), a solver failure ``-fail`` (-2.5), an invalid
-    design ``-invalid`` (-3) down to ``-(invalid + violation)`` (-4). Weights that would let an
-    invalid design score above a valid one are rejected.
+    With the defaults: holds ``[-1, 0.5]``, slips ``(-1.5, -1)``, misses ``(-3, -2]``, a failure
+    -3, invalid designs ``[-4.5, -3.5]``. Weights that would break the order are rejected.
 
     Parameters
     ----------
@@ -262,51 +279,60 @@ class RewardWeights:
         Weight of the peak compression (the largest shortening of a radius by the fingers,
         over r: how deep the grasp presses in) relative to the object's strain limit [-].
     miss
-        Penalty per finger that does not touch the disk [-].
+        Penalty per finger that does not touch the disk [-], > 0.
     gap
         Weight of the normalised gap ``g / (1 + g)`` of the farthest finger that does not
         touch the disk (``g`` its distance to the undeformed disk in the grasp, in radii) [-].
     invalid
         Penalty for a design that is invalid at rest (fingers overlapping the disk, ...) [-],
-        at least ``deform * deform_cap + 2 miss + gap``.
+        at least ``fail``.
     violation
         Weight of the normalised violation ``v / (1 + v)`` of an invalid design, added to
         ``invalid`` [-].
     fail
-        Penalty when the solver did not converge [-].
+        Penalty when the solver did not converge [-], at least ``deform * deform_cap + slip
+        + 2 miss + gap``.
     contact_cap
         Cap of the contact score [-], > 0.
     deform_cap
         Cap of ``peak_compression / strain_limit`` [-], > 0 (keeps the reward bounded).
+    slip
+        Width of the tier of grasps that would slip [-], > 0: how much a grasp needing
+        unlimited friction scores below one needing just the object's coefficient.
     """
 
     contact: float = 1.0
     deform: float = 0.25
     miss: float = 0.5
     gap: float = 0.5
-    invalid: float = 3.0
+    invalid: float = 3.5
     violation: float = 1.0
-    fail: float = 2.5
+    fail: float = 3.0
     contact_cap: float = 0.5
     deform_cap: float = 4.0
+    slip: float = 0.5
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            low_open = f.name.endswith("_cap")
+            low_open = f.name.endswith("_cap") or f.name in ("slip", "miss")
             v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), 0.0, math.inf,
                             low_open=low_open)
             object.__setattr__(self, f.name, v)
-        worst_valid = self.deform * self.deform_cap + 2 * self.miss + self.gap
-        if self.invalid < worst_valid:
+        worst_valid = self.deform * self.deform_cap + self.slip + 2 * self.miss + self.gap
+        if self.fail < worst_valid:
             raise ValueError(
-                f"RewardWeights.invalid = {self.invalid!r} must be at least deform * deform_cap "
-                f"+ 2 miss + gap = {worst_valid!r}, so that every invalid design scores below "
-                "every valid one")
+                f"RewardWeights.fail = {self.fail!r} must be at least deform * deform_cap + "
+                f"slip + 2 miss + gap = {worst_valid!r}, so that every solver failure scores "
+                "below every converged design")
+        if self.invalid < self.fail:
+            raise ValueError(
+                f"RewardWeights.invalid = {self.invalid!r} must be at least fail = "
+                f"{self.fail!r}, so that every invalid design scores below every valid one")
         weights = np.empty(N_WEIGHTS)
         for name, k in (("contact", W_CONTACT), ("contact_cap", W_CONTACT_CAP),
                         ("deform", W_DEFORM), ("deform_cap", W_DEFORM_CAP), ("miss", W_MISS),
                         ("gap", W_GAP), ("invalid", W_INVALID), ("violation", W_VIOLATION),
-                        ("fail", W_FAIL)):
+                        ("fail", W_FAIL), ("slip", W_SLIP)):
             weights[k] = getattr(self, name)
         weights.flags.writeable = False
         object.__setattr__(self, "_vector", weights)
@@ -341,6 +367,8 @@ def _design_table(designs) -> np.ndarray:
 
 # columns of :func:`_disk_table`
 DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE = range(5)
+# columns of the objects' requirements: strain limit and friction coefficient
+NEED_STRAIN, NEED_FRICTION = range(2)
 
 
 def _disk_table(disks, batch: int) -> np.ndarray:
@@ -458,6 +486,11 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
         out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
         out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
         out["max_displacement_ratio"], out["peak_compression"])
+    ok = rows[out["converged"][rows]]
+    done = out["converged"][rows]
+    out["pin_force_n"][ok] = sol.holding[done, H_PIN_X : H_PIN_Y + 1]
+    out["pin_moment_nm"][ok] = sol.holding[done, H_PIN_MOMENT]
+    out["required_friction"][ok] = sol.holding[done, H_MU]
 
 
 def rest_violation(cols: SceneColumns) -> np.ndarray:
@@ -548,9 +581,13 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
             "peak_log_strain": fem["peak_log_strain"],
             "max_displacement_ratio": fem["max_displacement_ratio"],
             "peak_compression": fem["peak_compression"],
+            "pin_force_n": fem["pin_force_n"],
+            "pin_moment_nm": fem["pin_moment_nm"],
+            "required_friction": fem["required_friction"],
         }
+    # (an infinite required friction is an answer, one finger touching: not a failure)
     floats = np.column_stack([np.reshape(v, (rows.size, -1)) for k, v in metrics.items()
-                              if v.dtype.kind == "f"])
+                              if v.dtype.kind == "f" and k != "required_friction"])
     ok = fem["converged"] & np.isfinite(floats).all(axis=1)
     out["status"][rows] = np.where(ok, OK, FEM_FAILED)
     out["iterations"][rows] = fem["iterations"]
@@ -561,19 +598,21 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
         out[key][rows[ok]] = v[ok]
 
 
-def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limits: np.ndarray,
+def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs: np.ndarray,
                      kf: np.ndarray, weights: RewardWeights,
                      model: tuple[int, str, float] = (1, "spring", 1.0),
                      fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS
                      ) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
+    ``needs``: each object's strain limit and friction coefficient (columns ``NEED_*``);
     ``model``: rings, element and the factor of the member's calibration on the disks'
     stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``)."""
     batch = des.shape[0]
     n_rings, element, model_scale = model
     out = _empty_output(batch)
     out["n_triangles"][:] = n_tri
-    out["strain_limit"][:] = limits
+    out["strain_limit"][:] = needs[:, NEED_STRAIN]
+    out["friction_coefficient"][:] = needs[:, NEED_FRICTION]
     out["status"][:] = NOT_SOLVED
     material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
@@ -605,6 +644,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, limit
     if rows.size:
         gaps = finger_gaps_m(des[rows], disk[rows, DISK_RADIUS], out["jaw_angles_rad"][rows])
         out["finger_gap_m"][rows] = np.where(missing[rows], gaps, 0.0)
+    out["holds"][:] = (out["converged"] & out["touching"].all(axis=1)
+                       & (out["required_friction"] <= out["friction_coefficient"]))
     _add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
 
@@ -614,7 +655,8 @@ def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndar
     reward_rows(w.vector(), valid, out["converged"], out["contact_score"],
                 out["peak_compression"], out["strain_limit"], out["touching"],
                 out["finger_gap_m"], np.ascontiguousarray(radius_m, dtype=np.float64),
-                out["rest_violation"], out["reward_contact"], out["reward_deform"],
+                out["rest_violation"], out["required_friction"], out["friction_coefficient"],
+                out["reward_contact"], out["reward_deform"], out["penalty_slip"],
                 out["penalty_miss"], out["penalty_gap"], out["penalty_invalid"],
                 out["penalty_fail"], out["reward"])
 
@@ -641,6 +683,7 @@ def evaluate_designs(
     n_triangles=None,
     weights: RewardWeights | None = None,
     strain_limits=None,
+    friction_coefficients=None,
     executor=None,
     chunk_size: int | None = None,
     n_rings: int | None = None,
@@ -686,6 +729,13 @@ def evaluate_designs(
     strain_limits
         Admissible compressive strain of the object [-], in (0, 1], a limit on
         ``peak_compression``; scalar or shape (B,). Default :data:`DEFAULT_STRAIN_LIMIT`.
+    friction_coefficients
+        Coulomb friction coefficient between the fingers and the object [-], in (0, 10];
+        scalar or shape (B,). A grasp that needs more (``required_friction``) does not hold
+        the object once the centre is free: it scores below every grasp that holds
+        (:class:`RewardWeights`). Default
+        :data:`~envs.model.defaults.DEFAULT_FRICTION_COEFFICIENT` (0.5, a rubber or silicone
+        pad on skin, fruit or tissue).
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
@@ -763,12 +813,25 @@ def evaluate_designs(
           it converges with the mesh: the default model and the FEM rank 100 random designs a
           paper disk alike (Spearman 0.999, median ratio 1.004; peak log strain 0.93).
         - ``strain_limit``: the limit used [-].
+        - ``pin_force_n`` (B, 2): the force the fixed centre exerts on the object, x and y in
+          the gripper frame [N]: what the frictionless contacts leave unbalanced (inclined jaws
+          push the object out of the grip, along +y); ``pin_moment_nm``: its moment about the
+          centre [N·m] (a hub's; ~0 for the fan's pin). FEM: the hub's reaction.
+        - ``required_friction``: the smallest Coulomb coefficient with which friction at the
+          contacts could carry that force and moment instead of the centre [-]
+          (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction
+          can (one finger touching); ``tan(theta)`` for a symmetric grasp on the faces at
+          finger angle ``theta``.
+        - ``friction_coefficient``: the coefficient used [-]; ``holds``: a converged grasp
+          touching with both fingers whose required friction is within it (it would hold
+          the object without the pin).
         - ``finger_gap_m`` (B, 2): for a converged grasp, the distance from each finger that
           does not touch the disk to the undeformed disk [m] (0 for a touching finger).
         - ``rest_violation``: for a design invalid at rest, how far it is from valid,
           ``v / (1 + v)`` in [0, 1] with ``v`` of :func:`rest_violation` (1 for a non-finite
           value); 0 for valid designs.
-        - ``reward_contact``, ``reward_deform``, ``penalty_miss``, ``penalty_gap``,
+        - ``reward_contact``, ``reward_deform``, ``penalty_slip``, ``penalty_miss``,
+          ``penalty_gap``,
           ``penalty_invalid``, ``penalty_fail``: signed reward terms (see
           :class:`RewardWeights`); ``reward`` is their sum.
 
@@ -804,20 +867,25 @@ def evaluate_designs(
         raise ValueError("a calibrated constant-strain member has one N (its scale depends on "
                          "N): pass a scalar n_triangles")
     model = (spec.n_rings, spec.element, spec.scale)
-    limits = _per_row("strain_limits", DEFAULT_STRAIN_LIMIT if strain_limits is None
-                      else strain_limits, batch, 0.0, 1.0, low_open=True)
+    needs = np.empty((batch, 2))
+    needs[:, NEED_STRAIN] = _per_row(
+        "strain_limits", DEFAULT_STRAIN_LIMIT if strain_limits is None else strain_limits,
+        batch, 0.0, 1.0, low_open=True)
+    needs[:, NEED_FRICTION] = _per_row(
+        "friction_coefficients", DEFAULT_FRICTION_COEFFICIENT if friction_coefficients is None
+        else friction_coefficients, batch, 0.0, MAX_FRICTION_COEFFICIENT, low_open=True)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     if executor is None:
-        return _evaluate_arrays(des, disk, n_tri, limits, kf, weights, model, fidelity,
+        return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
                                 fem_rings)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     starts = range(0, batch, int(chunk_size))
-    chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, limits, kf))
+    chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf))
               for s in starts]
     fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
                            fem_rings=fem_rings)

@@ -19,8 +19,8 @@ from .solver.status import CHECK_FAILED
 
 # layout of the weights vector of :func:`reward_rows` (RewardWeights.vector())
 (W_CONTACT, W_CONTACT_CAP, W_DEFORM, W_DEFORM_CAP, W_MISS, W_GAP, W_INVALID, W_VIOLATION,
- W_FAIL) = range(9)
-N_WEIGHTS = 9
+ W_FAIL, W_SLIP) = range(10)
+N_WEIGHTS = 10
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -131,35 +131,54 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
         compression_out[r] = peak_compression[g]
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _bounded(x):
+    """``x / (1 + x)`` in [0, 1] for x >= 0, 1 for an infinite x (and NaN)."""
+    if not x < math.inf:
+        return 1.0
+    return x / (1.0 + x)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def reward_rows(weights, valid, converged, contact_score, peak_compression, strain_limit,
-                touching, finger_gap_m, radius_m, rest_violation, reward_contact,
-                reward_deform, penalty_miss, penalty_gap, penalty_invalid, penalty_fail, reward):
+                touching, finger_gap_m, radius_m, rest_violation, required_friction,
+                friction_coefficient, reward_contact, reward_deform, penalty_slip,
+                penalty_miss, penalty_gap, penalty_invalid, penalty_fail, reward):
     """The reward terms of every row (:class:`envs.evaluate.RewardWeights`; ``weights`` in
-    the ``W_*`` layout): grasp terms only where the solve converged, the invalid-design
-    penalty (graded by the normalised ``rest_violation``) only where the design is invalid
-    at rest, the failure penalty where a valid design did not converge."""
+    the ``W_*`` layout), in tiers: a grasp that holds (both fingers touching, the required
+    friction within the object's coefficient) gets the contact and deformation terms; one
+    that would slip scores below every hold, graded by how much more friction it needs; a
+    converged design with a finger off the object below every grasp, graded by the fingers
+    missing and the gap; a valid design whose solve failed, the failure penalty; a design
+    invalid at rest, the invalid penalty graded by the normalised ``rest_violation``."""
+    floor = weights[W_DEFORM] * weights[W_DEFORM_CAP]  # the worst a hold scores: -floor
     for i in range(valid.shape[0]):
         ok = converged[i]
-        rc = rd = pm = pg = 0.0
+        rc = rd = ps = pm = pg = 0.0
         if ok:
-            rc = weights[W_CONTACT] * _capped(contact_score[i], weights[W_CONTACT_CAP])
-            ratio = _capped(peak_compression[i] / strain_limit[i], weights[W_DEFORM_CAP])
-            rd = 0.0 - weights[W_DEFORM] * ratio
             missing = (not touching[i, 0]) + (not touching[i, 1])
-            pm = 0.0 - weights[W_MISS] * missing
-            # ndarray.max: NaN wins
-            g0 = finger_gap_m[i, 0]
-            g1 = finger_gap_m[i, 1]
-            gap = (g0 if (g0 > g1 or math.isnan(g0)) else g1) / radius_m[i]
-            pg = 0.0 - weights[W_GAP] * gap / (1.0 + gap)
+            if missing:
+                pm = 0.0 - (floor + weights[W_SLIP]) - weights[W_MISS] * missing
+                # ndarray.max: NaN wins
+                g0 = finger_gap_m[i, 0]
+                g1 = finger_gap_m[i, 1]
+                gap = (g0 if (g0 > g1 or math.isnan(g0)) else g1) / radius_m[i]
+                pg = 0.0 - weights[W_GAP] * gap / (1.0 + gap)
+            elif not required_friction[i] <= friction_coefficient[i]:  # NaN: no hold
+                excess = required_friction[i] / friction_coefficient[i] - 1.0
+                ps = 0.0 - floor - weights[W_SLIP] * _bounded(excess)
+            else:
+                rc = weights[W_CONTACT] * _capped(contact_score[i], weights[W_CONTACT_CAP])
+                ratio = _capped(peak_compression[i] / strain_limit[i], weights[W_DEFORM_CAP])
+                rd = 0.0 - weights[W_DEFORM] * ratio
         pi = 0.0 if valid[i] else (0.0 - weights[W_INVALID]
                                    - weights[W_VIOLATION] * rest_violation[i])
         pf = 0.0 - weights[W_FAIL] if (valid[i] and not ok) else 0.0
         reward_contact[i] = rc
         reward_deform[i] = rd
+        penalty_slip[i] = ps
         penalty_miss[i] = pm
         penalty_gap[i] = pg
         penalty_invalid[i] = pi
         penalty_fail[i] = pf
-        reward[i] = rc + rd + pm + pg + pi + pf
+        reward[i] = rc + rd + ps + pm + pg + pi + pf

@@ -125,13 +125,15 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
 
     obj = result.object
     d, m = result.best_design, result.best_metrics
-    title = (f"{result.method} (seed {result.seed}) best: reward {result.best_reward:.4f}, "
+    name = obj.get("name") or "the object"
+    title = (f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
+             f"{result.seed}) best, reward {result.best_reward:.4f}\n"
              f"contact {m.get('contact_score', math.nan):.2f}, "
-             f"compression {m.get('peak_compression', math.nan):.3f}\n"
-             f"l = {d['finger_length_m']:.3f} m, θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
-             f"d3 = {d['joint_offset_m']:.4f} m\n"
-             f"w = {d['finger_width_m']:.4f} m, T = {d['torque_nm']:.3f} N·m, "
-             f"d1 = {d['distance_m']:.4f} m")
+             f"compression {m.get('peak_compression', math.nan):.3f}; "
+             f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
+             f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°\n"
+             f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm, "
+             f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m")
     try:
         scene = scene_of(result.best_design, obj)
     except ValueError:

@@ -41,7 +41,8 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
     problem
         The design problem (counts the evaluations, keeps the history).
     n_obj
-        1: ``F = -reward``; 2: ``F = (-contact_score, peak_compression)`` with three constraints.
+        1: ``F = -reward``; 2: ``F = (-contact_score, peak_compression)`` with four constraints
+        (converged, both fingers touching, the strain limit, the friction coefficient).
     """
     _import_pymoo()
     from pymoo.core.problem import Problem
@@ -51,7 +52,7 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
 
     class _GraspDesign(Problem):
         def __init__(self) -> None:
-            super().__init__(n_var=problem.n_var, n_obj=n_obj, n_ieq_constr=0 if n_obj == 1 else 3,
+            super().__init__(n_var=problem.n_var, n_obj=n_obj, n_ieq_constr=0 if n_obj == 1 else 4,
                              xl=-1.0, xu=1.0)
 
         def _evaluate(self, x, out, *args, **kwargs):
@@ -65,6 +66,8 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
                 0.5 - m["converged"].astype(np.float64),  # <= 0 iff converged
                 missing - 0.5,  # <= 0 iff both fingers touch
                 (m["peak_compression"] - problem.strain_limit) / problem.strain_limit,
+                # <= 0 iff it holds without the pin (inf, one finger: a large finite value)
+                np.minimum(m["required_friction"] / problem.friction_coefficient - 1.0, 1e6),
             ])
 
     return _GraspDesign()

@@ -26,7 +26,12 @@ from envs.evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_STRAIN_LIMIT
+from envs.model.defaults import (
+    DEFAULT_ELEMENT,
+    DEFAULT_FRICTION_COEFFICIENT,
+    DEFAULT_STRAIN_LIMIT,
+    MAX_FRICTION_COEFFICIENT,
+)
 from envs.model.family import resolve_model
 from envs.scene import PRESETS, Scene, SoftDisk, joint_spring
 from envs.validation import check_range
@@ -55,7 +60,8 @@ BEST_METRIC_KEYS = (
     "valid_at_rest", "converged", "stable", "n_contacts", "touching", "total_force_n",
     "jaw_angles_rad", "contact_score", "peak_strain", "peak_log_strain", "max_displacement_ratio",
     "peak_compression",
-    "strain_limit",
+    "strain_limit", "pin_force_n", "pin_moment_nm", "required_friction", "friction_coefficient",
+    "holds", "penalty_slip",
     "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
     "reward",
 )
@@ -92,6 +98,12 @@ def check_seed(seed: Any) -> int:
 def check_strain_limit(strain_limit: Any) -> float:
     """Validate the object's admissible strain, in (0, 1]."""
     return check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
+
+
+def check_friction(friction_coefficient: Any) -> float:
+    """Validate a Coulomb friction coefficient, in (0, 10]."""
+    return check_range("friction_coefficient", friction_coefficient, 0.0,
+                       MAX_FRICTION_COEFFICIENT, low_open=True)
 
 
 def paper_design(scene: str | Scene = "paper-r070", torque_nm: float = 0.1) -> np.ndarray:
@@ -144,7 +156,8 @@ class DesignProblem:
     :class:`~envs.evaluate.DesignBounds`); values outside [-1, 1] are clipped. The objective of
     the single-objective methods is the reward of :func:`envs.evaluate.evaluate_designs`
     (maximized). A design is *feasible* (for NSGA-II) when its grasp converged, both fingers
-    touch the disk and the peak compression does not exceed the strain limit.
+    touch the disk, the peak compression does not exceed the strain limit and the grasp holds
+    the object with its friction coefficient (``required_friction`` at most it).
 
     Parameters
     ----------
@@ -153,6 +166,10 @@ class DesignProblem:
     strain_limit
         Admissible compressive strain of the object [-], in (0, 1]: a limit on the peak
         compression (:func:`envs.evaluate_designs`).
+    friction_coefficient
+        Coulomb friction coefficient between the fingers and the object [-], in (0, 10]
+        (default 0.5, a rubber or silicone pad): a grasp needing more does not hold the
+        object once its centre is free, and scores below every grasp that does.
     torsion_stiffness_rel
         Joint torsion spring ``k_f`` in the object's torque unit ``s E t r^2`` per radian
         [1/rad], > 0 (:func:`envs.scene.joint_spring`). Default (with
@@ -187,6 +204,7 @@ class DesignProblem:
         self,
         disk: SoftDisk,
         strain_limit: float = DEFAULT_STRAIN_LIMIT,
+        friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
         *,
         torsion_stiffness_rel: float | None = None,
         torsion_stiffness_nm_per_rad: float | None = None,
@@ -205,6 +223,7 @@ class DesignProblem:
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
         self.disk = disk
         self.strain_limit = check_strain_limit(strain_limit)
+        self.friction_coefficient = check_friction(friction_coefficient)
         self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
@@ -239,7 +258,9 @@ class DesignProblem:
 
     @classmethod
     def from_scene(cls, scene: str | Scene = "paper-r070",
-                   strain_limit: float = DEFAULT_STRAIN_LIMIT, **kwargs: Any) -> DesignProblem:
+                   strain_limit: float = DEFAULT_STRAIN_LIMIT,
+                   friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+                   **kwargs: Any) -> DesignProblem:
         """The object and the joint spring of a scene preset (or a :class:`Scene`).
 
         The scene's gripper keeps its own spring, in N·m/rad, unless a spring is given.
@@ -259,7 +280,7 @@ class DesignProblem:
         if kwargs.get("torsion_stiffness_rel") is None:
             kwargs.setdefault("torsion_stiffness_nm_per_rad",
                               scene.gripper.torsion_stiffness_nm_per_rad)
-        return cls(scene.disk, strain_limit, **kwargs)
+        return cls(scene.disk, strain_limit, friction_coefficient, **kwargs)
 
     # --- bookkeeping --------------------------------------------------------------------------
 
@@ -311,7 +332,8 @@ class DesignProblem:
         """Evaluate physical designs (B, 6) on this object without counting them."""
         designs = np.asarray(designs, dtype=np.float64)
         return evaluate_designs(
-            designs, self.disk, strain_limits=self.strain_limit, **self.joint_spring_kwargs(),
+            designs, self.disk, strain_limits=self.strain_limit,
+            friction_coefficients=self.friction_coefficient, **self.joint_spring_kwargs(),
             weights=self.weights, executor=self.executor, **self.model.kwargs(),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
@@ -378,10 +400,9 @@ class DesignProblem:
             self.progress(x.shape[0], self.best_reward)
 
     def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
-        """Grasps that converged, touch with both fingers and keep their peak compression
-        within the strain limit."""
-        return (out["converged"] & np.all(out["touching"], axis=1)
-                & (out["peak_compression"] <= self.strain_limit))
+        """Grasps that hold the object (converged, both fingers touching, the required friction
+        within the coefficient) and keep their peak compression within the strain limit."""
+        return out["holds"] & (out["peak_compression"] <= self.strain_limit)
 
     def archive(self) -> dict[str, np.ndarray]:
         """Every evaluated point: ``x`` (n, 6), ``reward``, ``contact_score``,
@@ -440,6 +461,7 @@ class DesignProblem:
             "stiffness_scale": d.stiffness_scale,
             "contour_stiffness_ratio": d.contour_stiffness_ratio,
             "strain_limit": self.strain_limit,
+            "friction_coefficient": self.friction_coefficient,
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **self.model.kwargs(),

@@ -36,10 +36,12 @@ class NoGraspWarning(UserWarning):
 
 
 def grasp_found(metrics: dict[str, Any]) -> bool:
-    """Whether a design's metrics (:attr:`OptimResult.best_metrics`) are a grasp: valid at
-    rest, converged, both fingers touching."""
+    """Whether a design's metrics (:attr:`OptimResult.best_metrics`) are a grasp that holds:
+    valid at rest, converged, both fingers touching and, where the metrics say it, the
+    required friction within the object's coefficient (``holds``)."""
     touching = metrics.get("touching") or [False, False]
-    return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching))
+    return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching)
+                and metrics.get("holds", True))
 
 
 def no_grasp_reason(metrics: dict[str, Any]) -> str:
@@ -50,7 +52,12 @@ def no_grasp_reason(metrics: dict[str, Any]) -> str:
         return "is invalid at rest (the fingers overlap the disk, ...)"
     if not metrics.get("converged"):
         return "did not converge"
-    return "does not touch the disk with both fingers"
+    touching = metrics.get("touching") or [False, False]
+    if not all(touching):
+        return "does not touch the disk with both fingers"
+    need, mu = metrics.get("required_friction"), metrics.get("friction_coefficient")
+    return (f"would let the object slip out: it needs a friction coefficient of {need}, more "
+            f"than the object's {mu}")
 
 
 @dataclass(frozen=True)

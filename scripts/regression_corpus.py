@@ -12,9 +12,10 @@ Stores in ``tests/data/regression_corpus.npz``:
   paper-r070): converged flag, jaw angles, contour points and face forces;
 * the default model (nh-quad, 40 points on 2 rings, its shipped calibration): 700 random designs
   of the object-relative box (:class:`envs.DesignBounds`) on the three paper disks, and every
-  preset at three torques, with the same answers (keys ``default_*``). The fan rows above were
-  stored when the fan was the default; the ring meshes have their own kernels (element energies,
-  the scalar banded factor), which these rows pin.
+  preset at three torques, with the same answers (keys ``default_*``), and for the designs
+  also the peak compression, the contact score, the pin force and the required friction. The
+  fan rows above were stored when the fan was the default; the ring meshes have their own
+  kernels (element energies, the scalar banded factor), which these rows pin.
 
 ``tests/test_regression.py`` recomputes every answer and compares. Rerun this script only for
 an intended change of answers, and say in the commit which rows changed and why.
@@ -43,7 +44,8 @@ DESIGN_KEYS = ("status", "converged", "jaw_angles_rad", "n_contacts", "peak_stra
 DEFAULT_SEED = 20261125
 DEFAULT_DESIGN_ROWS = {"paper-r070": 300, "paper-r050": 200, "paper-r100": 200}
 DEFAULT_TORQUES_REL = (0.2, 0.5, 1.0)  # of the preset's reference torque
-DEFAULT_DESIGN_KEYS = DESIGN_KEYS + ("peak_compression", "contact_score")
+DEFAULT_DESIGN_KEYS = DESIGN_KEYS + ("peak_compression", "contact_score", "pin_force_n",
+                                     "required_friction")
 
 
 def design_inputs() -> tuple[np.ndarray, np.ndarray]:

@@ -83,9 +83,18 @@ def test_outputs_have_documented_keys_shapes_and_paper_values():
     assert np.all(width < 0.15)
     np.testing.assert_allclose(out["contact_score"], out["grip_share"] * width.sum(axis=1),
                                rtol=1e-12)
-    total = (out["reward_contact"] + out["reward_deform"] + out["penalty_miss"]
-             + out["penalty_gap"] + out["penalty_invalid"] + out["penalty_fail"])
+    total = (out["reward_contact"] + out["reward_deform"] + out["penalty_slip"]
+             + out["penalty_miss"] + out["penalty_gap"] + out["penalty_invalid"]
+             + out["penalty_fail"])
     np.testing.assert_array_equal(out["reward"], total)
+    # the paper's gripper at 35-36 deg needs friction tan(theta) ~ 0.72 to hold the disk
+    # without its pin: more than the default 0.5, so it scores in the tier of grasps that slip
+    np.testing.assert_allclose(out["required_friction"], np.tan(out["jaw_angles_rad"][:, 0]),
+                               rtol=1e-9)
+    w = RewardWeights()
+    assert not out["holds"].any() and np.all(out["reward_contact"] == 0.0)
+    assert np.all((out["reward"] > -w.deform * w.deform_cap - w.slip)
+                  & (out["reward"] < -w.deform * w.deform_cap))
 
 
 @pytest.mark.parametrize("model", [{}, {"n_triangles": 20, "element": "spring"}])
@@ -169,14 +178,17 @@ def test_reward_prefers_a_grasp_over_a_miss():
     assert out["converged"].all()
     np.testing.assert_array_equal(out["n_contacts"][0], [0, 0])  # too weak to reach the disk
     assert np.all(out["n_contacts"][1] > 0)
-    assert out["penalty_miss"][0] == -2 * RewardWeights().miss
+    w = RewardWeights()
+    assert out["penalty_miss"][0] == -(w.deform * w.deform_cap + w.slip) - 2 * w.miss
     assert out["penalty_gap"][0] < 0.0 and out["penalty_gap"][1] == 0.0
     assert out["reward"][1] > out["reward"][0]
 
 
 def test_reward_prefers_a_gentle_grasp_at_equal_contacts():
     torques = np.linspace(0.05, 0.8, 16)
-    out = evaluate_designs(paper_designs(torques), DISK)
+    # (friction 1: the paper's gripper needs 0.7-0.8 to hold, more than the default)
+    out = evaluate_designs(paper_designs(torques), DISK, friction_coefficients=1.0)
+    assert out["holds"].all()
     assert out["converged"].all()
     groups: dict[tuple[int, int], list[int]] = {}
     for i, nc in enumerate(map(tuple, out["n_contacts"].tolist())):
@@ -434,7 +446,8 @@ def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
     action = -np.ones(6)
     action[1] = 1.0  # 60 deg: the disk would sit below the joints; raised to 0, it overlaps
     _, reward, *_, info = env.step(action)
-    assert -4.0 < reward < -RewardWeights().invalid and not info["valid_at_rest"]
+    w = RewardWeights()
+    assert -(w.invalid + w.violation) < reward < -w.invalid and not info["valid_at_rest"]
     with pytest.raises(ValueError):
         env.reset(options={"disk": SoftDisk(2.0, 0.0)})  # outside the observable range
     with pytest.raises(ValueError):
@@ -611,10 +624,11 @@ def test_evaluate_names_a_bad_mesh_size(value, match):
 def test_a_nan_row_is_reported_and_the_others_answered():
     good = [0.2, 0.785, 0.025, 0.01, 0.2, 0.013]
     designs = np.array([good, [np.nan, *good[1:]], good])
-    out = evaluate_designs(designs, DISK)
+    out = evaluate_designs(designs, DISK, friction_coefficients=1.0)
     np.testing.assert_array_equal(out["valid_at_rest"], [True, False, True])
     np.testing.assert_array_equal(out["converged"], [True, False, True])
-    assert out["status"][1] == -1 and out["reward"][1] == -4.0
+    w = RewardWeights()
+    assert out["status"][1] == -1 and out["reward"][1] == -(w.invalid + w.violation)
     # the good rows are answered as if alone: a grasp with both fingers
     assert out["reward"][0] == out["reward"][2] > -1.0
     assert out["touching"][[0, 2]].all()

@@ -35,8 +35,11 @@ def batch():
     designs[3, 0] = np.nan
     n = np.where(np.arange(designs.shape[0]) % 2 == 0, 12, 20)
     weights = RewardWeights(contact=1.3, deform=0.2, miss=0.4, gap=0.7, invalid=3.5,
-                            violation=0.8, fail=2.0, contact_cap=0.4, deform_cap=3.0)
-    out = evaluate_designs(designs, disk, n_triangles=n, element="spring", weights=weights)
+                            violation=0.8, fail=2.9, contact_cap=0.4, deform_cap=3.0, slip=0.6)
+    # friction per row: some grasps hold, some would slip
+    mu = np.where(np.arange(designs.shape[0]) % 3 == 0, 0.2, 0.6)
+    out = evaluate_designs(designs, disk, n_triangles=n, element="spring", weights=weights,
+                           friction_coefficients=mu)
     return designs, disk, n, weights, out
 
 
@@ -50,20 +53,39 @@ def test_reward_terms_follow_their_formulas(batch):
     designs, disk, n, w, out = batch
     ok = out["converged"]
     valid = out["valid_at_rest"]
-    contact = np.where(ok, w.contact * np.minimum(out["contact_score"], w.contact_cap), 0.0)
-    deform = np.where(ok, -w.deform * np.minimum(out["peak_compression"] / out["strain_limit"],
-                                                 w.deform_cap), 0.0)
-    miss = np.where(ok, -w.miss * (~out["touching"]).sum(axis=1), 0.0)
+    missing = (~out["touching"]).sum(axis=1)
+    need, mu = out["required_friction"], out["friction_coefficient"]
+    hold = ok & (missing == 0) & (need <= mu)
+    slip = ok & (missing == 0) & ~hold
+    miss_row = ok & (missing > 0)
+    floor = w.deform * w.deform_cap
+    assert hold.sum() >= 20 and slip.sum() >= 20 and miss_row.sum() >= 5
+    np.testing.assert_array_equal(out["holds"], hold)
+    contact = np.where(hold, w.contact * np.minimum(out["contact_score"], w.contact_cap), 0.0)
+    deform = np.where(hold, -w.deform * np.minimum(out["peak_compression"]
+                                                   / out["strain_limit"], w.deform_cap), 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        excess = need / mu - 1.0
+        bounded = np.where(np.isfinite(excess), excess / (1.0 + excess), 1.0)
+    slipping = np.where(slip, -floor - w.slip * bounded, 0.0)
+    miss = np.where(miss_row, -(floor + w.slip) - w.miss * missing, 0.0)
     g = out["finger_gap_m"].max(axis=1) / disk.radius_m
-    gap = np.where(ok, -w.gap * g / (1 + g), 0.0)
+    gap = np.where(miss_row, -w.gap * g / (1 + g), 0.0)
     invalid = np.where(valid, 0.0, -w.invalid - w.violation * out["rest_violation"])
     fail = np.where(valid & ~ok, -w.fail, 0.0)
     for key, ref in (("reward_contact", contact), ("reward_deform", deform),
-                     ("penalty_miss", miss), ("penalty_gap", gap),
+                     ("penalty_slip", slipping), ("penalty_miss", miss), ("penalty_gap", gap),
                      ("penalty_invalid", invalid), ("penalty_fail", fail)):
         np.testing.assert_allclose(out[key], ref, rtol=0, atol=1e-15, err_msg=key)
-    np.testing.assert_allclose(out["reward"], contact + deform + miss + gap + invalid + fail,
+    np.testing.assert_allclose(out["reward"],
+                               contact + deform + slipping + miss + gap + invalid + fail,
                                rtol=0, atol=1e-15)
+    # the tiers: every hold above every slip above every miss above every failure and every
+    # invalid design
+    tiers = [out["reward"][m] for m in (hold, slip, miss_row, valid & ~ok, ~valid)]
+    for upper, lower in zip(tiers, tiers[1:], strict=False):
+        if upper.size and lower.size:
+            assert upper.min() > lower.max() or (upper.min() == lower.max() == -w.fail)
 
 
 def test_contact_score_is_grip_share_times_contact_fraction(batch):
@@ -75,7 +97,7 @@ def test_contact_score_is_grip_share_times_contact_fraction(batch):
                               disk.poisson_ratio)
     capped = 0
     for i in np.flatnonzero(ok):
-        scene = Design.from_array(designs[i]).to_scene(disk, 0.073)
+        scene = Design.from_array(designs[i]).to_scene(disk)
         res = simulate(scene, float(designs[i, 4]), int(n[i]), element="spring")
         face = res.contact_forces_n.sum(axis=1)
         nodes = out["n_contacts"][i] / n[i]

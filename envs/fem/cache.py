@@ -14,7 +14,7 @@ from pathlib import Path
 from .result import FemResult
 
 #: Version tag of the discretisation and solver; part of the cache key.
-FEM_VERSION = "fem-3"  # fem-3: contact fractions, stop torques, stretch strain
+FEM_VERSION = "fem-4"  # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding
 
 
 def _cache_dir() -> Path:

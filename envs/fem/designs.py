@@ -83,5 +83,8 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
         "peak_strain": column(lambda r: r.peak_stretch_strain),
         "peak_log_strain": column(lambda r: r.peak_strain),
         "max_displacement_ratio": column(lambda r: r.max_displacement_m) / radius_m,
+        "pin_force_n": column(lambda r: r.pin_force_n, 2),
+        "pin_moment_nm": column(lambda r: r.pin_moment_nm),
+        "required_friction": column(lambda r: r.required_friction),
         "message": np.array([r.message for r in results], dtype=object),
     }

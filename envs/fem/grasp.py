@@ -15,6 +15,7 @@ from dataclasses import fields, replace
 import numpy as np
 
 from envs.model.geometry import closed_angle_rad
+from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y, holding_row
 from envs.scene import Scene
 from envs.validation import check_range
 
@@ -251,6 +252,10 @@ def _solve_grasp(
             )
             continue
         forces, tip = system.contact_forces(x, load)
+        normals, points, node_forces, net, moment = system.contact_list(x, load)
+        # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
+        moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
+        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c)
         gaps = system.gaps(x)
         pen = 0.0
         for (g, valid), f in zip(gaps, forces, strict=True):
@@ -289,6 +294,9 @@ def _solve_grasp(
                     float(np.sum(rim.weight_m2[f > 0]) / rim_length) for f in forces[:2]),
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
+                pin_force_n=(float(hold[H_PIN_X]), float(hold[H_PIN_Y])),
+                pin_moment_nm=float(hold[H_PIN_MOMENT]),
+                required_friction=float(hold[H_MU]),
                 **common,
             )
         )

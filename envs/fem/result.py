@@ -73,6 +73,15 @@ class FemResult:
         Largest principal engineering strain ``max |lambda_i - 1|`` over the same quadrature
         points as ``peak_strain`` [-]: the largest relative length change of any material fibre
         (the FEM's counterpart of the point-spring model's largest spring strain).
+    pin_force_n
+        Force the rigid hub exerts on the disk, x and y [N] (NaN when not converged): what
+        the frictionless contacts leave unbalanced (:mod:`envs.model.holding`).
+    pin_moment_nm
+        The hub's moment on the disk about its centre [N·m].
+    required_friction
+        The smallest Coulomb coefficient with which friction at the contacts (rim nodes on the
+        faces, the tip corners) could carry the hub's force and moment instead [-]
+        (:func:`envs.model.holding.required_friction`, the point-spring model's definition).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -99,6 +108,9 @@ class FemResult:
     contact_fractions: tuple[float, float] = (math.nan, math.nan)
     stop_torques_nm: tuple[float, float] = (0.0, 0.0)
     peak_stretch_strain: float = math.nan
+    pin_force_n: tuple[float, float] = (math.nan, math.nan)
+    pin_moment_nm: float = math.nan
+    required_friction: float = math.nan
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:
@@ -139,6 +151,6 @@ class FemResult:
         kw["jaw_angles_rad"] = tuple(float(v) for v in kw["jaw_angles_rad"])
         kw["contact_forces_n"] = tuple(float(v) for v in kw["contact_forces_n"])
         kw["contact_node_counts"] = tuple(int(v) for v in kw["contact_node_counts"])
-        for name in ("tip_forces_n", "contact_fractions", "stop_torques_nm"):
+        for name in ("tip_forces_n", "contact_fractions", "stop_torques_nm", "pin_force_n"):
             kw[name] = tuple(float(v) for v in kw[name])
         return cls(**kw, from_cache=from_cache)

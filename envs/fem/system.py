@@ -202,6 +202,57 @@ class _System:
         out = self._contact(x, load, False)
         return out[3], out[4]
 
+    def contact_list(self, x: np.ndarray, load: float) -> tuple[np.ndarray, ...]:
+        """The contacts on the body and their net force and moment about the origin.
+
+        Returns ``(normals (k, 2), points (k, 2) [m], forces (k,) [N], net_force (2,) [N],
+        net_moment [N·m])``: each loaded rim node on a jaw face (its normal the face's, the
+        force the node's penalty force) and each loaded tip corner (its normal the direction of
+        the force it puts on the rim nodes it presses, at the corner); the net force and moment
+        sum the forces on the rim nodes (the hub carries their opposite at equilibrium).
+        """
+        p = self.rim_positions(x)
+        nodes, corner_forces = self.contact_forces(x, load)
+        normals, points, forces = [], [], []
+        net = np.zeros(2)
+        moment = 0.0
+        for ob, f in zip(self.obstacles, nodes, strict=True):
+            _, _, dgdp, *_ = ob.evaluate(p, x[self.n + ob.qi])
+            act = np.flatnonzero(f > 0)
+            vec = f[act, None] * dgdp[act]  # the face pushes a node along its normal
+            net += vec.sum(axis=0)
+            moment += float(np.sum(p[act, 0] * vec[:, 1] - p[act, 1] * vec[:, 0]))
+            normals.append(dgdp[act])
+            points.append(p[act])
+            forces.append(f[act])
+        if self.corners:
+            poly = p[self.rim_order]
+            for corner, f in zip(self.corners, corner_forces, strict=True):
+                if not f > 0:
+                    continue
+                c = corner.evaluate(float(x[self.n + corner.qi]))[0]
+                gap, kind, idx = _corner_feature(poly, c)
+                if kind == "segment":
+                    ends = [idx, (idx + 1) % poly.shape[0]]
+                    _, gz = _segment_gap_gradient(np.concatenate((poly[ends[0]], poly[ends[1]],
+                                                                  c)))
+                else:
+                    ends = [idx]
+                    _, gz = _vertex_distance_gradient(np.concatenate((poly[idx], c)))
+                    gz = math.copysign(1.0, gap) * gz
+                gz = np.real(gz[: 2 * len(ends)]).reshape(-1, 2)
+                vec = f * gz  # the force on each rim node the corner presses
+                net += vec.sum(axis=0)
+                moment += float(np.sum(poly[ends, 0] * vec[:, 1] - poly[ends, 1] * vec[:, 0]))
+                total = vec.sum(axis=0)
+                size = float(np.linalg.norm(total))
+                normals.append((total / size)[None, :])
+                points.append(c[None, :])
+                forces.append(np.array([size]))
+        return (np.concatenate(normals) if normals else np.zeros((0, 2)),
+                np.concatenate(points) if points else np.zeros((0, 2)),
+                np.concatenate(forces) if forces else np.zeros(0), net, moment)
+
     def gaps(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         p = self.rim_positions(x)
         out = []

@@ -99,6 +99,16 @@ CORNER_ROUNDING = 1e-3
 # 0.100), so 0.10 keeps the reward's balance of contact against deformation
 DEFAULT_STRAIN_LIMIT = 0.10
 
+# Coulomb friction coefficient between the fingers and the object: a design whose grasp needs
+# more does not hold the object once its centre is free (envs.model.holding). Default 0.5, a
+# rubber or silicone finger pad on skin, fruit or soft tissue: dry material pairs mostly lie
+# at 0.3-0.6, gripping surfaces on skin were measured at 0.36-0.63 (medical tapes) and 0.7-1.2
+# (sandpapers) (Table 1 of PMC4808115), the friction of human skin on most materials at about
+# 0.2-1 (Derler and Gerhardt, Tribology Letters 45, 2012). Wet tissue on polished steel jaws
+# slips at much less (0.1-0.3): give such an object its own coefficient.
+DEFAULT_FRICTION_COEFFICIENT = 0.5
+MAX_FRICTION_COEFFICIENT = 10.0  # beyond any Coulomb contact (a hook, not friction)
+
 # The finite-element fidelity of evaluate_designs: rings of the disk mesh (element size r / 12,
 # 864 quadratic triangles, ~3,500 unknowns; the mesh of the accuracy references, within ~0.5 %
 # of the mesh-converged closing angle on the paper disks), and the largest accepted

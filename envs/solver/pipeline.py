@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from envs import check
+from envs.model.holding import N_HOLD
 from envs.model.layout import (
     I_ITERATIONS,
     I_ROUNDS,
@@ -68,6 +69,7 @@ from envs.model.rings import HUB_RADIUS, kernel_copy
 
 from ..parallel import run_rows
 from . import driver
+from .reaction import holding_one, max_contacts
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
 from .warmup import announce_compile
 
@@ -100,6 +102,7 @@ class BatchSolution(NamedTuple):
     state_scaled: np.ndarray  # (B, 2 N M + 2) solver state (warm starts)
     interior_points_m: np.ndarray  # (B, (M - 1) N, 2) interior points of a ring mesh
     face_scaled: np.ndarray  # (B, 2, N) scaled face multipliers (warm starts)
+    holding: np.ndarray  # (B, N_HOLD): pin force x, y [N], its moment [N·m], required friction
     solve_time_s: float  # compiled solve time of the whole batch
 
 
@@ -242,12 +245,20 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
 @njit(cache=True, error_model="numpy", nogil=True)
 def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
                  points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
-                 status, counts, flags, jaw):
+                 status, counts, flags, jaw, holding):
     """Finish rows ``start .. stop_row - 1``: SI answers, metrics, the check, the public
-    status, and the per-row columns of :class:`BatchSolution` (``counts`` and ``flags`` one
-    row a column, layouts ``C_*`` and ``F_*``; here rather than in numpy: a one-row call paid
-    ~5 us for a dozen small array operations)."""
+    status, the pin reaction and required friction (:mod:`envs.solver.reaction`), and the
+    per-row columns of :class:`BatchSolution` (``counts`` and ``flags`` one row a column,
+    layouts ``C_*`` and ``F_*``; here rather than in numpy: a one-row call paid ~5 us for a
+    dozen small array operations)."""
+    # the contact list's scratch, once per block of rows
+    k = max_contacts(n)
+    grad5, hess5 = np.empty(5), np.empty((5, 5))
+    normals, contact_points = np.empty((k, 2)), np.empty((k, 2))
+    forces, gens = np.empty(k), np.empty((k, 3))
     for b in range(start, stop_row):
+        holding_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], grad5, hess5,
+                    normals, contact_points, forces, gens, holding[b])
         st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                          infos[b], points[b], interior[b], face[b], corner[b], stop[b],
                          totals[b], edges[b], metrics[b], ck[b], verdict[b])
@@ -334,9 +345,10 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     counts = np.empty((N_COUNTS, b), dtype=np.int64)
     flags = np.empty((N_FLAGS, b), dtype=np.bool_)
     jaw = np.empty((b, 2))
+    holding = np.empty((b, N_HOLD))
     run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
              interior, face, corner, stop, totals, edges, metrics, ck, verdict, status, counts,
-             flags, jaw)
+             flags, jaw, holding)
     return BatchSolution(
         status=status, converged=flags[F_CONVERGED], folded=flags[F_FOLDED],
         iterations=counts[C_ITERATIONS], rounds=counts[C_ROUNDS],
@@ -348,7 +360,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         max_displacement_ratio=metrics[:, M_DISPLACEMENT],
         energy_j=metrics[:, M_ENERGY], inverted=counts[C_INVERTED], check=verdict,
         state_scaled=xs, face_scaled=lam_face, solve_time_s=elapsed,
-        interior_points_m=interior,
+        interior_points_m=interior, holding=holding,
     )
 
 

@@ -87,6 +87,20 @@ class GraspResult:
     interior_points_m : numpy.ndarray
         Interior points of a ring mesh, ``((M - 1) N, 2)``, ring by ring from the hub out
         (empty for the fan) [m].
+    pin_force_n : numpy.ndarray
+        Force the fixed centre exerts on the object, x and y in the gripper frame [N], (2,):
+        what the frictionless contacts leave unbalanced (a free object would be pushed by its
+        opposite; inclined jaws push the object out, along +y).
+    pin_moment_nm : float
+        Moment of the fixed centre on the object about the centre [N·m]: a ring mesh's hub
+        carries one; a pin carries none (the value is then the equilibrium's round-off).
+    required_friction : float
+        The smallest Coulomb coefficient with which friction at the contacts (tangential forces
+        along the finger axes on the faces, across the normal at the corners, each at most the
+        coefficient times its normal force) could carry the pin's force and moment instead [-]
+        (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction can
+        (one finger touching). A symmetric grasp on the faces at finger angle ``theta`` needs
+        ``tan(theta)``.
     inverted_triangles : int
         Mesh triangles (the fan's: centre, point i, point i+1) turned over in the returned
         state. The
@@ -124,6 +138,18 @@ class GraspResult:
     model_scale: float = 1.0
     interior_points_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     peak_compression: float = math.nan
+    pin_force_n: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    pin_moment_nm: float = 0.0
+    required_friction: float = 0.0
+
+    def holds(self, friction_coefficient: float) -> bool:
+        """Whether this grasp would hold a free object with this Coulomb coefficient: a
+        converged grasp touching with both fingers whose :attr:`required_friction` is at most
+        it."""
+        touching = [self.contact_mask[j].any() or self.corner_forces_n[j].sum() > 0.0
+                    for j in range(2)]
+        return bool(self.converged and all(touching)
+                    and self.required_friction <= friction_coefficient)
 
     @property
     def folded(self) -> bool:
@@ -175,6 +201,10 @@ class GraspResult:
             "peak_strain": self.peak_strain,
             "peak_log_strain": self.peak_log_strain,
             "peak_compression": self.peak_compression,
+            "pin_force_n": self.pin_force_n.tolist(),
+            "pin_moment_nm": self.pin_moment_nm,
+            "required_friction": (self.required_friction if math.isfinite(self.required_friction)
+                                  else "inf"),
             "max_displacement_ratio": self.max_displacement_ratio,
             "n_contacts": list(self.n_contacts),
             "total_force_n": list(self.total_force_n),

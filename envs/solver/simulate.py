@@ -19,6 +19,7 @@ import numpy as np
 from envs import check
 from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_PHASE_RAD, STIFFNESS_RULES
 from envs.model.family import ModelSpec, resolve_model
+from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y
 from envs.model.layout import S_SCALE
 from envs.model.problem import pack_params, rest_state, stiffness_unit
 from envs.scene import Scene
@@ -80,6 +81,9 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         model_scale=float(model_scale),
         interior_points_m=sol.interior_points_m[i],
         peak_compression=float(sol.peak_compression[i]),
+        pin_force_n=sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy(),
+        pin_moment_nm=float(sol.holding[i, H_PIN_MOMENT]),
+        required_friction=float(sol.holding[i, H_MU]),
     )
 
 

@@ -1,0 +1,109 @@
+"""The pin reaction and the required friction of a solved point-spring grasp.
+
+Each contact force of the solver is its multiplier times the gradient of its gap
+(:mod:`envs.solver.contact`): on a contour point for a face contact (the rounded finger bar:
+the gripping face, its ends, its back), on the two end points of a contour edge for a corner.
+The gradient's direction is the contact's normal, so the contact list and the net force and
+moment on the object come from the solver's own contact geometry, written once. The fixed
+centre carries what they leave unbalanced (:mod:`envs.model.holding`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ..model.holding import holding_of_contacts
+from ..model.layout import N_CORNERS, S_DISTANCE, S_RADIUS
+from ..model.problem import stiffness_unit
+from .contact import _corner_eval, _face_eval, _sel, _trig
+
+__all__ = ["max_contacts", "holding_one"]
+
+
+@njit(cache=True, inline="always")
+def max_contacts(n):
+    """Largest number of contacts of a grasp with N contour points: every point on each
+    finger's bar, and every corner against every edge."""
+    return 2 * n * (1 + N_CORNERS)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, points, forces,
+                gens, out):
+    """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer.
+
+    Parameters
+    ----------
+    s, prm, n
+        The scene row (SI), its packed parameters and N.
+    x, lam_face, lam_corner
+        The scaled state and the face (2, N) and corner (2, 4, N) multipliers.
+    grad5, hess5, normals, points, forces, gens
+        Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / 3).
+    out
+        The holding row, written: the pin force on the object [N], its moment about the
+        centre [N·m], the required friction [-].
+
+    Returns
+    -------
+    int
+        The number of contacts written to ``normals``, ``points`` and ``forces``.
+    """
+    r = s[S_RADIUS]
+    force_unit = stiffness_unit(s) * r
+    yc = s[S_DISTANCE] + r
+    q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
+    count = 0
+    fx = fy = moment = 0.0
+    for j in range(2):
+        sj, cj = _sel(sn, j), _sel(cs, j)
+        for i in range(n):
+            lam = lam_face[j, i]
+            if not lam > 0.0:
+                continue
+            _face_eval(q, i, j, sj, cj, prm, grad5, hess5, False)
+            f = lam * force_unit
+            nx, ny = grad5[0], grad5[1]
+            px, py = q[i, 0] * r, q[i, 1] * r
+            normals[count, 0], normals[count, 1] = nx, ny
+            points[count, 0], points[count, 1] = px, py + yc
+            forces[count] = f
+            fx += f * nx
+            fy += f * ny
+            moment += f * (px * ny - py * nx)
+            count += 1
+        for c in range(N_CORNERS):
+            for k in range(n):
+                lam = lam_corner[j, c, k]
+                if not lam > 0.0:
+                    continue
+                _corner_eval(q, k, j, sj, cj, c, prm, grad5, hess5, False)
+                k1 = k + 1 if k + 1 < n else 0
+                # the force on the edge's two points, lam times the gap's gradient at each
+                ax, ay, bx, by = grad5[0], grad5[1], grad5[2], grad5[3]
+                tx, ty = ax + bx, ay + by
+                size = math.sqrt(tx * tx + ty * ty)
+                if size == 0.0:
+                    continue
+                f = lam * force_unit
+                moment += f * ((q[k, 0] * ay - q[k, 1] * ax) + (q[k1, 0] * by - q[k1, 1] * bx)
+                               ) * r
+                fx += f * tx
+                fy += f * ty
+                # where a tangential force would act: the edge point the force is shared from
+                # (weights |grad| of each end: 1 - t and t on the edge, 1 at an end point)
+                wa = math.sqrt(ax * ax + ay * ay)
+                wb = math.sqrt(bx * bx + by * by)
+                px = (wa * q[k, 0] + wb * q[k1, 0]) / (wa + wb) * r
+                py = (wa * q[k, 1] + wb * q[k1, 1]) / (wa + wb) * r
+                normals[count, 0], normals[count, 1] = tx / size, ty / size
+                points[count, 0], points[count, 1] = px, py + yc
+                forces[count] = f * size
+                count += 1
+    # the centre carries what the contacts leave unbalanced
+    holding_of_contacts(normals, points, forces, count, 0.0, yc, r, -fx, -fy, -moment, gens,
+                        out)
+    return count
