@@ -15,11 +15,11 @@ demo: $(STAMP)
 	$(BIN)/psm-grasp demo --out out
 
 test: $(STAMP)
-	$(BIN)/ruff check envs optim tests scripts
+	$(BIN)/ruff check envs optim cli tests scripts
 	$(BIN)/python -m pytest -q
 
 lint: $(STAMP)
-	$(BIN)/ruff check envs optim tests scripts
+	$(BIN)/ruff check envs optim cli tests scripts
 
 bench: $(STAMP)
 	$(BIN)/python scripts/bench_solver.py

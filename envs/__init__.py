@@ -58,7 +58,10 @@ def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
 if ENV_ID not in gymnasium.registry:
     gymnasium.register(
         id=ENV_ID,
-        entry_point="envs.design_env:GripperDesignEnv",
+        # the env inside Gymnasium's passive checker, its reset arguments checked outside it:
+        # a refused first reset would break the checker for good (envs/reset_check.py)
+        entry_point="envs.reset_check:make_env",
+        disable_env_checker=True,  # make_env adds the checker itself
         vector_entry_point="envs.design_env:GripperDesignVectorEnv",
         # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
         # would also flag that step as truncated (Gymnasium's checker rejects it)

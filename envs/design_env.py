@@ -38,6 +38,7 @@ __all__ = [
     "observe",
     "GripperDesignEnv",
     "GripperDesignVectorEnv",
+    "check_reset_arguments",
 ]
 
 # (name, transform, low, high): the observation is the transformed value mapped linearly from
@@ -209,23 +210,50 @@ def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndar
 
 
 def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
+    """The reset options, every one validated (the strain limit as a float) before a reset
+    changes anything: a refused reset leaves the env, its random stream included, as it was."""
     options = dict(options or {})
     unknown = set(options) - {"disk", "strain_limit"}
     if unknown:
         raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: disk, strain_limit")
     if "disk" in options and not isinstance(options["disk"], SoftDisk):
         raise ValueError(f"options['disk'] must be a SoftDisk, got {type(options['disk'])}")
+    if "strain_limit" in options:
+        options["strain_limit"] = check_range("strain_limit", options["strain_limit"], 0.0, 1.0,
+                                              low_open=True)
+    if "disk" in options:  # observable (any valid limit stands in for one drawn later)
+        _observe_table(_object_table([options["disk"]]),
+                       np.array([options.get("strain_limit", 1.0)]))
     return options
+
+
+def check_reset_arguments(seed: int | None, options: dict[str, Any] | None) -> dict[str, Any]:
+    """Validate the arguments of :meth:`GripperDesignEnv.reset` without touching any state;
+    return the parsed options.
+
+    Also called by :class:`envs.reset_check.ResetCheck` around the env ``gym.make`` builds, before
+    Gymnasium's passive checker: that wrapper marks its first reset as checked before calling
+    the env, so a refused first reset would leave it without the reset's data and its first
+    step check would fail with a ``TypeError`` from then on.
+
+    Raises
+    ------
+    ValueError
+        For a seed that is not None or an integer >= 0, an unknown option, a ``disk`` that is
+        not an observable :class:`~envs.scene.SoftDisk`, a ``strain_limit`` outside (0, 1].
+    """
+    if seed is not None and (isinstance(seed, bool | np.bool_)
+                             or not isinstance(seed, int | np.integer) or seed < 0):
+        raise ValueError(f"seed must be None or an integer >= 0, got {seed!r}")
+    return _parse_options(options)
 
 
 def _draw(rng: np.random.Generator, distribution: ObjectDistribution,
           options: dict[str, Any]) -> tuple[SoftDisk, float]:
-    # always draw, so the random stream does not depend on the options
+    # always draw, so the random stream does not depend on the options (validated by
+    # _parse_options; the distribution's own draws lie in its validated range)
     disk, limit = distribution.sample(rng)
-    disk = options.get("disk", disk)
-    if "strain_limit" in options:  # the distribution's own draws lie in its validated range
-        limit = check_range("strain_limit", options["strain_limit"], 0.0, 1.0, low_open=True)
-    return disk, limit
+    return options.get("disk", disk), options.get("strain_limit", limit)
 
 
 def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
@@ -484,8 +512,8 @@ class GripperDesignEnv(gym.Env):
         self.model = resolve_model(value, self.model.n_rings, self.model.element)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
-        super().reset(seed=seed)
-        opts = _parse_options(options)
+        opts = check_reset_arguments(seed, options)  # before anything changes
+        super().reset(seed=None if seed is None else int(seed))
         self._disk, self._strain_limit, self._obs = _draw_object(
             self.np_random, self.distribution, opts)
         self._last_design = None

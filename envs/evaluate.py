@@ -186,11 +186,12 @@ class DesignBounds:
 
     def __post_init__(self) -> None:
         for name in ("low", "high"):
-            vals = tuple(float(v) for v in getattr(self, name))
-            if len(vals) != N_DESIGN:
-                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(vals)}")
-            for field_name, v in zip(RELATIVE_FIELDS, vals, strict=True):
-                check_range(f"DesignBounds.{name}[{field_name}]", v)
+            given = tuple(getattr(self, name))
+            if len(given) != N_DESIGN:
+                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(given)}")
+            # checked as given, not after float(): "0.2" and True are not bounds
+            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v)
+                         for field_name, v in zip(RELATIVE_FIELDS, given, strict=True))
             object.__setattr__(self, name, vals)
         for field_name, lo, hi in zip(RELATIVE_FIELDS, self.low, self.high, strict=True):
             if not lo < hi:

@@ -27,6 +27,10 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+# from its own module, not from the package: envs/__init__ imports this module, and a module
+# importing its package back closes an import circle
+from .design_env import GripperDesignVectorEnv
+
 __all__ = ["SB3_INSTALL_HINT", "sb3_vec_env"]
 
 SB3_INSTALL_HINT = ("sb3_vec_env needs stable-baselines3: pip install 'psm-grasp[rl]'")
@@ -108,10 +112,6 @@ class _BatchedVecEnvMethods:
         if fixed:
             raise ValueError(f"{', '.join(fixed)} cannot be set: the stable-baselines3 adapter "
                              "uses same-step autoreset and terminated one-step episodes")
-        # through the package's public API, at call time: envs/ is being restructured, and
-        # envs/__init__ may import this module before it binds GripperDesignVectorEnv
-        from . import GripperDesignVectorEnv
-
         #: The batched Gymnasium vector env holding every sub-env (shared by all of them).
         self.vector_env = GripperDesignVectorEnv(
             _check_num_envs(num_envs), autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)

@@ -34,7 +34,7 @@ from .model.problem import (
     _clearance,
     rest_codes,
 )
-from .validation import check_range
+from .validation import check_range, check_real
 
 __all__ = [
     "Gripper",
@@ -319,8 +319,9 @@ class Design:
     distance_m: float
 
     def __post_init__(self) -> None:
+        # any number (an impossible design is the evaluator's to report), but a number
         for f in fields(self):
-            object.__setattr__(self, f.name, float(getattr(self, f.name)))
+            object.__setattr__(self, f.name, check_real(f.name, getattr(self, f.name)))
 
     def to_scene(self, disk: SoftDisk, torsion_stiffness_nm_per_rad: float | None = None, *,
                  torsion_stiffness_rel: float | None = None) -> Scene:

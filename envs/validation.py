@@ -7,7 +7,9 @@ allowed range, so that a user sees at once what to change.
 from __future__ import annotations
 
 import math
+import numbers
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -19,9 +21,36 @@ __all__ = [
     "check_integer",
     "check_n_triangles",
     "check_choice",
+    "check_real",
     "check_output_file",
     "check_output_dir",
 ]
+
+
+def _real(value) -> float | None:
+    """``value`` as a float when it is a real number, else None.
+
+    Real numbers are Python and numpy integers and floats (and 0-d numeric arrays); a string is
+    refused although ``float("0.2")`` would parse it, and so is a bool although ``float(True)``
+    is 1: either is a caller's mistake that would otherwise run with a value nobody typed.
+    """
+    kind = type(value)
+    if kind is float or kind is int:  # the common case first: this runs for every row
+        return float(value)
+    if isinstance(value, bool | np.bool_):
+        return None
+    if isinstance(value, numbers.Real) or (
+            isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf"):
+        try:
+            return float(value)
+        except OverflowError:  # an int beyond the float range: infinite for the range check
+            return math.copysign(math.inf, value)
+    return None
+
+
+def _kind(value) -> str:
+    """The value and its type, for an error message (``'0.2' (str)``)."""
+    return f"{value!r} ({type(value).__name__})"
 
 
 def check_range(
@@ -40,7 +69,7 @@ def check_range(
     name
         Name of the parameter, used in the error message.
     value
-        The value to check.
+        The value to check: a Python or numpy integer or float (not a bool, not a string).
     low, high
         Interval bounds.
     low_open, high_open
@@ -54,16 +83,15 @@ def check_range(
     Raises
     ------
     ValueError
-        If ``value`` is not a finite number or lies outside the interval; the message names the
-        parameter, the value and the allowed range.
+        If ``value`` is not a real number (a string or a bool included), not finite or outside
+        the interval; the message names the parameter, the value and the allowed range.
     """
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
     lo_b = "(" if low_open else "["
     hi_b = ")" if high_open else "]"
     allowed = f"{lo_b}{low:g}, {high:g}{hi_b}"
+    v = _real(value)
+    if v is None:
+        raise ValueError(f"{name} must be a real number in {allowed}, got {_kind(value)}")
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite and in {allowed}, got {v!r}")
     below = v <= low if low_open else v < low
@@ -75,19 +103,16 @@ def check_range(
 
 def check_integer(name: str, value, low: int, high: int) -> int:
     """Validate that ``value`` is an integer (a Python or numpy integer, or a float with an
-    integral value) in ``[low, high]``; returns it as ``int``.
+    integral value; not a bool, not a string) in ``[low, high]``; returns it as ``int``.
 
     Raises
     ------
     ValueError
         Naming the parameter, the value and the allowed range.
     """
-    if isinstance(value, bool | np.bool_):
-        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}") from None
+    v = _real(value)
+    if v is None:
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {_kind(value)}")
     if not math.isfinite(v) or v != int(v):
         raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
     if not low <= int(v) <= high:
@@ -110,6 +135,24 @@ def check_n_triangles(n_triangles) -> int:
         raise
 
 
+def check_real(name: str, value) -> float:
+    """Validate that ``value`` is a real number (a Python or numpy integer or float, not a bool,
+    not a string), finite or not; returns it as ``float``.
+
+    For fields that may hold any number (a design may be impossible: the evaluator reports
+    it) but must not hold something else.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter, the value and its type.
+    """
+    v = _real(value)
+    if v is None:
+        raise ValueError(f"{name} must be a real number, got {_kind(value)}")
+    return v
+
+
 def check_choice(name: str, value, allowed) -> str:
     """Validate that ``value`` is one of ``allowed``."""
     if not isinstance(value, str) or value not in allowed:
@@ -125,11 +168,31 @@ def _writable_dir(name: str, folder: Path, shown) -> None:
         raise ValueError(f"{name} = {str(shown)!r}: {str(folder)!r} is not a folder")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ValueError(f"{name} = {str(shown)!r}: the folder {str(folder)!r} is not writable")
+    # permissions do not tell the whole story (root passes os.access; /proc, /sys and read-only
+    # mounts refuse new files anyway): write a file there now, not after the work is done
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".psm-grasp-probe-", dir=folder)
+    except OSError as exc:
+        raise ValueError(f"{name} = {str(shown)!r}: cannot write in the folder {str(folder)!r} "
+                         f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
+def _writable_file(name: str, path: Path, shown) -> None:
+    """An existing file opened for appending (which leaves its content as is) and closed."""
+    try:
+        with open(path, "ab"):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{name} = {str(shown)!r} exists and cannot be written "
+                         f"({exc.strerror or exc})") from None
 
 
 def check_output_file(name: str, path, suffixes: tuple[str, ...]) -> Path:
-    """Validate an output file before any work: its folder exists and is writable, the path is
-    not a folder and its extension is one of ``suffixes`` (e.g. ``(".png",)``).
+    """Validate an output file before any work: its folder exists and a file can be created in
+    it (tried: a temporary file is written and removed), the path is not a folder, an existing
+    file can be written and the extension is one of ``suffixes`` (e.g. ``(".png",)``).
 
     Raises
     ------
@@ -143,14 +206,18 @@ def check_output_file(name: str, path, suffixes: tuple[str, ...]) -> Path:
     if p.is_dir():
         raise ValueError(f"{name} = {str(path)!r} is a folder, not a file")
     _writable_dir(name, p.parent if str(p.parent) else Path("."), path)
-    if p.exists() and not os.access(p, os.W_OK):
-        raise ValueError(f"{name} = {str(path)!r} exists and is not writable")
+    if p.exists():
+        if not os.access(p, os.W_OK):
+            raise ValueError(f"{name} = {str(path)!r} exists and is not writable")
+        _writable_file(name, p, path)
     return p
 
 
 def check_output_dir(name: str, path) -> Path:
     """Validate an output folder before any work: it is a writable folder, or it does not exist
-    yet and its parent is a writable folder (it is created then).
+    yet and its parent is a writable folder (it is created then). Writable means a file could
+    be created there: a temporary file is written and removed (the permission bits alone pass
+    ``/proc``, ``/sys``, read-only mounts and every folder for root).
 
     Raises
     ------

@@ -46,6 +46,9 @@ __all__ = [
 DEFAULT_MAX_RETRIES = 3
 POLL_S = 0.002
 DASK_HINT = "the Dask executor needs dask.distributed: pip install 'psm-grasp[dask]'"
+# seconds to wait for a Dask scheduler: a running one answers in well under a second, and a
+# wrong address should be reported before a user gives up on a silent command
+DASK_CONNECT_TIMEOUT_S = 5.0
 
 
 class ChunkFailedError(RuntimeError):
@@ -284,10 +287,29 @@ class DaskExecutor(RetryingExecutor):
         super().__init__(self, max_retries=max_retries, description=f"dask({address})")
 
     @classmethod
-    def connect(cls, address: str, **kwargs: Any) -> DaskExecutor:
-        """Connect to a running scheduler, e.g. ``"tcp://10.0.0.5:8786"``."""
+    def connect(cls, address: str, *, timeout_s: float | None = None,
+                **kwargs: Any) -> DaskExecutor:
+        """Connect to a running scheduler, e.g. ``"tcp://10.0.0.5:8786"``.
+
+        Raises
+        ------
+        ValueError
+            When no scheduler answers at ``address`` within ``timeout_s`` seconds (default
+            :data:`DASK_CONNECT_TIMEOUT_S`; Dask's own default waits 30 s, then fails with
+            chained tracebacks).
+        """
         distributed = _import_distributed()
-        return cls(distributed.Client(address), **kwargs)
+        timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else float(timeout_s)
+        try:
+            client = distributed.Client(address, timeout=f"{timeout_s}s")
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            # OSError: refused, unknown host, timed out (distributed raises OSError for all
+            # three); ValueError and TypeError: a malformed address
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ValueError(f"dask = {address!r}: no Dask scheduler answered there within "
+                             f"{timeout_s:g} s ({reason}); give the address of a running "
+                             "scheduler (tcp://host:8786) or 'local'") from None
+        return cls(client, **kwargs)
 
     @classmethod
     def local(cls, n_workers: int = 2, *, processes: bool = True, **kwargs: Any) -> DaskExecutor:

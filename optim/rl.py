@@ -14,6 +14,7 @@ Defaults are small (CPU torch, two 64-unit layers, a few thousand steps).
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -41,6 +42,9 @@ RL_HINT = "PPO and SAC need stable-baselines3 and torch: pip install 'psm-grasp[
 DEFAULT_N_ENVS = 4
 DEFAULT_PROBES = 20
 DEFAULT_NET = (64, 64)
+# arguments of the stable-baselines3 constructors that train_policy sets (not options)
+_SET_BY_TRAIN_POLICY = ("policy", "env", "seed", "policy_kwargs", "device", "verbose",
+                        "_init_setup_model")
 
 
 class PolicyRegret(NamedTuple):
@@ -60,6 +64,19 @@ def _import_sb3():
     except ImportError as exc:
         raise ImportError(RL_HINT) from exc
     return stable_baselines3
+
+
+def option_names(method: str) -> tuple[str, ...]:
+    """The options of :func:`run_ppo` and :func:`run_sac`: :func:`train_policy`'s own and the
+    stable-baselines3 constructor's, but those :func:`train_policy` sets itself (read by
+    :func:`optim.optimize.option_names`; imports stable-baselines3)."""
+    if method not in RL_METHODS:
+        raise ValueError(f"unknown RL method {method!r}; allowed: {', '.join(RL_METHODS)}")
+    own = [p.name for p in inspect.signature(train_policy).parameters.values()
+           if p.kind is p.KEYWORD_ONLY and p.name not in ("budget", "seed")]
+    algo = inspect.signature(getattr(_import_sb3(), method.upper())).parameters.values()
+    return tuple(own + [p.name for p in algo if p.kind is not p.VAR_KEYWORD
+                        and p.name not in _SET_BY_TRAIN_POLICY])
 
 
 def training_distribution(problem: DesignProblem) -> ObjectDistribution:

@@ -35,10 +35,10 @@ from matplotlib.figure import Figure
 from envs.model.defaults import DEFAULT_STRAIN_LIMIT
 from optim import DesignProblem, OptimResult, get_optimizer
 from optim.charts import METHOD_COLOURS
-from optim.cli import paper_reference
 from optim.executors import make_executor
 from optim.problem import pareto_mask
 from optim.result import to_jsonable
+from optim.run import paper_reference
 
 BASE_METHODS = ("cmaes", "ga", "random", "nsga2")
 RL_METHODS = ("ppo", "sac")

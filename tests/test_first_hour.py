@@ -17,7 +17,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import envs
-from envs.cli import main
+from cli.main import main
 from envs.evaluate import DesignBounds, evaluate_designs
 from envs.scene import PRESETS, Scene
 from envs.solver.status import PUBLIC_STATUS
@@ -71,20 +71,20 @@ def test_simulate_reports_solve_and_kernel_load_apart(capsys):
 ])
 def test_optimize_checks_options_before_any_evaluation(argv, match, tmp_path, capsys,
                                                        monkeypatch):
-    import optim.cli
+    import optim.run
 
     def no_run(*args, **kwargs):
         raise AssertionError("the optimizer ran before the options were checked")
 
-    monkeypatch.setattr(optim.cli, "run_optimize", no_run)
+    monkeypatch.setattr(optim.run, "run_optimize", no_run)
     assert main(["optimize", "--out", str(tmp_path), *argv]) == 2
     assert re.search(match, capsys.readouterr().err)
 
 
 def test_optimize_checks_the_output_folder_first(tmp_path, capsys, monkeypatch):
-    import optim.cli
+    import optim.run
 
-    monkeypatch.setattr(optim.cli, "run_optimize", lambda *a, **k: pytest.fail("ran"))
+    monkeypatch.setattr(optim.run, "run_optimize", lambda *a, **k: pytest.fail("ran"))
     a_file = tmp_path / "results.txt"
     a_file.write_text("not a folder")
     assert main(["optimize", "--out", str(a_file / "x")]) == 2
@@ -93,7 +93,7 @@ def test_optimize_checks_the_output_folder_first(tmp_path, capsys, monkeypatch):
 
 
 def test_a_run_without_a_grasp_warns_and_fails(tmp_path, capsys, monkeypatch):
-    import optim.cli
+    import optim.run
     from optim.problem import DesignProblem
 
     def no_torque(problem: DesignProblem, *, budget: int, seed: int, **options):
@@ -102,9 +102,9 @@ def test_a_run_without_a_grasp_warns_and_fails(tmp_path, capsys, monkeypatch):
         problem.evaluate(np.array([[0.0, 0.0, 0.0, 0.0, -1.0, 0.0]] * budget))
         return problem.result("stub", seed)
 
-    monkeypatch.setattr(optim.cli, "get_optimizer", lambda method: no_torque)
+    monkeypatch.setattr(optim.run, "get_optimizer", lambda method: no_torque)
     code = main(["optimize", "--budget", "2", "--out", str(tmp_path), "--no-progress"])
-    assert code == optim.cli.NO_GRASP_EXIT != 0
+    assert code == optim.run.NO_GRASP_EXIT != 0
     err = capsys.readouterr().err
     assert "found no grasp in 2 evaluations" in err and "does not touch" in err
     data = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
@@ -112,7 +112,7 @@ def test_a_run_without_a_grasp_warns_and_fails(tmp_path, capsys, monkeypatch):
 
 
 def test_a_run_with_a_grasp_is_flagged_found(tmp_path):
-    from optim.cli import run_optimize
+    from optim.run import run_optimize
 
     result, _ = run_optimize("random", scene="forceps-a", budget=40, seed=0, out=tmp_path,
                              progress=False, verbose=False)

@@ -151,7 +151,7 @@ def make_problem_with_limit(limit):
 
 
 def test_cli_rejects_bad_options(capsys, tmp_path):
-    from envs.cli import main
+    from cli.main import main
 
     assert main(["optimize", "--budget", "0", "--out", str(tmp_path)]) == 2
     assert "budget" in capsys.readouterr().err
@@ -183,7 +183,7 @@ def test_result_json_round_trip(tmp_path):
 
 
 def test_cli_optimize_writes_result_and_charts(tmp_path):
-    from envs.cli import main
+    from cli.main import main
 
     assert main(["optimize", "--method", "nsga2", "--budget", "80", "--seed", "1", "--out",
                  str(tmp_path), "--no-progress"]) == 0
@@ -335,7 +335,7 @@ def test_dask_worker_killed_mid_run_loses_nothing(tmp_path):
 
 @pytest.mark.slow
 def test_demo_writes_its_files(tmp_path):
-    from optim.cli import run_demo
+    from optim.run import run_demo
 
     assert run_demo(tmp_path) == 0
     for name in ("demo_result.json", "demo_convergence.png", "demo_best_grasp.png"):

@@ -443,7 +443,7 @@ def test_family_members_accept_fine_contours_the_spring_fan_does_not():
 def test_cli_solves_a_calibrated_ring_member(capsys):
     """``psm-grasp simulate --rings M --element cst --calibrated``: the member with its shipped
     scale, checked; a member without a shipped scale is refused before any solve."""
-    from envs.cli import main
+    from cli.main import main
 
     assert main(["simulate", "--triangles", "20", "--rings", "3", "--element", "cst",
                  "--calibrated", "--json"]) == 0

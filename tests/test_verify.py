@@ -8,7 +8,7 @@ import shutil
 import numpy as np
 import pytest
 
-from envs.cli import main
+from cli.main import main
 from envs.scene import DESIGN_FIELDS
 from optim import OptimResult
 
@@ -148,9 +148,9 @@ def test_verify_needs_a_run(tmp_path, capsys):
 
 
 def test_verify_without_the_fem_extra_says_what_to_install(run_dir, capsys, monkeypatch):
-    import optim.cli
+    import optim.run
 
-    monkeypatch.setattr(optim.cli, "fem_available", lambda: False)
+    monkeypatch.setattr(optim.run, "fem_available", lambda: False)
     assert main(["verify", str(run_dir)]) == 2
     assert "pip install -e '.[fem]'" in capsys.readouterr().err
     assert main(["optimize", "--budget", "10", "--out", str(run_dir), "--verify-top", "2"]) == 2

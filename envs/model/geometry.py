@@ -16,17 +16,15 @@ purpose.)
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numba import njit, vectorize
 
 from .defaults import CORNER_ROUNDING
 
-if TYPE_CHECKING:
-    from envs.scene import Gripper
-
 __all__ = [
+    "FingerBars",
     "finger_axes",
     "finger_axes_array",
     "finger_frame",
@@ -35,6 +33,15 @@ __all__ = [
     "rest_points",
     "corner_radius",
 ]
+
+
+class FingerBars(Protocol):
+    """What the geometry reads of a gripper: an :class:`envs.scene.Gripper` or anything with
+    these fields (the model sits below the scene and does not import it)."""
+
+    finger_length_m: float  # l [m]
+    joint_offset_m: float  # d_3 [m]
+    finger_width_m: float  # w [m]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -46,7 +53,7 @@ def finger_axes(j, s, c):
     return -s, c, c, s
 
 
-def finger_frame(gripper: Gripper, side: int, angle_rad):
+def finger_frame(gripper: FingerBars, side: int, angle_rad):
     """Joint position, axis and inward face normal of one finger.
 
     Parameters
@@ -78,7 +85,7 @@ def finger_axes_array(side: int, angles: np.ndarray):
     return (s, c, -c, s) if side == 0 else (-s, c, c, s)
 
 
-def closed_angle_rad(gripper: Gripper) -> float:
+def closed_angle_rad(gripper: FingerBars) -> float:
     """Finger angle at which the gripping-face tip reaches the symmetry axis [rad].
 
     The jaws cannot close past it (the two faces would meet); the solver treats it as a joint
@@ -110,7 +117,7 @@ def bar_distance(along_m, across_m, length_m, width_m):
     return math.hypot(ds, dm)
 
 
-def distance_to_finger_bar(gripper: Gripper, side: int, angle_rad, point):
+def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point):
     """Distance from ``point`` to the rectangular finger bar (0 inside) [m].
 
     ``angle_rad`` may be an array of finger angles: one distance per angle.

@@ -8,7 +8,7 @@ triangles e that share spring c; ``"cst_fit"`` is a Poisson-aware rule. The disk
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -17,10 +17,19 @@ from envs.validation import check_integer, check_range
 
 from .defaults import STIFFNESS_RULES
 
-if TYPE_CHECKING:
-    from envs.scene import SoftDisk
+__all__ = ["DiskMaterial", "spring_stiffness", "disk_spring_stiffness"]
 
-__all__ = ["spring_stiffness", "disk_spring_stiffness"]
+
+class DiskMaterial(Protocol):
+    """What the stiffness rules read of a disk: an :class:`envs.scene.SoftDisk` or anything
+    with these fields (the model sits below the scene and does not import it)."""
+
+    radius_m: float  # r [m]
+    youngs_modulus_pa: float  # E [Pa]
+    poisson_ratio: float  # nu [-]
+    thickness_m: float  # t [m]
+    stiffness_scale: float  # s [-]
+    contour_stiffness_ratio: float  # rho_c [-]
 
 
 def _cst_stiffness(points: np.ndarray, nu: float) -> np.ndarray:
@@ -108,7 +117,7 @@ def spring_stiffness(
 
 
 def disk_spring_stiffness(
-    disk: SoftDisk, n_triangles: int, rule: str = "van_gelder"
+    disk: DiskMaterial, n_triangles: int, rule: str = "van_gelder"
 ) -> tuple[float, float]:
     """Physical radial and contour spring stiffness of a disk's fan [N/m].
 

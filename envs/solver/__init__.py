@@ -8,7 +8,8 @@ grasp, a batch). Python: :mod:`.pipeline` (the one batch entry every caller uses
 :mod:`.baselines` (SLSQP, Nelder-Mead).
 """
 
+from .pipeline import grasp_result
 from .result import GraspResult
-from .simulate import METHODS, grasp_result, simulate, simulate_ramp
+from .simulate import METHODS, simulate, simulate_ramp
 
 __all__ = ["GraspResult", "METHODS", "grasp_result", "simulate", "simulate_ramp"]

@@ -40,7 +40,7 @@ from envs.model.layout import (
 from envs.model.problem import pack_params
 from envs.scene import Scene
 
-from .pipeline import checked_solution
+from .pipeline import checked_solution, grasp_result
 from .status import ITER_LIMIT, OK
 
 __all__ = ["solve", "face_gaps", "face_gap_jacobian"]
@@ -230,8 +230,6 @@ def _nelder_mead(prob: _Scaled, time_limit_s: float):
 def solve(scene: Scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
           phase_rad: float, method: str, time_limit_s: float):
     """Run a baseline and return its answer as a checked :class:`GraspResult`."""
-    from .simulate import grasp_result
-
     cols = scene.columns(torque_nm)
     prm = pack_params(cols, n_triangles, stiffness_rule, phase_rad)
     prob = _Scaled(int(n_triangles), prm[0])

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from envs import check
-from envs.model.holding import N_HOLD
+from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y, N_HOLD
 from envs.model.layout import (
     I_ITERATIONS,
     I_ROUNDS,
@@ -70,10 +70,11 @@ from envs.model.rings import HUB_RADIUS, kernel_copy
 from ..parallel import run_rows
 from . import driver
 from .reaction import holding_one, max_contacts
+from .result import GraspResult
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
 from .warmup import announce_compile
 
-__all__ = ["BatchSolution", "solve_columns", "checked_solution", "row_message"]
+__all__ = ["BatchSolution", "solve_columns", "checked_solution", "row_message", "grasp_result"]
 
 
 class BatchSolution(NamedTuple):
@@ -370,3 +371,45 @@ def row_message(sol: BatchSolution, i: int) -> str:
     if status == CHECK_FAILED:
         return f"independent KKT check failed: {check.report_from_output(sol.check[i]).reason}"
     return STATUS_MESSAGES[status]
+
+
+def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
+                 stiffness_rule: str = "van_gelder", *, message: str | None = None,
+                 iterations: int | None = None, solve_time_s: float | None = None,
+                 element: str = "spring", model_scale: float = 1.0) -> GraspResult:
+    """Row ``i`` of a batch solution as a :class:`GraspResult`."""
+    face = sol.face_forces_n[i]
+    return GraspResult(
+        converged=bool(sol.converged[i]),
+        message=row_message(sol, i) if message is None else message,
+        jaw_angles_rad=(float(sol.jaw_angles_rad[i, 0]), float(sol.jaw_angles_rad[i, 1])),
+        points_m=sol.points_m[i],
+        contact_mask=face > 0.0,
+        contact_forces_n=face,
+        peak_strain=float(sol.peak_strain[i]),
+        iterations=int(sol.iterations[i]) if iterations is None else int(iterations),
+        solve_time_s=sol.solve_time_s if solve_time_s is None else float(solve_time_s),
+        torque_nm=float(torque_nm),
+        n_triangles=int(sol.points_m.shape[1]),
+        method=method,
+        stiffness_rule=stiffness_rule,
+        corner_forces_n=sol.corner_totals_n[i],
+        corner_edges=sol.corner_edges[i],
+        corner_edge_forces_n=sol.corner_forces_n[i],
+        stop_torques_nm=sol.stop_torques_nm[i],
+        energy_j=float(sol.energy_j[i]),
+        max_displacement_ratio=float(sol.max_displacement_ratio[i]),
+        stable=bool(sol.stable[i]),
+        kkt=check.report_from_output(sol.check[i]),
+        rounds=int(sol.rounds[i]),
+        inverted_triangles=int(sol.inverted[i]),
+        peak_log_strain=float(sol.peak_log_strain[i]),
+        n_rings=int((sol.state_scaled.shape[1] - 2) // (2 * sol.points_m.shape[1])),
+        element=element,
+        model_scale=float(model_scale),
+        interior_points_m=sol.interior_points_m[i],
+        peak_compression=float(sol.peak_compression[i]),
+        pin_force_n=sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy(),
+        pin_moment_nm=float(sol.holding[i, H_PIN_MOMENT]),
+        required_friction=float(sol.holding[i, H_MU]),
+    )

@@ -16,19 +16,17 @@ from dataclasses import replace
 
 import numpy as np
 
-from envs import check
 from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_PHASE_RAD, STIFFNESS_RULES
 from envs.model.family import ModelSpec, resolve_model
-from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y
 from envs.model.layout import S_SCALE
 from envs.model.problem import pack_params, rest_state, stiffness_unit
 from envs.scene import Scene
 from envs.validation import check_choice, check_range
 
-from .pipeline import BatchSolution, row_message, solve_columns
+from .pipeline import BatchSolution, grasp_result, solve_columns
 from .result import GraspResult
 
-__all__ = ["METHODS", "simulate", "simulate_ramp", "grasp_result", "check_model"]
+__all__ = ["METHODS", "simulate", "simulate_ramp", "check_model"]
 
 METHODS = ("newton", "slsqp", "nelder-mead")
 WARM_OPENING_RAD = 1e-3
@@ -43,48 +41,6 @@ CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does no
 # turned rest starts: these fractions of a point spacing about the pin, in turn (the smaller one
 # measured: N = 4, M = 4 on paper-r100 at 5.675 N·m converges from 1/8, not from 1/4)
 TURNED_STARTS = (0.25, 0.125)
-
-
-def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
-                 stiffness_rule: str = "van_gelder", *, message: str | None = None,
-                 iterations: int | None = None, solve_time_s: float | None = None,
-                 element: str = "spring", model_scale: float = 1.0) -> GraspResult:
-    """Row ``i`` of a batch solution as a :class:`GraspResult`."""
-    face = sol.face_forces_n[i]
-    return GraspResult(
-        converged=bool(sol.converged[i]),
-        message=row_message(sol, i) if message is None else message,
-        jaw_angles_rad=(float(sol.jaw_angles_rad[i, 0]), float(sol.jaw_angles_rad[i, 1])),
-        points_m=sol.points_m[i],
-        contact_mask=face > 0.0,
-        contact_forces_n=face,
-        peak_strain=float(sol.peak_strain[i]),
-        iterations=int(sol.iterations[i]) if iterations is None else int(iterations),
-        solve_time_s=sol.solve_time_s if solve_time_s is None else float(solve_time_s),
-        torque_nm=float(torque_nm),
-        n_triangles=int(sol.points_m.shape[1]),
-        method=method,
-        stiffness_rule=stiffness_rule,
-        corner_forces_n=sol.corner_totals_n[i],
-        corner_edges=sol.corner_edges[i],
-        corner_edge_forces_n=sol.corner_forces_n[i],
-        stop_torques_nm=sol.stop_torques_nm[i],
-        energy_j=float(sol.energy_j[i]),
-        max_displacement_ratio=float(sol.max_displacement_ratio[i]),
-        stable=bool(sol.stable[i]),
-        kkt=check.report_from_output(sol.check[i]),
-        rounds=int(sol.rounds[i]),
-        inverted_triangles=int(sol.inverted[i]),
-        peak_log_strain=float(sol.peak_log_strain[i]),
-        n_rings=int((sol.state_scaled.shape[1] - 2) // (2 * sol.points_m.shape[1])),
-        element=element,
-        model_scale=float(model_scale),
-        interior_points_m=sol.interior_points_m[i],
-        peak_compression=float(sol.peak_compression[i]),
-        pin_force_n=sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy(),
-        pin_moment_nm=float(sol.holding[i, H_PIN_MOMENT]),
-        required_friction=float(sol.holding[i, H_MU]),
-    )
 
 
 class _Problem:

@@ -1,7 +1,7 @@
-"""``psm-grasp optimize`` and the optimization part of ``psm-grasp demo``.
+"""Run one optimization and write its files: what ``psm-grasp optimize``, ``verify`` and
+``demo`` do (the command line itself is :mod:`cli`).
 
-:mod:`envs.cli` imports :func:`add_optimize_parser` and :func:`run_demo` from here when they
-exist. ``psm-grasp optimize`` runs one method on one object and writes, to ``--out``:
+:func:`run_optimize` runs one method on one object and writes, to its output folder:
 
 - ``{method}_seed{S}_result.json``: the :class:`~optim.result.OptimResult`;
 - ``{method}_seed{S}_convergence.png``: best reward so far against evaluations;
@@ -11,7 +11,6 @@ exist. ``psm-grasp optimize`` runs one method on one object and writes, to ``--o
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -21,12 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from envs.model.defaults import MAX_TRIANGLES, MAX_TRIANGLES_FAMILY
-from envs.model.family import ELEMENTS
 from envs.scene import PRESETS, Scene
-from envs.validation import check_integer
 
-from .optimize import METHODS, get_optimizer
+from .optimize import check_options, get_optimizer
 from .problem import (
     DEFAULT_STRAIN_LIMIT,
     DesignProblem,
@@ -35,11 +31,10 @@ from .problem import (
     check_strain_limit,
     paper_design,
 )
-from .result import NoGraspWarning, OptimResult, no_grasp_reason
-from .verify import DEFAULT_TOP, MAX_TOP
+from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
 
-__all__ = ["add_optimize_parser", "add_verify_parser", "run_optimize", "run_demo",
-           "paper_reference", "verify_outputs"]
+__all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
+           "no_grasp_reason", "fem_available", "verify_outputs", "NO_GRASP_EXIT", "DEMO_SCENE"]
 
 DEMO_BUDGET = 2000
 DEMO_VERIFY_TOP = 3
@@ -145,10 +140,11 @@ def run_optimize(
     Raises
     ------
     ValueError
-        Unknown method or scene, budget <= 0, bad seed, strain limit outside (0, 1], a model
-        member outside the family (:func:`envs.model.family.resolve_model`; default: the
-        default model, ``element="spring"`` the paper's fan), bad worker count or Dask
-        address, an output folder that cannot be written.
+        Unknown method, scene or method option, budget <= 0, bad seed, strain limit outside
+        (0, 1], a model member outside the family (:func:`envs.model.family.resolve_model`;
+        default: the default model, ``element="spring"`` the paper's fan), bad worker count,
+        a Dask address that is not a scheduler answering within seconds, an output folder
+        that cannot be written.
     """
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
@@ -158,6 +154,7 @@ def run_optimize(
 
     # every option before any work (no cluster started, no evaluation spent)
     driver = get_optimizer(method)
+    check_options(method, options)
     if scene not in PRESETS:
         raise ValueError(f"unknown scene {scene!r}; allowed: {sorted(PRESETS)}")
     budget, seed = check_budget(budget), check_seed(seed)
@@ -190,37 +187,6 @@ def run_optimize(
     return result, paths
 
 
-def _optimize_command(args: argparse.Namespace) -> int:
-    from envs.cli import cli_option
-    from envs.model.defaults import DEFAULT_ELEMENT
-    from envs.model.family import resolve_model
-    from envs.validation import check_output_dir
-
-    # the options a user typed, named as typed (run_optimize checks them all again)
-    cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
-               args.element or DEFAULT_ELEMENT)
-    cli_option("--budget", check_budget, args.budget)
-    cli_option("--seed", check_seed, args.seed)
-    cli_option("--strain-limit", check_strain_limit, args.strain_limit)
-    check_output_dir("--out", args.out)
-    if args.verify_top is not None:
-        check_integer("--verify-top", args.verify_top, 1, MAX_TOP)
-        if not fem_available():
-            raise ValueError("--verify-top needs scikit-fem: pip install -e '.[fem]'")
-    from envs.solver.warmup import announce_compile
-
-    announce_compile()
-    result, _ = run_optimize(args.method, scene=args.scene, budget=args.budget, seed=args.seed,
-                             out=args.out, dask=args.dask, workers=args.workers,
-                             strain_limit=args.strain_limit, n_triangles=args.triangles,
-                             n_rings=args.rings, element=args.element,
-                             progress=not args.no_progress)
-    if args.verify_top is not None:
-        verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json", args.verify_top)
-    # a run that found no grasp is not a success, whatever files it wrote
-    return 0 if result.extra["grasp_found"] else NO_GRASP_EXIT
-
-
 def fem_available() -> bool:
     """Whether the FEM reference can run (the optional extra ``fem``: scikit-fem)."""
     import importlib.util
@@ -238,76 +204,6 @@ def verify_outputs(out: str | Path, result_name: str | None, top: int) -> dict:
     report, paths = verify_run(out, top, result=result_name)
     print_report(report, paths)
     return report
-
-
-def _verify_command(args: argparse.Namespace) -> int:
-    from .verify import find_result
-
-    find_result(args.out_dir, args.result)  # a bad folder or file before any work
-    report = verify_outputs(args.out_dir, args.result, args.top)
-    return 0 if report["summary"]["all_fem_converged"] else 1
-
-
-def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``verify`` command to the ``psm-grasp`` sub-parsers."""
-    p = subparsers.add_parser(
-        "verify", help="re-score a run's best designs with the FEM",
-        description="Re-score the K best distinct designs of an optimization run (its "
-                    "*_result.json in OUT_DIR) with the model the run used and with the "
-                    "finite-element reference (same metrics and reward), and write verify.json "
-                    "and verify.png (both rewards and rankings) to OUT_DIR. Each FEM grasp "
-                    "takes 0.3-2 s and is cached (out/cache/fem).")
-    p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the run (psm-grasp optimize "
-                   "--out, or the demo's out)")
-    p.add_argument("--top", type=int, default=DEFAULT_TOP,
-                   help=f"designs to verify, in [1, {MAX_TOP}] (default %(default)s)")
-    p.add_argument("--result", default=None,
-                   help="the result file in OUT_DIR when it holds several")
-    p.set_defaults(func=_verify_command)
-    return p
-
-
-def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``optimize`` command to the ``psm-grasp`` sub-parsers."""
-    p = subparsers.add_parser(
-        "optimize", help="optimize a gripper design for one object",
-        description="Optimize a gripper design for the object of a scene preset and write the "
-                    "result JSON, a convergence chart and the best grasp (NSGA-II: the Pareto "
-                    "front) to --out.")
-    p.add_argument("--method", default="cmaes", choices=METHODS)
-    p.add_argument("--scene", default=DEMO_SCENE, choices=sorted(PRESETS),
-                   help="object: the disk of this preset (default %(default)s)")
-    p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", default="out",
-                   help="output folder, created if its parent exists (default %(default)s)")
-    p.add_argument("--dask", metavar="ADDRESS|local",
-                   help="evaluate on a Dask cluster: a scheduler address, or 'local' to start "
-                        "a LocalCluster of --workers workers. Pays only with more cores than "
-                        "this machine has (a remote cluster) and populations of hundreds of "
-                        "designs (GA, random search): each task carries at least 64 designs")
-    p.add_argument("--workers", type=int,
-                   help="parallel workers: local processes without --dask, LocalCluster "
-                        "workers with --dask local (default: in-process, batched, already on "
-                        "every core; on one machine workers do not pay: 2 processes measured "
-                        "4200-4700 designs/s against 4400-4900 in process on 2 cores, and "
-                        "far less for CMA-ES's 9-design populations)")
-    p.add_argument("--strain-limit", type=float, default=DEFAULT_STRAIN_LIMIT,
-                   help="admissible strain of the object, in (0, 1] (default %(default)s)")
-    p.add_argument("--element", default=None, choices=ELEMENTS,
-                   help="element of the disk model (default nhquad: the default model, within "
-                   "2 %% RMS of the FEM; spring: the paper's fan, ~5x cheaper, 30-40 %% off)")
-    p.add_argument("--triangles", type=int, default=None,
-                   help=f"contour points N (default 40 for nhquad, 20 for the fan), in [4, "
-                   f"{MAX_TRIANGLES}] for the fan, [4, {MAX_TRIANGLES_FAMILY}] otherwise")
-    p.add_argument("--rings", type=int, default=None,
-                   help="rings M of the disk mesh (default 2 for nhquad, 1 otherwise)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--verify-top", type=int, default=None, metavar="K",
-                   help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
-                   f"verify; K in [1, {MAX_TOP}])")
-    p.set_defaults(func=_optimize_command)
-    return p
 
 
 def run_demo(out_dir: Path) -> int:

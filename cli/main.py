@@ -1,0 +1,70 @@
+"""Command line: ``psm-grasp simulate | demo | optimize | verify``."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from .optimize import add_demo_parser, add_optimize_parser, add_verify_parser
+from .simulate import add_simulate_parser
+
+__all__ = ["main", "build_parser", "ERROR_EXIT", "BROKEN_PIPE_EXIT"]
+
+ERROR_EXIT = 2  # a refused input (as argparse's own errors)
+# the reader of stdout went away (``| head -1``): the status of a program that SIGPIPE ended,
+# as the shell reports it; Python ignores SIGPIPE and raises BrokenPipeError instead
+BROKEN_PIPE_EXIT = 128 + 13
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``psm-grasp`` parser: one sub-command per job."""
+    parser = argparse.ArgumentParser(prog="psm-grasp", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_simulate_parser(sub)
+    add_demo_parser(sub)
+    add_optimize_parser(sub)
+    add_verify_parser(sub)
+    return parser
+
+
+def _run(argv: list[str] | None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except ValueError as exc:
+        print(f"psm-grasp: error: {exc}", file=sys.stderr)
+        return ERROR_EXIT
+
+
+def _silence_stdout() -> None:
+    """Send what is left of stdout to the null device: the interpreter flushes stdout again at
+    exit, which would raise a second BrokenPipeError (the recipe of Python's ``signal`` docs).
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout without a file descriptor (captured, replaced)
+        sys.stdout = open(os.devnull, "w")  # kept open until the process exits
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``psm-grasp`` command.
+
+    Returns the exit code: 0 on success, :data:`ERROR_EXIT` with one line ``psm-grasp: error:
+    ...`` on stderr for a refused input (every ``ValueError``), :data:`BROKEN_PIPE_EXIT`
+    quietly when the reader of stdout stopped reading; a command's own codes otherwise.
+    """
+    try:
+        try:
+            return _run(argv)
+        finally:
+            # a reader that went away shows here, inside the handler below, not at exit
+            sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+        return BROKEN_PIPE_EXIT
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
