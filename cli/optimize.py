@@ -8,6 +8,7 @@ and checked, by the names the user typed, before any of it starts.
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
 from optim import run
@@ -20,28 +21,43 @@ __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 def _optimize_command(args: argparse.Namespace) -> int:
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
+    from envs.object_file import load_object
+    from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
-    from optim.problem import check_budget, check_seed, check_strain_limit
+    from optim.problem import check_budget, check_friction, check_seed, check_strain_limit
     from optim.verify import MAX_TOP
 
     # the options a user typed, named as typed (run_optimize checks them all again)
+    if args.object is not None and args.scene is not None:
+        raise ValueError("--object and --scene exclude each other: the object is a preset's "
+                         "disk or your own")
+    obj = None if args.object is None else load_object(args.object)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
     cli_option("--budget", check_budget, args.budget)
     cli_option("--seed", check_seed, args.seed)
-    cli_option("--strain-limit", check_strain_limit, args.strain_limit)
+    if args.strain_limit is not None:
+        cli_option("--strain-limit", check_strain_limit, args.strain_limit)
+    if args.friction is not None:
+        cli_option("--friction", check_friction, args.friction)
+    cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
+               args.joint_spring_nm_per_rad)
     check_output_dir("--out", args.out)
     if args.verify_top is not None:
         check_integer("--verify-top", args.verify_top, 1, MAX_TOP)
         if not run.fem_available():
             raise ValueError("--verify-top needs scikit-fem: pip install -e '.[fem]'")
     announce_compile()
-    result, _ = run.run_optimize(args.method, scene=args.scene, budget=args.budget,
+    result, _ = run.run_optimize(args.method, scene=args.scene, obj=obj, budget=args.budget,
                                  seed=args.seed, out=args.out, dask=args.dask,
                                  workers=args.workers, strain_limit=args.strain_limit,
+                                 friction_coefficient=args.friction,
+                                 torsion_stiffness_rel=args.joint_spring,
+                                 torsion_stiffness_nm_per_rad=args.joint_spring_nm_per_rad,
                                  n_triangles=args.triangles, n_rings=args.rings,
-                                 element=args.element, progress=not args.no_progress)
+                                 element=args.element, progress=not args.no_progress,
+                                 finish=not args.no_finish)
     if args.verify_top is not None:
         run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
                            args.verify_top)
@@ -51,13 +67,31 @@ def _optimize_command(args: argparse.Namespace) -> int:
 
 def _verify_command(args: argparse.Namespace) -> int:
     from envs.validation import check_output_dir
+    from optim.result import OptimResult
     from optim.verify import find_result
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
-    find_result(args.out_dir, args.result)
+    path = find_result(args.out_dir, args.result)
     check_output_dir("OUT_DIR", args.out_dir)
+    if args.object is not None:
+        _check_same_object(args.object, OptimResult.from_json(path).object, path)
     report = run.verify_outputs(args.out_dir, args.result, args.top)
     return 0 if report["summary"]["all_fem_converged"] else 1
+
+
+def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
+    """``verify --object FILE``: the run in OUT_DIR must be a run for that object."""
+    from envs.object_file import load_object
+
+    spec = load_object(object_file)
+    fields = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
+              "stiffness_scale")
+    differ = [k for k in fields
+              if not math.isclose(spec.info()[k], recorded.get(k, math.nan), rel_tol=1e-12)]
+    if differ:
+        raise ValueError(f"--object {object_file!r}: the run in {str(result_path)!r} was for "
+                         f"another object ({differ[0]} {recorded.get(differ[0])!r}, the file's "
+                         f"{spec.info()[differ[0]]!r})")
 
 
 def _demo_command(args: argparse.Namespace) -> int:
@@ -95,13 +129,19 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help=f"designs to verify, in [1, {MAX_TOP}] (default %(default)s)")
     p.add_argument("--result", default=None,
                    help="the result file in OUT_DIR when it holds several")
+    p.add_argument("--object", metavar="FILE.toml", default=None,
+                   help="check that the run was for this object file's object")
     p.set_defaults(func=_verify_command)
     return p
 
 
 def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``optimize`` command to the ``psm-grasp`` sub-parsers."""
-    from envs.model.defaults import MAX_TRIANGLES, MAX_TRIANGLES_FAMILY
+    from envs.model.defaults import (
+        DEFAULT_FRICTION_COEFFICIENT,
+        MAX_TRIANGLES,
+        MAX_TRIANGLES_FAMILY,
+    )
     from envs.model.family import ELEMENTS
     from envs.scene import PRESETS
     from optim.optimize import METHODS
@@ -110,12 +150,20 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
 
     p = subparsers.add_parser(
         "optimize", help="optimize a gripper design for one object",
-        description="Optimize a gripper design for the object of a scene preset and write the "
-                    "result JSON, a convergence chart and the best grasp (NSGA-II: the Pareto "
-                    "front) to --out.")
+        description="Optimize a gripper design for an object (your own from --object FILE, or "
+                    "a scene preset's disk) and write the result JSON, a convergence chart, the "
+                    "best grasp, the design in millimetres (JSON, CSV and a dimensioned "
+                    "drawing) and, for NSGA-II, the Pareto front to --out. The optimum is "
+                    "reported by a finer member of the model family (within a few percent of "
+                    "the FEM) unless --no-finish.")
     p.add_argument("--method", default="cmaes", choices=METHODS)
-    p.add_argument("--scene", default=run.DEMO_SCENE, choices=sorted(PRESETS),
-                   help="object: the disk of this preset (default %(default)s)")
+    p.add_argument("--object", metavar="FILE.toml", default=None,
+                   help="your object: a TOML file with an [object] table (radius_m, "
+                   "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
+                   "stiffness_scale, strain_limit, friction_coefficient); see examples/objects")
+    p.add_argument("--scene", default=None, choices=sorted(PRESETS),
+                   help=f"or the disk of this preset, with its gripper's own joint spring "
+                   f"(default without --object: {run.DEMO_SCENE})")
     p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default="out",
@@ -131,8 +179,19 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "every core; on one machine workers do not pay: 2 processes measured "
                         "4200-4700 designs/s against 4400-4900 in process on 2 cores, and "
                         "far less for CMA-ES's 9-design populations)")
-    p.add_argument("--strain-limit", type=float, default=DEFAULT_STRAIN_LIMIT,
-                   help="admissible strain of the object, in (0, 1] (default %(default)s)")
+    p.add_argument("--strain-limit", type=float, default=None,
+                   help=f"admissible peak compression of the object, in (0, 1] (default: the "
+                   f"object file's, else {DEFAULT_STRAIN_LIMIT})")
+    p.add_argument("--friction", type=float, default=None,
+                   help=f"Coulomb friction coefficient of the fingers on the object, in "
+                   f"(0, 10]: a grasp needing more does not hold (default: the object file's, "
+                   f"else {DEFAULT_FRICTION_COEFFICIENT}, a rubber or silicone pad)")
+    p.add_argument("--joint-spring", type=float, default=None, metavar="REL",
+                   help="joint torsion spring in the object's torque unit s E t r^2 per "
+                   "radian (default 0.0149: the paper gripper's on its r = 0.07 m disk, scaled "
+                   "with the object; a preset keeps its gripper's own)")
+    p.add_argument("--joint-spring-nm-per-rad", type=float, default=None, metavar="K_F",
+                   help="an absolute joint torsion spring [N·m/rad] instead")
     p.add_argument("--element", default=None, choices=ELEMENTS,
                    help="element of the disk model (default nhquad: the default model, within "
                    "2 %% RMS of the FEM; spring: the paper's fan, ~5x cheaper, 30-40 %% off)")
@@ -142,6 +201,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--rings", type=int, default=None,
                    help="rings M of the disk mesh (default 2 for nhquad, 1 otherwise)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-finish", action="store_true",
+                   help="report the optimum by the search model itself, not re-scored by the "
+                   "finer member")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

@@ -21,8 +21,20 @@ def add_simulate_parser(subparsers: Any) -> argparse.ArgumentParser:
     from envs.scene import PRESETS
     from envs.solver import METHODS
 
-    sim = subparsers.add_parser("simulate", help="solve one grasp")
-    sim.add_argument("--scene", default="paper-r070", choices=sorted(PRESETS))
+    sim = subparsers.add_parser(
+        "simulate", help="solve one grasp",
+        description="Solve one grasp of a scene preset or of your own object (--object FILE: "
+                    "its [gripper] table, else the paper's gripper scaled to it) and print it: "
+                    "jaw angles, contacts, forces, deformation, what the fixed centre carries "
+                    "and the friction a free object would need.")
+    sim.add_argument("--scene", default=None, choices=sorted(PRESETS),
+                     help="a preset scene (default without --object: paper-r070)")
+    sim.add_argument("--object", metavar="FILE.toml", default=None,
+                     help="your object: a TOML file with an [object] table and an optional "
+                     "[gripper] table (see examples/objects)")
+    sim.add_argument("--friction", type=float, default=None,
+                     help="friction coefficient of the fingers on the object, to say whether the "
+                     "grasp holds (default: the object file's, else 0.5)")
     sim.add_argument("--element", default=None, choices=ELEMENTS,
                      help="nhquad (default: the default model, 40 points, 2 rings, within 2 %% "
                      "RMS of the FEM); spring: springs and the area energy (the paper's fan: "
@@ -40,7 +52,10 @@ def add_simulate_parser(subparsers: Any) -> argparse.ArgumentParser:
                      "default it is applied where the member has one)")
     sim.add_argument("--uncalibrated", action="store_true",
                      help="the member without its shipped scale (the disk's own scale only)")
-    sim.add_argument("--torque", type=float, default=0.2, help="actuation torque T_a [N·m]")
+    sim.add_argument("--torque", type=float, default=None,
+                     help="actuation torque T_a [N·m] (default 0.2 on a preset; with --object "
+                     "the [gripper] table's torque_nm, else the squeeze of 0.2 N·m on "
+                     "paper-r070: 0.041 of the object's torque unit s E t r^2)")
     sim.add_argument("--method", default="newton", choices=METHODS)
     sim.add_argument("--rule", default="van_gelder", choices=STIFFNESS_RULES)
     sim.add_argument("--json", action="store_true", help="print the result as JSON")
@@ -53,7 +68,6 @@ def add_simulate_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run_simulate(args: argparse.Namespace) -> int:
     """The ``simulate`` command: exit code 0 when the grasp converged, 1 otherwise."""
     from envs.model.defaults import DEFAULT_ELEMENT
-    from envs.scene import Scene
     from envs.solver import simulate
     from envs.solver.simulate import check_model
     from envs.solver.warmup import announce_compile
@@ -66,9 +80,11 @@ def run_simulate(args: argparse.Namespace) -> int:
     element = args.element or (DEFAULT_ELEMENT if args.method == "newton" else "spring")
     spec = cli_option("--triangles/--rings/--element/--calibrated", check_model,
                       args.triangles, args.rings, element, calibrated)
-    check_range("--torque", args.torque, 0.0, math.inf)
+    if args.torque is not None:
+        check_range("--torque", args.torque, 0.0, math.inf)
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
-    scene = Scene.preset(args.scene)
+    scene, torque, name, friction = _scene_of(args)
+    args.torque = torque
     model = {"stiffness_rule": args.rule, **spec.kwargs()}
     n_tri = model.pop("n_triangles")
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
@@ -81,11 +97,13 @@ def run_simulate(args: argparse.Namespace) -> int:
     load_s = max(0.0, first_wall_s - first.solve_time_s)
     if args.json:
         data = res.to_dict()
-        data["scene"] = args.scene
+        data["scene"] = name
+        data["friction_coefficient"] = friction
+        data["holds"] = res.holds(friction)
         data["kernel_load_s"] = load_s
         print(json.dumps(data, indent=2))
     else:
-        _print_text(args, spec, res, load_s)
+        _print_text(args, spec, res, load_s, name, friction)
     if plot is not None:
         from envs.render import grasp_figure
 
@@ -95,9 +113,46 @@ def run_simulate(args: argparse.Namespace) -> int:
     return 0 if res.converged else 1
 
 
-def _print_text(args: argparse.Namespace, spec, res, load_s: float) -> None:
+def _scene_of(args: argparse.Namespace):
+    """The scene, torque [N·m], name and friction coefficient of the command's options."""
+    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
+    from envs.object_file import load_object
+    from envs.scene import Design, Scene, design_from_relative, relative_from_design
+    from optim.problem import check_friction, paper_design
+
+    if args.object is not None and args.scene is not None:
+        raise ValueError("--object and --scene exclude each other")
+    if args.friction is not None:
+        cli_option("--friction", check_friction, args.friction)
+    if args.object is None:
+        name = args.scene or "paper-r070"
+        torque = 0.2 if args.torque is None else args.torque
+        friction = DEFAULT_FRICTION_COEFFICIENT if args.friction is None else args.friction
+        return Scene.preset(name), torque, name, friction
+    spec = load_object(args.object)
+    friction = (args.friction if args.friction is not None else spec.friction_coefficient
+                if spec.friction_coefficient is not None else DEFAULT_FRICTION_COEFFICIENT)
+    # the default squeeze: 0.2 N·m on paper-r070, in the object's torque unit s E t r^2
+    paper = Scene.preset("paper-r070").disk
+    unit = spec.disk.torque_unit_nm
+    squeeze = 0.2 / paper.torque_unit_nm * unit
+    if spec.gripper is not None:
+        scene = spec.scene()
+        torque = (args.torque if args.torque is not None else spec.gripper.torque_nm
+                  if spec.gripper.torque_nm is not None else squeeze)
+        return scene, torque, spec.name, friction
+    # no [gripper] table: the paper's gripper, scaled to the object like a relative design
+    rel = relative_from_design(paper_design("paper-r070", 0.2),
+                               paper.radius_m, paper.torque_unit_nm)
+    design = Design.from_array(design_from_relative(rel, spec.disk.radius_m, unit))
+    torque = design.torque_nm if args.torque is None else args.torque
+    return design.to_scene(spec.disk), torque, f"{spec.name} (the paper's gripper)", friction
+
+
+def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
+                friction: float) -> None:
     r, left = (math.degrees(a) for a in res.jaw_angles_rad)
-    print(f"scene {args.scene}, N = {spec.n_triangles}, M = {spec.n_rings} ({spec.element}"
+    print(f"scene {name}, N = {spec.n_triangles}, M = {spec.n_rings} ({spec.element}"
           f"{f', shipped scale x{spec.scale:.4f}' if spec.scale != 1.0 else ''}), "
           f"T_a = {args.torque:g} N·m, method {args.method}")
     print(f"  converged      : {res.converged} ({res.message})")
@@ -106,6 +161,11 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float) -> None:
     print(f"  total force    : {res.total_force_n[0]:.4g} N, {res.total_force_n[1]:.4g} N")
     print(f"  peak strain    : {res.peak_strain:.4%}")
     print(f"  max disp / r   : {res.max_displacement_ratio:.4%}")
+    print(f"  peak compr.    : {res.peak_compression:.4%}")
+    print(f"  pin force      : ({res.pin_force_n[0]:.4g}, {res.pin_force_n[1]:.4g}) N, moment "
+          f"{res.pin_moment_nm:.3g} N·m (what the fixed centre carries)")
+    print(f"  friction needed: {res.required_friction:.4g} to hold it without the pin; with "
+          f"{friction:g}: " + ("holds" if res.holds(friction) else "would slip"))
     print(f"  stable         : {res.stable}")
     print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
           f"moment {res.kkt.moment_residual_rel:.1e}")

@@ -6,7 +6,14 @@
 - ``{method}_seed{S}_result.json``: the :class:`~optim.result.OptimResult`;
 - ``{method}_seed{S}_convergence.png``: best reward so far against evaluations;
 - ``{method}_seed{S}_best_grasp.png``: the best design's grasp, re-solved and drawn;
+- ``{method}_seed{S}_design.json``, ``..._design.csv`` and ``..._drawing.png``: the best design
+  as a builder needs it, in millimetres with its spring and torque in SI units
+  (:mod:`optim.build_sheet`);
 - ``{method}_seed{S}_pareto.png`` (NSGA-II): the front with a few of its designs drawn.
+
+The object is a scene preset's disk or a designer's own (:class:`envs.object_file.ObjectSpec`,
+read from a TOML file); the run's optimum is reported by a finer member of the model family
+(:mod:`optim.finish`) unless asked otherwise.
 """
 
 from __future__ import annotations
@@ -15,18 +22,21 @@ import math
 import sys
 import time
 import warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from envs.scene import PRESETS, Scene
+from envs.object_file import ObjectSpec
+from envs.scene import PRESETS, Scene, design_from_relative, relative_from_design
 
 from .optimize import check_options, get_optimizer
 from .problem import (
     DEFAULT_STRAIN_LIMIT,
     DesignProblem,
     check_budget,
+    check_friction,
     check_seed,
     check_strain_limit,
     paper_design,
@@ -43,16 +53,25 @@ DEMO_SCENE = "paper-r070"
 REFERENCE_TORQUES_NM = (0.05, 0.1, 0.2, 0.3, 0.5)
 
 
-def paper_reference(problem: DesignProblem, scene: str = DEMO_SCENE,
+def paper_reference(problem: DesignProblem, scene: str | None = DEMO_SCENE,
                     torques_nm: tuple[float, ...] = REFERENCE_TORQUES_NM) -> tuple[float, float]:
-    """Best reward of the scene's own (paper) gripper over a few torques, and that torque.
+    """Best reward of the paper's gripper over a few torques, and that torque [N·m].
 
-    The torques are those of the paper-r070 disk scaled by the disk's torque unit ``s E t r^2``
-    (the same squeeze for every object: unchanged on paper-r070, 0.4 to 4 mN·m on the forceps'
-    2 mm beads). Not counted in the problem's evaluations.
+    With a scene preset: the scene's own gripper; without (a designer's own object): the
+    paper's gripper on its r = 0.07 m disk, scaled to the object like every relative design
+    (lengths in radii, torque in ``s E t r^2``). The torques are those of the paper-r070 disk
+    scaled by the disk's torque unit (the same squeeze for every object: unchanged on
+    paper-r070, 0.4 to 4 mN·m on the forceps' 2 mm beads). Not counted in the problem's
+    evaluations.
     """
-    ratio = problem.disk.torque_unit_nm / Scene.preset(DEMO_SCENE).disk.torque_unit_nm
-    designs = np.array([paper_design(scene, t * ratio) for t in torques_nm])
+    paper = Scene.preset(DEMO_SCENE).disk
+    ratio = problem.disk.torque_unit_nm / paper.torque_unit_nm
+    if scene is not None:
+        designs = np.array([paper_design(scene, t * ratio) for t in torques_nm])
+    else:
+        rel = relative_from_design(np.array([paper_design(DEMO_SCENE, t) for t in torques_nm]),
+                                   paper.radius_m, paper.torque_unit_nm)
+        designs = design_from_relative(rel, problem.disk.radius_m, problem.disk.torque_unit_nm)
     reward = problem.evaluate_physical(designs)["reward"]
     i = int(np.argmax(reward))
     return float(reward[i]), float(torques_nm[i] * ratio)
@@ -74,7 +93,9 @@ def _progress_bar(total: int, desc: str, enabled: bool):
 def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
                   problem: DesignProblem | None = None,
                   reference: float | None = None) -> dict[str, Path]:
-    """Write the result JSON, the convergence chart, the best grasp (and the Pareto chart)."""
+    """Write the result JSON, the convergence chart, the best grasp, the build sheet (and the
+    Pareto chart)."""
+    from .build_sheet import write_build_sheet
     from .charts import best_grasp_figure, convergence_figure, pareto_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -82,10 +103,13 @@ def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
     paths["convergence"] = out_dir / f"{prefix}_convergence.png"
     convergence_figure([result], paths["convergence"], reference=reference,
                        title=f"{result.method} on {result.object.get('name') or 'object'}, "
-                             f"strain limit {result.object['strain_limit']:g}")
+                             f"strain limit {result.object['strain_limit']:g}, friction "
+                             f"{result.object.get('friction_coefficient', float('nan')):g}")
     if result.best_design:
         paths["best_grasp"] = out_dir / f"{prefix}_best_grasp.png"
         best_grasp_figure(result, paths["best_grasp"])
+        paths.update(write_build_sheet(result.best_design, result.object, out_dir, prefix,
+                                       result.best_metrics))
     if result.method == "nsga2":
         paths["pareto"] = out_dir / f"{prefix}_pareto.png"
         pareto_figure(result, paths["pareto"],
@@ -96,14 +120,26 @@ def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
 def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
                    paths: dict[str, Path]) -> None:
     print(result.summary())
-    d = result.best_design
+    d, m, extra = result.best_design, result.best_metrics, result.extra
+    if "search_reward" in extra:
+        rm = extra["reward_model"]
+        print(f"  reported by the finer member {rm['element']} N = {rm['n_triangles']}, M = "
+              f"{rm['n_rings']} (the search model said {extra['search_reward']:.4f}; the "
+              f"finish took {extra['finish']['evaluations']} evaluations, "
+              f"{extra['finish']['seconds']:.2f} s)")
     if d:
-        print(f"  best design: l = {d['finger_length_m']:.4f} m, "
+        print(f"  best design: l = {d['finger_length_m'] * 1e3:.4g} mm, "
               f"theta_a0 = {math.degrees(d['rest_angle_rad']):.2f} deg, "
-              f"d3 = {d['joint_offset_m']:.4f} m, w = {d['finger_width_m']:.4f} m, "
-              f"T_a = {d['torque_nm']:.4f} N·m, d1 = {d['distance_m']:.4f} m")
+              f"d3 = {d['joint_offset_m'] * 1e3:.4g} mm, w = {d['finger_width_m'] * 1e3:.4g} mm, "
+              f"T_a = {d['torque_nm']:.4g} N·m, d1 = {d['distance_m'] * 1e3:.4g} mm, "
+              f"k_f = {result.object['torsion_stiffness_nm_per_rad']:.4g} N·m/rad")
+    if m.get("required_friction") is not None:
+        print(f"  holding: needs friction {m['required_friction']:.3g} (the object's "
+              f"{m.get('friction_coefficient', float('nan')):.3g}): "
+              + ("holds" if m.get("holds") else "would slip without the pin")
+              + f"; the pin carries {math.hypot(*m['pin_force_n']):.4g} N")
     if reference is not None:
-        print(f"  the scene's own gripper (best of 5 torques): {reference[0]:.4f} at "
+        print(f"  the paper's gripper (best of 5 torques): {reference[0]:.4f} at "
               f"T_a = {reference[1]:.3g} N·m")
     if result.pareto_front:
         print(f"  Pareto front: {len(result.pareto_front)} designs")
@@ -112,39 +148,84 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
         print(f"  {name:12s}: {path}")
 
 
+def _problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
+                    spring_rel, spring_nm) -> tuple[Any, dict[str, Any]]:
+    """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
+    run, validated: explicit values first, then the object file's, then the defaults."""
+    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
+    from envs.scene import joint_spring
+
+    if obj is not None and scene is not None:
+        raise ValueError("give the object once: a scene preset or an object (file), not both")
+    if obj is not None and not isinstance(obj, ObjectSpec):
+        raise ValueError(f"obj must be an ObjectSpec (envs.object_file.load_object), got "
+                         f"{type(obj).__name__}")
+    if obj is None and scene not in PRESETS:
+        raise ValueError(f"unknown scene {scene!r}; allowed: {sorted(PRESETS)}")
+    own = obj if obj is not None else None
+    limit = strain_limit if strain_limit is not None else (
+        own.strain_limit if own is not None and own.strain_limit is not None
+        else DEFAULT_STRAIN_LIMIT)
+    mu = friction if friction is not None else (
+        own.friction_coefficient if own is not None and own.friction_coefficient is not None
+        else DEFAULT_FRICTION_COEFFICIENT)
+    kwargs: dict[str, Any] = {"strain_limit": check_strain_limit(limit),
+                              "friction_coefficient": check_friction(mu)}
+    if spring_rel is not None or spring_nm is not None:
+        rel, absolute = joint_spring(spring_rel, spring_nm)
+        kwargs["torsion_stiffness_rel" if absolute is None else
+               "torsion_stiffness_nm_per_rad"] = rel if absolute is None else absolute
+    return (obj.disk if obj is not None else scene), kwargs
+
+
 def run_optimize(
     method: str,
     *,
-    scene: str = DEMO_SCENE,
+    scene: str | None = None,
+    obj: ObjectSpec | None = None,
     budget: int = 2000,
     seed: int = 0,
     out: str | Path = "out",
     dask: str | None = None,
     workers: int | None = None,
-    strain_limit: float = DEFAULT_STRAIN_LIMIT,
+    strain_limit: float | None = None,
+    friction_coefficient: float | None = None,
+    torsion_stiffness_rel: float | None = None,
+    torsion_stiffness_nm_per_rad: float | None = None,
     n_triangles: int | None = None,
     progress: bool = True,
     n_rings: int | None = None,
     element: str | None = None,
     prefix: str | None = None,
     verbose: bool = True,
+    finish: bool = True,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
-    """Run one method on a scene's object and write its files (what ``optimize`` does).
+    """Run one method on an object and write its files (what ``optimize`` does).
+
+    The object is a scene preset's disk (``scene``; its gripper keeps its own joint spring)
+    or a designer's own (``obj``, e.g. :func:`envs.object_file.load_object`; the spring is
+    relative to it unless given); neither: :data:`DEMO_SCENE`. The strain limit and the
+    friction coefficient are the arguments', else the object file's, else the defaults. With
+    ``finish`` (default) the run's best distinct designs are re-scored by a finer member
+    (:func:`optim.finish.finish_result`): the reported optimum is the FEM's within a few
+    percent; the result JSON says which model reported it (``extra["reward_model"]``).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
-    grasp (valid, converged, both fingers touching); when it is not, a warning goes to stderr
-    (and ``psm-grasp optimize`` exits with :data:`NO_GRASP_EXIT`).
+    grasp that holds the object (valid, converged, both fingers touching, the friction it
+    needs within the object's); when it is not, a warning goes to stderr (and ``psm-grasp
+    optimize`` exits with :data:`NO_GRASP_EXIT`).
 
     Raises
     ------
     ValueError
-        Unknown method, scene or method option, budget <= 0, bad seed, strain limit outside
-        (0, 1], a model member outside the family (:func:`envs.model.family.resolve_model`;
-        default: the default model, ``element="spring"`` the paper's fan), bad worker count,
-        a Dask address that is not a scheduler answering within seconds, an output folder
-        that cannot be written.
+        Unknown method, scene or method option, both a scene and an object, budget <= 0, bad
+        seed, strain limit outside (0, 1], friction outside (0, 10], a bad joint spring, a
+        model member outside the family (:func:`envs.model.family.resolve_model`; default: the
+        default model, ``element="spring"`` the paper's fan), bad worker count, a Dask address
+        that is not a scheduler answering within seconds, an output folder that cannot be
+        written.
     """
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
@@ -155,18 +236,22 @@ def run_optimize(
     # every option before any work (no cluster started, no evaluation spent)
     driver = get_optimizer(method)
     check_options(method, options)
-    if scene not in PRESETS:
-        raise ValueError(f"unknown scene {scene!r}; allowed: {sorted(PRESETS)}")
+    if obj is None and scene is None:
+        scene = DEMO_SCENE
+    target, problem_kwargs = _problem_kwargs(scene, obj, strain_limit, friction_coefficient,
+                                             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
     budget, seed = check_budget(budget), check_seed(seed)
-    strain_limit = check_strain_limit(strain_limit)
     model = resolve_model(n_triangles, n_rings, element or DEFAULT_ELEMENT)
     check_executor_options(dask, workers)
     out_dir = check_output_dir("out", out)
     prefix = prefix or f"{method}_seed{seed}"
     bar, hook = _progress_bar(budget, method, progress)
     with make_executor(dask, workers) as executor:
-        problem = DesignProblem.from_scene(scene, strain_limit, executor=executor,
-                                           progress=hook, **model.kwargs())
+        common = {"executor": executor, "progress": hook, **problem_kwargs, **model.kwargs()}
+        if obj is None:
+            problem = DesignProblem.from_scene(target, **common)
+        else:
+            problem = DesignProblem(target, name=obj.name, **common)
         try:
             with warnings.catch_warnings():
                 # said once below, with the files written
@@ -174,6 +259,12 @@ def run_optimize(
                 result = driver(problem, budget=budget, seed=seed, **options)
         finally:
             bar.close()
+        if obj is not None:
+            result = replace(result, object={**result.object, "file": obj.info()["file"]})
+        if finish:
+            from .finish import finish_result
+
+            result = finish_result(problem, result)
         reference = paper_reference(problem, scene)
         paths = write_outputs(result, out_dir, prefix, problem,
                               None if reference is None else reference[0])

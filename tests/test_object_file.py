@@ -33,7 +33,7 @@ def test_the_example_objects_load():
     tomato = names["cherry_tomato"]
     assert tomato.name == "cherry tomato"
     assert tomato.disk == SoftDisk(0.012, 0.0, 150e3, 0.45, 0.024)
-    assert tomato.strain_limit == 0.08 and tomato.friction_coefficient == 0.5
+    assert tomato.strain_limit == 0.10 and tomato.friction_coefficient == 0.5
     assert tomato.info()["radius_m"] == 0.012
     foam = names["foam_disk"]
     scene = foam.scene()  # the [gripper] table: the paper's gripper on a foam disk
