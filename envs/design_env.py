@@ -1,4 +1,4 @@
-"""GripperDesign-v0: one step designs a gripper for a soft disk; a thin adapter over physics.
+"""GripperDesign-v1: one step designs a gripper for a soft disk; a thin adapter over physics.
 
 The physics and the reward live in :func:`envs.evaluate.evaluate_designs`; this module only maps
 actions to designs, draws objects, builds observations and ``info``, and renders.
@@ -42,108 +42,141 @@ __all__ = [
 ]
 
 # (name, transform, low, high): the observation is the transformed value mapped linearly from
-# [low, high] to [-1, 1]; objects outside these ranges are rejected at reset.
+# [low, high] to [-1, 1]; objects outside these ranges are rejected at reset. Only what changes
+# a relative design's grasp is observed: the model is invariant under the object's size,
+# stiffness and thickness (lengths in radii, torques in s E t r^2, the joint spring with them),
+# so a relative design scores the same on every disk of one Poisson ratio, strain limit,
+# friction coefficient and calibration scale (the Hertz contact width goes as sqrt(s)).
 OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
-    ("radius_m", "log10", -3.0, 0.0),
-    ("effective_modulus_pa", "log10", 3.0, 9.0),
-    ("thickness_m", "log10", -4.0, -1.0),
-    ("poisson_ratio", "linear", -1.0, 0.5),
-    ("strain_limit", "linear", 0.0, 1.0),
+    ("poisson_ratio", "linear", 0.0, 0.5),
+    ("strain_limit", "linear", 0.0, 0.5),
+    ("friction_coefficient", "linear", 0.0, 2.0),
+    ("stiffness_scale", "log10", -2.0, 1.0),
 )
-OBJECT_INFO_KEYS = (
-    "radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m", "stiffness_scale",
-    "strain_limit",
-)
+DISK_INFO_KEYS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
+                  "stiffness_scale")
+NEED_KEYS = ("strain_limit", "friction_coefficient")  # what a design must respect
+OBJECT_INFO_KEYS = DISK_INFO_KEYS + NEED_KEYS
 RENDER_FPS = 4
+
+
+def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
+          high_open: bool = False) -> tuple[float, float]:
+    pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=low_open,
+                             high_open=high_open) for v in value)
+    if len(pair) != 2 or pair[0] > pair[1]:
+        raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
+    return pair
 
 
 @dataclass(frozen=True)
 class ObjectDistribution:
-    """Distribution of the object drawn at reset.
+    """Distribution of the object drawn at reset: a disk and what a design must respect.
+
+    The default covers real use: produce and tissue from 1 mm to 0.2 m, from 10 kPa to 10 MPa.
+    Radius, modulus and thickness are drawn log-uniformly, the rest uniformly.
 
     Parameters
     ----------
-    radii_m
-        Radii drawn uniformly among these values [m] (default: the three paper disks).
+    radius_range_m
+        Disk radius [m].
     youngs_modulus_range_pa
-        Young's modulus drawn log-uniformly in this range [Pa].
+        Young's modulus [Pa].
+    poisson_ratio_range
+        Poisson's ratio [-], inside (-1, 0.5).
+    thickness_range_m
+        Thickness [m].
     strain_limit_range
-        Admissible compressive strain (a limit on the peak compression, see
-        :func:`envs.evaluate_designs`) drawn uniformly in this range [-], inside (0, 1]:
-        around the evaluator's default 0.10.
-    poisson_ratio
-        Poisson's ratio of every object [-].
-    thickness_m
-        Thickness of every object [m].
+        Admissible peak compression (see :func:`envs.evaluate_designs`) [-], inside (0, 0.5]
+        (the observable range).
+    friction_range
+        Coulomb friction coefficient of the fingers on the object [-], inside (0, 2].
     stiffness_scale
         Calibration scale ``s`` of every object [-].
     """
 
-    radii_m: tuple[float, ...] = (0.05, 0.07, 0.10)
-    youngs_modulus_range_pa: tuple[float, float] = (30e3, 1e6)
+    radius_range_m: tuple[float, float] = (1e-3, 0.2)
+    youngs_modulus_range_pa: tuple[float, float] = (10e3, 10e6)
+    poisson_ratio_range: tuple[float, float] = (0.25, 0.49)
+    thickness_range_m: tuple[float, float] = (1e-3, 0.1)
     strain_limit_range: tuple[float, float] = (0.03, 0.17)
-    poisson_ratio: float = 0.45
-    thickness_m: float = 0.01
+    friction_range: tuple[float, float] = (0.2, 1.0)
     stiffness_scale: float = 1.0
 
     def __post_init__(self) -> None:
-        radii = tuple(check_range("radii_m[i]", r, 0.0, math.inf, low_open=True)
-                      for r in self.radii_m)
-        if not radii:
-            raise ValueError("radii_m must hold at least one radius")
-        object.__setattr__(self, "radii_m", radii)
-        for name, low, high in (("youngs_modulus_range_pa", 0.0, math.inf),
-                                ("strain_limit_range", 0.0, 1.0)):
-            pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=True)
-                         for v in getattr(self, name))
-            if len(pair) != 2 or pair[0] > pair[1]:
-                raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
-            object.__setattr__(self, name, pair)
-        # a SoftDisk validates the material fields (both ends of the modulus range)
-        SoftDisk(radii[0], 0.0, self.youngs_modulus_range_pa[1], self.poisson_ratio,
-                 self.thickness_m, self.stiffness_scale)
-        object.__setattr__(self, "_templates", tuple(
-            SoftDisk(r, 0.0, self.youngs_modulus_range_pa[0], self.poisson_ratio,
-                     self.thickness_m, self.stiffness_scale) for r in radii))
+        for name, low, high, low_open, high_open in (
+                ("radius_range_m", 0.0, math.inf, True, False),
+                ("youngs_modulus_range_pa", 0.0, math.inf, True, False),
+                ("poisson_ratio_range", 0.0, 0.5, False, True),
+                ("thickness_range_m", 0.0, math.inf, True, False),
+                ("strain_limit_range", 0.0, 0.5, True, False),
+                ("friction_range", 0.0, 2.0, True, False)):
+            object.__setattr__(self, name, _pair(name, getattr(self, name), low, high,
+                                                 low_open=low_open, high_open=high_open))
+        scale = check_range("stiffness_scale", self.stiffness_scale, 10.0**-2, 10.0)
+        object.__setattr__(self, "stiffness_scale", scale)
+        # a SoftDisk validates the material fields (both ends of every range)
+        for end in (0, 1):
+            SoftDisk(self.radius_range_m[end], 0.0, self.youngs_modulus_range_pa[end],
+                     self.poisson_ratio_range[end], self.thickness_range_m[end], scale)
+        object.__setattr__(self, "_template", SoftDisk(
+            self.radius_range_m[0], 0.0, self.youngs_modulus_range_pa[0],
+            self.poisson_ratio_range[0], self.thickness_range_m[0], scale))
 
-    def sample(self, rng: np.random.Generator) -> tuple[SoftDisk, float]:
-        """Draw an object and its strain limit: three uniform numbers of ``rng`` in one call
-        (radius index, log modulus, strain limit, in this order).
+    def sample(self, rng: np.random.Generator) -> tuple[SoftDisk, float, float]:
+        """Draw an object, its strain limit and its friction coefficient: six uniform numbers
+        of ``rng`` in one call (radius, modulus, Poisson ratio, thickness, strain limit,
+        friction, in this order).
 
         The disk's ``distance_m`` is 0: the design's ``distance_m`` replaces it.
         """
-        # one call, not three (integers, uniform, uniform): a vector env draws hundreds of
-        # objects per step and each call of a Generator costs about a microsecond
-        u_radius, u_modulus, u_limit = rng.random(3).tolist()
-        k = min(int(u_radius * len(self.radii_m)), len(self.radii_m) - 1)
-        lo, hi = self.youngs_modulus_range_pa
-        modulus = math.exp(math.log(lo) + u_modulus * (math.log(hi) - math.log(lo)))
-        low, high = self.strain_limit_range
-        limit = low + u_limit * (high - low)
-        # every field lies in a range validated at construction: a copy of the radius' validated
-        # template with the drawn modulus, not a SoftDisk validated again (a vector env draws
+        # one call, not six: a vector env draws hundreds of objects per step and each call of
+        # a Generator costs about a microsecond
+        u = rng.random(6).tolist()
+
+        def log_uniform(pair, x):
+            return math.exp(math.log(pair[0]) + x * (math.log(pair[1]) - math.log(pair[0])))
+
+        def uniform(pair, x):
+            return pair[0] + x * (pair[1] - pair[0])
+
+        # every field lies in a range validated at construction: a copy of the validated
+        # template with the drawn fields, not a SoftDisk validated again (a vector env draws
         # one object per reset, hundreds per step)
         disk = object.__new__(SoftDisk)
-        disk.__dict__.update(self._templates[k].__dict__)  # copy.copy without its reduce protocol
-        object.__setattr__(disk, "youngs_modulus_pa", modulus)
-        return disk, limit
+        disk.__dict__.update(self._template.__dict__)  # copy.copy without its reduce protocol
+        for name, value in (("radius_m", log_uniform(self.radius_range_m, u[0])),
+                            ("youngs_modulus_pa", log_uniform(self.youngs_modulus_range_pa,
+                                                              u[1])),
+                            ("poisson_ratio", uniform(self.poisson_ratio_range, u[2])),
+                            ("thickness_m", log_uniform(self.thickness_range_m, u[3]))):
+            object.__setattr__(disk, name, value)
+        return (disk, uniform(self.strain_limit_range, u[4]),
+                uniform(self.friction_range, u[5]))
 
 
-def observe(disk: SoftDisk, strain_limit: float) -> np.ndarray:
-    """Normalized observation of an object, float32 (5,) in [-1, 1] (see :data:`OBS_FIELDS`).
+def observe(disk: SoftDisk, strain_limit: float, friction_coefficient: float) -> np.ndarray:
+    """Normalized observation of an object, float32 (4,) in [-1, 1] (see :data:`OBS_FIELDS`).
 
     Raises
     ------
     ValueError
         If a value lies outside the observable range (the message names it).
     """
-    check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
-    return observe_rows([disk], np.array([strain_limit], dtype=float))[0]
+    return observe_rows([disk], np.array([[strain_limit, friction_coefficient]],
+                                         dtype=float))[0]
 
 
-def observe_rows(disks: list[SoftDisk], strain_limits: np.ndarray) -> np.ndarray:
-    """Normalized observations of B objects, float32 (B, 5) in [-1, 1]: :func:`observe` row by
+def observe_rows(disks: list[SoftDisk], needs: np.ndarray) -> np.ndarray:
+    """Normalized observations of B objects, float32 (B, 4) in [-1, 1]: :func:`observe` row by
     row, as array operations (a vector env observes hundreds of new objects per step).
+
+    Parameters
+    ----------
+    disks
+        The B disks.
+    needs
+        Their strain limits and friction coefficients, (B, 2) (:data:`NEED_KEYS`).
 
     Raises
     ------
@@ -151,37 +184,35 @@ def observe_rows(disks: list[SoftDisk], strain_limits: np.ndarray) -> np.ndarray
         If a value lies outside the observable range (the message names it, and the row when
         B > 1).
     """
-    return _observe_table(_object_table(disks), np.asarray(strain_limits, dtype=float))
+    return _observe_table(_object_table(disks), np.asarray(needs, dtype=float).reshape(-1, 2))
 
 
-_OBJECT_FIELDS = operator.attrgetter(*OBJECT_INFO_KEYS[:-1])  # one C call per object
+_DISK_FIELDS = operator.attrgetter(*DISK_INFO_KEYS)  # one C call per object
 
 
 def _object_table(disks: list[SoftDisk]) -> np.ndarray:
-    """The objects' fields, float (B, 5), columns as the first five of OBJECT_INFO_KEYS."""
-    return np.array([_OBJECT_FIELDS(d) for d in disks],
-                    dtype=float).reshape(len(disks), len(OBJECT_INFO_KEYS) - 1)
+    """The disks' fields, float (B, 5), columns as :data:`DISK_INFO_KEYS`."""
+    return np.array([_DISK_FIELDS(d) for d in disks],
+                    dtype=float).reshape(len(disks), len(DISK_INFO_KEYS))
 
 
-def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
-    """:func:`observe_rows` of an object table (:func:`_object_table`) and strain limits."""
-    values = {key: table[:, k] for k, key in enumerate(OBJECT_INFO_KEYS[:-1])}
-    values["effective_modulus_pa"] = values["stiffness_scale"] * values["youngs_modulus_pa"]
-    values["strain_limit"] = limits
+def _observe_table(table: np.ndarray, needs: np.ndarray) -> np.ndarray:
+    """:func:`observe_rows` of a disk table (:func:`_object_table`) and the needs (B, 2)."""
+    values = {key: table[:, k] for k, key in enumerate(DISK_INFO_KEYS)}
+    values.update({key: needs[:, k] for k, key in enumerate(NEED_KEYS)})
     n_rows = table.shape[0]
-    bad = np.flatnonzero(~((limits > 0.0) & (limits <= 1.0)))
-    if bad.size:
-        where = f" (row {int(bad[0])})" if n_rows > 1 else ""
-        raise ValueError(f"strain_limit = {float(limits[bad[0]])!r}{where} must be in (0, 1]")
     obs = np.empty((n_rows, len(OBS_FIELDS)), dtype=np.float32)
     for i, (name, transform, low, high) in enumerate(OBS_FIELDS):
         v = values[name]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.log10(v) if transform == "log10" else v
-        bad = np.flatnonzero(~((low <= t) & (t <= high)))
+        # a strain limit or friction of 0 is no object: the lower end is open for them
+        open_low = name in NEED_KEYS
+        bad = np.flatnonzero(~(((low < t) if open_low else (low <= t)) & (t <= high)))
         if bad.size:
             row = int(bad[0])
-            shown = f"[{10**low:g}, {10**high:g}]" if transform == "log10" else f"[{low}, {high}]"
+            lo, hi = ((10**low, 10**high) if transform == "log10" else (low, high))
+            shown = f"{'(' if open_low else '['}{lo:g}, {hi:g}]"
             where = f" (row {row})" if n_rows > 1 else ""
             raise ValueError(f"{name} = {float(v[row])!r}{where} is outside the observable "
                              f"range {shown}")
@@ -189,10 +220,10 @@ def _observe_table(table: np.ndarray, limits: np.ndarray) -> np.ndarray:
     return np.clip(obs, -1.0, 1.0)
 
 
-def _object_info(disk: SoftDisk, strain_limit: float) -> dict[str, float]:
-    # the disk's fields named in OBJECT_INFO_KEYS, then the strain limit (as _object_table)
-    return {**dict(zip(OBJECT_INFO_KEYS[:-1], _OBJECT_FIELDS(disk), strict=True)),
-            "strain_limit": float(strain_limit)}
+def _object_info(disk: SoftDisk, needs: np.ndarray) -> dict[str, float]:
+    # the disk's fields named in DISK_INFO_KEYS, then the needs (as _object_table)
+    return {**dict(zip(DISK_INFO_KEYS, _DISK_FIELDS(disk), strict=True)),
+            **{key: float(v) for key, v in zip(NEED_KEYS, needs, strict=True)}}
 
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -209,21 +240,27 @@ def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndar
     return np.clip(a, -1.0, 1.0), np.asarray(clipped)
 
 
+RESET_OPTIONS = ("disk", "strain_limit", "friction_coefficient")
+
+
 def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
-    """The reset options, every one validated (the strain limit as a float) before a reset
-    changes anything: a refused reset leaves the env, its random stream included, as it was."""
+    """The reset options, every one validated (numbers as floats) before a reset changes
+    anything: a refused reset leaves the env, its random stream included, as it was."""
     options = dict(options or {})
-    unknown = set(options) - {"disk", "strain_limit"}
+    unknown = set(options) - set(RESET_OPTIONS)
     if unknown:
-        raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: disk, strain_limit")
+        raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: "
+                         f"{', '.join(RESET_OPTIONS)}")
     if "disk" in options and not isinstance(options["disk"], SoftDisk):
         raise ValueError(f"options['disk'] must be a SoftDisk, got {type(options['disk'])}")
     if "strain_limit" in options:
-        options["strain_limit"] = check_range("strain_limit", options["strain_limit"], 0.0, 1.0,
+        options["strain_limit"] = check_range("strain_limit", options["strain_limit"], 0.0, 0.5,
                                               low_open=True)
-    if "disk" in options:  # observable (any valid limit stands in for one drawn later)
-        _observe_table(_object_table([options["disk"]]),
-                       np.array([options.get("strain_limit", 1.0)]))
+    if "friction_coefficient" in options:
+        options["friction_coefficient"] = check_range(
+            "friction_coefficient", options["friction_coefficient"], 0.0, 2.0, low_open=True)
+    if "disk" in options:  # observable (any valid need stands in for one drawn later)
+        _observe_table(_object_table([options["disk"]]), np.array([[0.1, 0.5]]))
     return options
 
 
@@ -240,7 +277,8 @@ def check_reset_arguments(seed: int | None, options: dict[str, Any] | None) -> d
     ------
     ValueError
         For a seed that is not None or an integer >= 0, an unknown option, a ``disk`` that is
-        not an observable :class:`~envs.scene.SoftDisk`, a ``strain_limit`` outside (0, 1].
+        not an observable :class:`~envs.scene.SoftDisk`, a ``strain_limit`` outside (0, 0.5],
+        a ``friction_coefficient`` outside (0, 2].
     """
     if seed is not None and (isinstance(seed, bool | np.bool_)
                              or not isinstance(seed, int | np.integer) or seed < 0):
@@ -249,17 +287,18 @@ def check_reset_arguments(seed: int | None, options: dict[str, Any] | None) -> d
 
 
 def _draw(rng: np.random.Generator, distribution: ObjectDistribution,
-          options: dict[str, Any]) -> tuple[SoftDisk, float]:
+          options: dict[str, Any]) -> tuple[SoftDisk, np.ndarray]:
     # always draw, so the random stream does not depend on the options (validated by
     # _parse_options; the distribution's own draws lie in its validated range)
-    disk, limit = distribution.sample(rng)
-    return options.get("disk", disk), options.get("strain_limit", limit)
+    disk, limit, friction = distribution.sample(rng)
+    return options.get("disk", disk), np.array([options.get("strain_limit", limit),
+                                                options.get("friction_coefficient", friction)])
 
 
 def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
-                 options: dict[str, Any]) -> tuple[SoftDisk, float, np.ndarray]:
-    disk, limit = _draw(rng, distribution, options)
-    return disk, limit, observe(disk, limit)
+                 options: dict[str, Any]) -> tuple[SoftDisk, np.ndarray, np.ndarray]:
+    disk, needs = _draw(rng, distribution, options)
+    return disk, needs, observe(disk, *needs)
 
 
 def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element, calibrated):
@@ -336,7 +375,8 @@ class GripperDesignEnv(gym.Env):
     ## Description
 
     Design an angular two-finger gripper for a soft disk. Each episode presents one object (a
-    soft 2-D disk with a radius, a stiffness and a strain limit); the agent answers with one
+    soft 2-D disk with a radius, a stiffness, a strain limit and a friction coefficient of the
+    finger pads on it); the agent answers with one
     design (finger length, rest angle, joint offset, finger width, actuation torque and where the
     object sits), the grasp is solved with the point-spring model of the disk (quasi-static,
     frictionless contact, a member of the model family) and the episode ends. It is a
@@ -373,66 +413,63 @@ class GripperDesignEnv(gym.Env):
 
     ## Observation Space
 
-    The observation is a float32 `ndarray` with shape `(5,)` describing the object, each value
+    The observation is a float32 `ndarray` with shape `(4,)` describing the object, each value
     mapped linearly from the range below to `[-1, 1]` (a reset with an object outside these
-    ranges raises `ValueError`).
+    ranges raises `ValueError`). The radius, the modulus and the thickness are not observed:
+    the model is invariant under them (lengths in radii, torques and the joint spring in
+    `s E t r^2`), so an action scores the same on every disk of one Poisson ratio, strain
+    limit, friction coefficient and calibration scale (tested); `info` holds them.
 
     | Num | Observation                                   | Transform | Min    | Max   |
     |-----|-----------------------------------------------|-----------|--------|-------|
-    | 0   | radius `r` [m]                                | log10     | 1e-3   | 1.0   |
-    | 1   | effective Young's modulus `s E` [Pa]          | log10     | 1e3    | 1e9   |
-    | 2   | thickness `t` [m]                             | log10     | 1e-4   | 0.1   |
-    | 3   | Poisson's ratio `nu` [-]                      | linear    | -1.0   | 0.5   |
-    | 4   | strain limit `eps_max` [-]                    | linear    | 0.0    | 1.0   |
+    | 0   | Poisson's ratio `nu` [-]                      | linear    | 0.0    | 0.5   |
+    | 1   | strain limit `eps_max` [-]                    | linear    | 0.0    | 0.5   |
+    | 2   | friction coefficient `mu` [-]                 | linear    | 0.0    | 2.0   |
+    | 3   | calibration scale `s` [-]                     | log10     | 0.01   | 10    |
 
     ## Rewards
 
-    With the weights `w` of :class:`~envs.evaluate.RewardWeights` (defaults in brackets):
+    The reward of :func:`~envs.evaluate.evaluate_designs` with the weights `w` of
+    :class:`~envs.evaluate.RewardWeights`, in tiers (defaults in brackets):
 
-    *r = w_contact min(c, c_max) - w_deform min(eps / eps_max, q_max) - w_miss m
-    - w_gap g / (1 + g) - [invalid] (w_invalid + w_violation v / (1 + v))
-    - w_fail [not converged]*
+    - a grasp that **holds** the object (both fingers touching, the friction it needs to hold
+      a free object within `mu`): *w_contact min(c, c_max) - w_deform min(eps / eps_max,
+      q_max)*, in `[-1, 0.5]`, with `c` the contact score, the fraction of the contour in
+      contact (each face's share the smaller of its pressed points over `N` and the Hertz
+      width of its force) times the grip share, the part of the actuation torque that grips
+      the object (`w_contact = 1`, `c_max = 0.5`), and `eps` the peak compression, the
+      largest shortening of a radius by the fingers over r (`w_deform = 0.25`, `q_max = 4`);
+    - a grasp that would **slip** (it needs friction `mu_req > mu`): *-1 - w_slip x / (1 + x)*,
+      `x = mu_req / mu - 1`, in `(-1.5, -1)` (`w_slip = 0.5`);
+    - a **miss** (a finger does not touch): *-1.5 - w_miss m - w_gap g / (1 + g)*, `m` the
+      fingers missing, `g` the largest gap of such a finger to the disk in radii, in
+      `(-3, -2]` (`w_miss = 0.5`, `w_gap = 0.5`): closer fingers score higher;
+    - the solver failed: *-w_fail* (`-3`);
+    - invalid at rest (the fingers overlap the disk, ...; nothing is solved):
+      *-w_invalid - w_violation v / (1 + v)*, `v` how far it is from valid, in `[-4.5, -3.5]`.
 
-    - `c`: contact score, the fraction of the contour in contact (each face's share the
-      smaller of its pressed points over `N` and the Hertz width of its force, so a light
-      touch counts its physical width, not a facet) times the grip share `s`: the part of the
-      actuation torque that grips the object, not taken by the torsion springs or the joint
-      stops (0 for fingers that merely touch it) (`w_contact = 1`, `c_max = 0.5`);
-    - `eps`: peak compression, the largest shortening of a radius by the fingers over r (how
-      deep the grasp presses in), `eps_max` the object's strain limit (`w_deform = 0.25`,
-      `q_max = 4`);
-    - `m`: number of fingers that do not touch the disk (`w_miss = 0.5`);
-    - `g`: the largest distance between a finger that does not touch and the disk, in disk
-      radii (`w_gap = 0.5`): a design that misses scores higher the closer its fingers close;
-    - invalid: the fingers overlap the disk at rest, or the design is otherwise impossible
-      (nothing is solved; `w_invalid = 3`); `v` is how far it is from valid (overlap depth
-      in radii and any other violated limit, :func:`envs.evaluate.rest_violation`;
-      `w_violation = 1`), so less overlap scores higher;
-    - not converged: the solver failed (`w_fail = 2.5`, metrics reported as 0).
-
-    Outcomes are ordered: every valid converged grasp scores above -2.5, a solver failure
-    -2.5, every invalid design -3 down to -4. The reward is finite and lies in `(-4, 0.5]`.
-    Each signed term is in `info` (`reward_contact`, `reward_deform`, `penalty_miss`,
-    `penalty_gap`, `penalty_invalid`, `penalty_fail`), with `finger_gap_m` and
-    `rest_violation`.
+    Every outcome of a tier scores below every outcome of the tiers above, and the reward is
+    finite. Each signed term is in `info` (`reward_contact`, `reward_deform`, `penalty_slip`,
+    `penalty_miss`, `penalty_gap`, `penalty_invalid`, `penalty_fail`), with `required_friction`,
+    `pin_force_n`, `holds`, `finger_gap_m` and `rest_violation`.
 
     ## Starting State
 
-    At reset an object is drawn from `distribution` (an :class:`ObjectDistribution`; default:
-    radius uniformly among the paper disks {0.05, 0.07, 0.10} m, Young's modulus log-uniform in
-    [30 kPa, 1 MPa], strain limit (admissible compression) uniform in [0.03, 0.17],
-    `nu = 0.45`, `t = 0.01` m, `s = 1`).
-    `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1})` fixes either or both (the
-    disk's `distance_m` is ignored: `d_1` is part of the action).
+    At reset an object is drawn from `distribution` (an :class:`ObjectDistribution`; default,
+    covering real use: radius 1 mm to 0.2 m, Young's modulus 10 kPa to 10 MPa and thickness
+    1 mm to 0.1 m log-uniform, `nu` 0.25 to 0.49, strain limit (admissible compression) 0.03
+    to 0.17 and friction coefficient 0.2 to 1.0 uniform, `s = 1`).
+    `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1, "friction_coefficient": 0.5})`
+    fixes any of them (the disk's `distance_m` is ignored: `d_1` is part of the action).
 
     ## Episode End
 
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
-    `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v0"))`
+    `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v1"))`
     passes. Stepping again without a reset evaluates another design on the same object.
 
-    Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v0", n)`
+    Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v1", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
     default. Gymnasium's `"sync"` and `"async"` modes reset on the *next* step unless told
     otherwise, which would spend every other step on a reset: pass
@@ -465,6 +502,11 @@ class GripperDesignEnv(gym.Env):
 
     ## Version History
 
+    * v1: the object's friction coefficient, and holding: a grasp that would let a free object
+      slip scores below every grasp that holds; the reward in tiers (a miss below every grasp);
+      the observation is what changes a relative design's grasp (Poisson ratio, strain limit,
+      friction, calibration scale), not the radius, modulus and thickness; the default object
+      distribution covers real use; the joint spring relative to the object.
     * v0: Initial version. Later in v0: actions relative to the object (lengths in radii,
       torque in `s E t r^2`, placement as a rest clearance) instead of metres; graded
       penalties for missing and invalid designs; no `TimeLimit` in the registration.
@@ -495,7 +537,7 @@ class GripperDesignEnv(gym.Env):
         self.joint_spring = _spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces()
         self._disk: SoftDisk | None = None
-        self._strain_limit = 0.0
+        self._needs = np.zeros(len(NEED_KEYS))  # strain limit, friction coefficient
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
         self._last_design: np.ndarray | None = None
         self._render_cache: dict = {}
@@ -514,12 +556,12 @@ class GripperDesignEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         opts = check_reset_arguments(seed, options)  # before anything changes
         super().reset(seed=None if seed is None else int(seed))
-        self._disk, self._strain_limit, self._obs = _draw_object(
+        self._disk, self._needs, self._obs = _draw_object(
             self.np_random, self.distribution, opts)
         self._last_design = None
         if self.render_mode == "human":
             self.render()
-        return self._obs.copy(), _object_info(self._disk, self._strain_limit)
+        return self._obs.copy(), _object_info(self._disk, self._needs)
 
     def step(self, action):
         if self._disk is None:
@@ -527,13 +569,14 @@ class GripperDesignEnv(gym.Env):
         act, clipped = _check_actions(action, (N_DESIGN,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_designs(
-            design[None, :], self._disk, strain_limits=self._strain_limit,
+            design[None, :], self._disk, strain_limits=self._needs[0],
+            friction_coefficients=self._needs[1],
             weights=self.weights, **self.joint_spring, **self.model.kwargs(),
         )
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
         info["design"] = design
-        info.update(_object_info(self._disk, self._strain_limit))
+        info.update(_object_info(self._disk, self._needs))
         self._last_design = design
         if self.render_mode == "human":
             self.render()
@@ -545,7 +588,7 @@ class GripperDesignEnv(gym.Env):
             return None
         if self._disk is None:
             raise ResetNeeded("call reset() before render()")
-        frame = _render_frame(self._last_design, self._disk, self._strain_limit,
+        frame = _render_frame(self._last_design, self._disk, float(self._needs[0]),
                               self.model, self.joint_spring,
                               self._render_cache)
         if self.render_mode == "rgb_array":
@@ -557,7 +600,7 @@ class GripperDesignEnv(gym.Env):
         import matplotlib.pyplot as plt
 
         if self._figure is None or not plt.fignum_exists(self._figure.number):
-            self._figure = plt.figure("GripperDesign-v0")
+            self._figure = plt.figure("GripperDesign-v1")
             self._image = self._figure.add_subplot().imshow(frame)
             self._figure.axes[0].set_axis_off()
         else:
@@ -657,7 +700,7 @@ class GripperDesignVectorEnv(VectorEnv):
         n = self.num_envs
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._disks: list[SoftDisk | None] = [None] * n
-        self._limits = np.zeros(n)
+        self._needs = np.zeros((n, len(NEED_KEYS)))  # strain limits, friction coefficients
         self._objects = np.zeros((n, len(OBJECT_INFO_KEYS)))
         self._obs = np.zeros((n, len(OBS_FIELDS)), dtype=np.float32)
         self._autoreset = np.zeros(n, dtype=np.bool_)
@@ -678,23 +721,23 @@ class GripperDesignVectorEnv(VectorEnv):
 
     def _reset_rows(self, rows: np.ndarray, seeds: list[int | None], options: dict) -> None:
         idx = rows.tolist()
-        disks, limits = [], np.empty(len(idx))
+        disks, needs = [], np.empty((len(idx), len(NEED_KEYS)))
         for k, i in enumerate(idx):
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(seeds[i])
             # every sub-env draws from its own stream, as GripperDesignEnv.reset does
-            disk, limits[k] = _draw(self._rngs[i], self.distribution, options)
+            disk, needs[k] = _draw(self._rngs[i], self.distribution, options)
             disks.append(disk)
         # the object infos' table (columns in OBJECT_INFO_KEYS order) and the observations,
         # which validate a fixed object from the options before any sub-env changes
         table = _object_table(disks)
-        obs = _observe_table(table, limits)
+        obs = _observe_table(table, needs)
         for k, i in enumerate(idx):
             self._disks[i] = disks[k]
             self._last_designs[i] = None
-        self._limits[rows] = limits
-        self._objects[rows, :-1] = table
-        self._objects[rows, -1] = limits
+        self._needs[rows] = needs
+        self._objects[rows, : len(DISK_INFO_KEYS)] = table
+        self._objects[rows, len(DISK_INFO_KEYS):] = needs
         self._obs[rows] = obs
         self._autoreset[rows] = False
 
@@ -716,7 +759,8 @@ class GripperDesignVectorEnv(VectorEnv):
         act, clipped = _check_actions(actions[rows], (rows.size, N_DESIGN))
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_designs(
-            designs, [self._disks[i] for i in rows.tolist()], strain_limits=self._limits[rows],
+            designs, [self._disks[i] for i in rows.tolist()],
+            strain_limits=self._needs[rows, 0], friction_coefficients=self._needs[rows, 1],
             weights=self.weights, **self.joint_spring, **self.model.kwargs(),
         )
         info: dict[str, np.ndarray] = {}
@@ -805,7 +849,7 @@ class GripperDesignVectorEnv(VectorEnv):
         if any(d is None for d in self._disks):
             raise ResetNeeded("call reset() before render()")
         return tuple(
-            _render_frame(self._last_designs[i], self._disks[i], float(self._limits[i]),
+            _render_frame(self._last_designs[i], self._disks[i], float(self._needs[i, 0]),
                           self.model, self.joint_spring,
                           self._render_caches[i])
             for i in range(self.num_envs)

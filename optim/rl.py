@@ -1,7 +1,7 @@
-"""PPO and SAC (stable-baselines3) on GripperDesign-v0: a policy from objects to designs.
+"""PPO and SAC (stable-baselines3) on GripperDesign-v1: a policy from objects to designs.
 
 Unlike the other drivers, RL does not search one object's design space: it trains a policy on
-objects drawn at random (GripperDesign-v0 is a contextual bandit, one step per object) and is
+objects drawn at random (GripperDesign-v1 is a contextual bandit, one step per object) and is
 then *asked* for a design for the fixed object. To compare it with the per-object optimizers on
 equal terms, every training step counts as one evaluation of the budget, and every
 ``probe_every`` evaluations the deterministic policy's design for the fixed object is evaluated
@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from envs.design_env import OBS_FIELDS, ObjectDistribution, observe
+from envs.design_env import ObjectDistribution, observe
 from envs.scene import SoftDisk
 
 from .problem import DesignProblem, check_budget, check_seed
@@ -80,27 +80,22 @@ def option_names(method: str) -> tuple[str, ...]:
 
 
 def training_distribution(problem: DesignProblem) -> ObjectDistribution:
-    """The env's default object distribution, widened to contain the problem's object.
-
-    The radius joins the radii, the modulus and strain ranges stretch to include the object's,
-    and the material constants are the object's.
-    """
+    """The env's default object distribution, widened to contain the problem's object (its
+    radius, modulus, Poisson ratio, thickness, strain limit and friction; its calibration
+    scale for every draw)."""
     base = ObjectDistribution()
     d = problem.disk
-    radii = tuple(sorted(set(base.radii_m) | {d.radius_m}))
-    e_lo, e_hi = base.youngs_modulus_range_pa
-    # every drawn object must stay observable: the observation is the effective modulus s E,
-    # and the object's own calibration scale (0.033 for the forceps' TPU) applies to all draws
-    (_, _, log_low, log_high), = (f for f in OBS_FIELDS if f[0] == "effective_modulus_pa")
-    e_lo = max(e_lo, 10.0**log_low / d.stiffness_scale)
-    e_hi = min(e_hi, 10.0**log_high / d.stiffness_scale)
-    s_lo, s_hi = base.strain_limit_range
+
+    def widen(pair, value):
+        return (min(pair[0], value), max(pair[1], value))
+
     return ObjectDistribution(
-        radii_m=radii,
-        youngs_modulus_range_pa=(min(e_lo, d.youngs_modulus_pa), max(e_hi, d.youngs_modulus_pa)),
-        strain_limit_range=(min(s_lo, problem.strain_limit), max(s_hi, problem.strain_limit)),
-        poisson_ratio=d.poisson_ratio,
-        thickness_m=d.thickness_m,
+        radius_range_m=widen(base.radius_range_m, d.radius_m),
+        youngs_modulus_range_pa=widen(base.youngs_modulus_range_pa, d.youngs_modulus_pa),
+        poisson_ratio_range=widen(base.poisson_ratio_range, d.poisson_ratio),
+        thickness_range_m=widen(base.thickness_range_m, d.thickness_m),
+        strain_limit_range=widen(base.strain_limit_range, problem.strain_limit),
+        friction_range=widen(base.friction_range, problem.friction_coefficient),
         stiffness_scale=d.stiffness_scale,
     )
 
@@ -108,7 +103,8 @@ def training_distribution(problem: DesignProblem) -> ObjectDistribution:
 def policy_design(model: Any, disk: SoftDisk, strain_limit: float, problem: DesignProblem
                   ) -> np.ndarray:
     """The deterministic policy's normalized design (6,) for an object."""
-    action, _ = model.predict(observe(disk, strain_limit), deterministic=True)
+    action, _ = model.predict(observe(disk, strain_limit, problem.friction_coefficient),
+                              deterministic=True)
     return np.clip(np.asarray(action, dtype=np.float64).reshape(problem.n_var), -1.0, 1.0)
 
 
@@ -170,7 +166,7 @@ def train_policy(
     torch_threads: int | None = 1,
     **algo_options: Any,
 ) -> tuple[Any, OptimResult]:
-    """Train PPO or SAC on GripperDesign-v0 with random objects, probing the fixed object.
+    """Train PPO or SAC on GripperDesign-v1 with random objects, probing the fixed object.
 
     Parameters
     ----------
@@ -257,13 +253,13 @@ def train_policy(
 
 def run_ppo(problem: DesignProblem, *, budget: int, seed: int = 0, **options: Any
             ) -> OptimResult:
-    """PPO on GripperDesign-v0 (see :func:`train_policy` for the options)."""
+    """PPO on GripperDesign-v1 (see :func:`train_policy` for the options)."""
     return train_policy("ppo", problem, budget=budget, seed=seed, **options)[1]
 
 
 def run_sac(problem: DesignProblem, *, budget: int, seed: int = 0, **options: Any
             ) -> OptimResult:
-    """SAC on GripperDesign-v0 (see :func:`train_policy` for the options)."""
+    """SAC on GripperDesign-v1 (see :func:`train_policy` for the options)."""
     return train_policy("sac", problem, budget=budget, seed=seed, **options)[1]
 
 

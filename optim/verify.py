@@ -112,6 +112,7 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     for i, p in enumerate(picks):
         rows.append({
             "design": p["design"],
+            "label": p.get("label", f"#{i + 1}"),
             "psm": {k: psm[k][i].item() for k in REPORTED},
             "ranking_member": {k: fine[k][i].item() for k in REPORTED},
             "fem": {k: fem[k][i].item() for k in REPORTED},
@@ -160,7 +161,7 @@ def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
     import matplotlib.pyplot as plt
 
     rows = report["designs"]
-    labels = [f"#{i + 1}" for i in range(len(rows))]
+    labels = [r.get("label", f"#{i + 1}") for i, r in enumerate(rows)]
     psm = [r["psm"]["reward"] for r in rows]
     fem = [r["fem"]["reward"] for r in rows]
     member = report.get("ranking_member")
@@ -176,8 +177,8 @@ def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
                f"{member['n_triangles']}, M = {member['n_rings']})", color="tab:green")
     ax.bar(x + width, fem, width, label=f"FEM ({report['fem']['elements']} P2 triangles)",
            color="tab:orange")
-    ax.set_xticks(x, labels)
-    ax.set_xlabel("design (the run's order, best first)")
+    ax.set_xticks(x, labels, fontsize=7 if max(len(t) for t in labels) > 4 else None)
+    ax.set_xlabel("design")
     ax.set_ylabel("reward")
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.legend(fontsize=8)
@@ -238,6 +239,9 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
           "PSM rank" + ("  member rank" if member else "") + "  FEM rank  FEM contact  "
           "FEM compression")
     for i, r in enumerate(report["designs"]):
+        label = r.get("label", f"#{i + 1}")
+        if not label.startswith("#"):
+            print(f"  #{i + 1}: {label}")
         print(f"  #{i + 1:<6d} {r['psm']['reward']:10.4f}"
               + (f"  {r['ranking_member']['reward']:13.4f}" if member else "")
               + f"  {r['fem']['reward']:10.4f}  {r['psm_rank']:8d}"

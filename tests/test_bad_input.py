@@ -86,7 +86,7 @@ def test_every_public_entry_refuses_n_triangles_that_is_not_an_integer(entry, va
         "simulate": lambda: simulate(SCENE, 0.2, value),
         "evaluate_designs": lambda: evaluate_designs(np.zeros((1, 6)), DISK, n_triangles=value),
         "env": lambda: envs.GripperDesignEnv(n_triangles=value),
-        "gym.make": lambda: gym.make("GripperDesign-v0", n_triangles=value),
+        "gym.make": lambda: gym.make("GripperDesign-v1", n_triangles=value),
         "vector env": lambda: GripperDesignVectorEnv(2, n_triangles=value),
         "problem": lambda: DesignProblem(DISK, n_triangles=value),
         "resolve_model": lambda: resolve_model(value, element="spring"),
@@ -141,10 +141,10 @@ def test_the_other_parameter_dataclasses_refuse_strings():
         DesignBounds(low=tuple(low))
     with pytest.raises(ValueError, match=r"RewardWeights\.miss must be a real number"):
         RewardWeights(miss="0.5")
-    with pytest.raises(ValueError, match=r"poisson_ratio must be a real number"):
-        ObjectDistribution(poisson_ratio="0.45")
-    with pytest.raises(ValueError, match=r"radii_m\[i\] must be a real number"):
-        ObjectDistribution(radii_m=(0.05, True))
+    with pytest.raises(ValueError, match=r"poisson_ratio_range\[i\] must be a real number"):
+        ObjectDistribution(poisson_ratio_range=("0.3", 0.45))
+    with pytest.raises(ValueError, match=r"radius_range_m\[i\] must be a real number"):
+        ObjectDistribution(radius_range_m=(0.05, True))
 
 
 # --- 5: an optimizer option it does not take ----------------------------------------------------
@@ -253,17 +253,17 @@ def test_an_unreachable_dask_scheduler_is_one_line_within_seconds(tmp_path, caps
     {"options": {"strain_limit": 2.0}},
     {"options": {"strain_limit": "0.1"}},
     {"options": {"colour": "red"}},
-    {"options": {"disk": SoftDisk(0.5e-3 / 2, 0.0)}},  # outside the observable radii
+    {"options": {"disk": SoftDisk(0.05, 0.0, poisson_ratio=-0.2)}},  # outside the observable
     {"seed": -1},
 ], ids=["limit", "string-limit", "unknown", "disk", "seed"])
 def test_a_made_env_works_after_a_refused_first_reset(bad):
-    env = gym.make("GripperDesign-v0", element="spring")
+    env = gym.make("GripperDesign-v1", element="spring")
     with pytest.raises(ValueError):
         env.reset(**bad)
     obs, _ = env.reset(seed=3)
     _, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
     assert terminated and not truncated and np.isfinite(reward) and info["converged"]
-    fresh = gym.make("GripperDesign-v0", element="spring")
+    fresh = gym.make("GripperDesign-v1", element="spring")
     np.testing.assert_array_equal(obs, fresh.reset(seed=3)[0])
     env.close()
     fresh.close()
@@ -285,12 +285,12 @@ def test_a_refused_reset_leaves_the_random_stream_as_it_was():
 
 
 def test_the_made_env_keeps_one_checker_inside_the_reset_check():
-    env = gym.make("GripperDesign-v0")
-    stack = "OrderEnforcing<ResetCheck<PassiveEnvChecker<GripperDesignEnv<GripperDesign-v0>>>>"
+    env = gym.make("GripperDesign-v1")
+    stack = "OrderEnforcing<ResetCheck<PassiveEnvChecker<GripperDesignEnv<GripperDesign-v1>>>>"
     assert str(env) == f"<{stack}>"
     again = gym.make(env.spec)  # the spec builds the same stack, not a second checker outside
     assert str(again) == str(env) and again.unwrapped is not env.unwrapped
-    vec = gym.make_vec("GripperDesign-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    vec = gym.make_vec("GripperDesign-v1", num_envs=2, vectorization_mode="vector_entry_point")
     assert isinstance(vec, GripperDesignVectorEnv)
 
 

@@ -1,4 +1,4 @@
-"""GripperDesign-v0 and evaluate_designs: API checkers, determinism, batching, reward order."""
+"""GripperDesign-v1 and evaluate_designs: API checkers, determinism, batching, reward order."""
 
 from __future__ import annotations
 
@@ -298,10 +298,11 @@ def test_every_default_scores_relative_designs_alike_on_objects_far_apart():
         problem = DesignProblem(disk)
         by_problem = problem.evaluate(a)["reward"]
         env = GripperDesignEnv()
-        env.reset(seed=0, options={"disk": disk, "strain_limit": 0.1})
+        fixed = {"disk": disk, "strain_limit": 0.1, "friction_coefficient": 0.5}
+        env.reset(seed=0, options=fixed)
         by_env = np.array([env.step(row)[1] for row in a[:4]])
         vec = GripperDesignVectorEnv(4)
-        vec.reset(seed=0, options={"disk": disk, "strain_limit": 0.1})
+        vec.reset(seed=0, options=fixed)
         by_vec = vec.step(a[:4])[1]
         # (float64 actions: a float32 cast moves a design near a bifurcation onto another branch)
         for other in (by_problem, by_env, by_vec):
@@ -355,12 +356,12 @@ def test_every_invalid_design_scores_below_every_valid_one():
 
 def test_gymnasium_check_env():
     check_env(GripperDesignEnv(), skip_render_check=True)
-    check_env(gym.make("GripperDesign-v0", render_mode="rgb_array").unwrapped)
+    check_env(gym.make("GripperDesign-v1", render_mode="rgb_array").unwrapped)
 
 
 def test_gymnasium_check_env_as_registered():
     # as a user makes it: with the wrappers of make (no TimeLimit: one step terminates)
-    env = gym.make("GripperDesign-v0")
+    env = gym.make("GripperDesign-v1")
     assert env.spec.max_episode_steps is None
     with pytest.warns(UserWarning, match="different from the unwrapped"):
         check_env(env, skip_render_check=True)
@@ -430,13 +431,15 @@ def test_clipping_is_reported():
 
 def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
     env = GripperDesignEnv()
-    obs, info = env.reset(seed=0, options={"disk": DISK, "strain_limit": 0.1})
+    obs, info = env.reset(seed=0, options={"disk": DISK, "strain_limit": 0.1,
+                                           "friction_coefficient": 0.9})
     assert info["radius_m"] == DISK.radius_m and info["strain_limit"] == 0.1
+    assert info["friction_coefficient"] == 0.9
     action = env.bounds.unscale(PAPER, DISK)
     _, reward, terminated, truncated, info = env.step(action)
-    assert terminated and not truncated and info["converged"]
+    assert terminated and not truncated and info["converged"] and info["holds"]
     ref = evaluate_designs(env.bounds.scale(np.clip(action, -1, 1), DISK)[None], DISK,
-                           strain_limits=0.1)
+                           strain_limits=0.1, friction_coefficients=0.9)
     assert reward == ref["reward"][0]
     # a box reaching negative clearances (overlap) gets the graded invalid penalty
     low = list(DesignBounds().low)
@@ -448,8 +451,10 @@ def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
     _, reward, *_, info = env.step(action)
     w = RewardWeights()
     assert -(w.invalid + w.violation) < reward < -w.invalid and not info["valid_at_rest"]
-    with pytest.raises(ValueError):
-        env.reset(options={"disk": SoftDisk(2.0, 0.0)})  # outside the observable range
+    with pytest.raises(ValueError, match="poisson_ratio = -0.2 is outside the observable"):
+        env.reset(options={"disk": SoftDisk(2.0, 0.0, poisson_ratio=-0.2)})
+    with pytest.raises(ValueError, match="friction_coefficient = 3.0 is outside"):
+        env.reset(options={"friction_coefficient": 3.0})
     with pytest.raises(ValueError):
         env.reset(options={"colour": "red"})
 
@@ -463,7 +468,7 @@ def test_vector_observations_are_the_single_objects_observations():
     obs, info = vec.reset(seed=3)
     for i in range(5):
         disk = vec._disks[i]
-        assert np.array_equal(obs[i], observe(disk, float(vec._limits[i])))
+        assert np.array_equal(obs[i], observe(disk, *vec._needs[i]))
         assert info["youngs_modulus_pa"][i] == disk.youngs_modulus_pa
     # and the same objects as five single envs seeded alike draw
     for i in range(5):
@@ -471,19 +476,21 @@ def test_vector_observations_are_the_single_objects_observations():
         assert np.array_equal(obs[i], single_obs)
     # a fixed object outside the observable range leaves the vector env as it was
     fresh = GripperDesignVectorEnv(3)
-    with pytest.raises(ValueError, match="radius_m"):
-        fresh.reset(seed=0, options={"disk": SoftDisk(2.0, 0.0)})
+    with pytest.raises(ValueError, match="poisson_ratio"):
+        fresh.reset(seed=0, options={"disk": SoftDisk(2.0, 0.0, poisson_ratio=-0.1)})
     with pytest.raises(gym.error.ResetNeeded):
         fresh.step(np.zeros((3, 6)))
     obs_before = vec._obs.copy()
     with pytest.raises(ValueError, match="strain_limit"):
-        vec.reset(options={"strain_limit": 1.5})
+        vec.reset(options={"strain_limit": 0.6})
     assert np.array_equal(vec._obs, obs_before) and vec._disks[0] is not None
-    disks = [DISK, SoftDisk(2.0, 0.0), DISK]
-    with pytest.raises(ValueError, match=r"radius_m = 2.0 \(row 1\) is outside"):
-        observe_rows(disks, np.array([0.1, 0.1, 0.1]))
+    disks = [DISK, SoftDisk(2.0, 0.0, stiffness_scale=20.0), DISK]
+    with pytest.raises(ValueError, match=r"stiffness_scale = 20.0 \(row 1\) is outside"):
+        observe_rows(disks, np.full((3, 2), 0.1))
     with pytest.raises(ValueError, match=r"strain_limit = 0.0 \(row 2\)"):
-        observe_rows([DISK] * 3, np.array([0.1, 0.2, 0.0]))
+        observe_rows([DISK] * 3, np.array([[0.1, 0.5], [0.2, 0.5], [0.0, 0.5]]))
+    with pytest.raises(ValueError, match=r"friction_coefficient = 0.0 \(row 0\)"):
+        observe_rows([DISK] * 3, np.array([[0.1, 0.0], [0.2, 0.5], [0.1, 0.5]]))
 
 
 def test_render_rgb_array_and_grasp_figure(tmp_path):
@@ -533,7 +540,7 @@ SAME_STEP = {"autoreset_mode": AutoresetMode.SAME_STEP}
     ("async", {"vector_kwargs": SAME_STEP}),
 ])
 def test_make_vec_evaluates_a_design_on_every_step(mode, kwargs):
-    env = gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode, **kwargs)
+    env = gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode=mode, **kwargs)
     assert env.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
     env.reset(seed=11)
     for _ in range(3):
@@ -548,13 +555,13 @@ def test_make_vec_evaluates_a_design_on_every_step(mode, kwargs):
 
 def test_make_vec_modes_agree():
     traces = {
-        mode: _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode=mode,
+        mode: _run_vec(gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode=mode,
                                     **kwargs))
         for mode, kwargs in (("sync", {"vector_kwargs": SAME_STEP}),
                              ("async", {"vector_kwargs": SAME_STEP}),
                              ("vector_entry_point", {}))
     }
-    vec = gym.make_vec("GripperDesign-v0", num_envs=3)
+    vec = gym.make_vec("GripperDesign-v1", num_envs=3)
     assert isinstance(vec.unwrapped, GripperDesignVectorEnv)
     for mode in ("sync", "async"):
         _assert_same_trace(traces[mode], traces["vector_entry_point"],
@@ -570,7 +577,7 @@ def test_next_step_autoreset_is_still_available():
 
 def test_same_step_autoreset_agrees_with_sync():
     same = AutoresetMode.SAME_STEP
-    sync = _run_vec(gym.make_vec("GripperDesign-v0", num_envs=3, vectorization_mode="sync",
+    sync = _run_vec(gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode="sync",
                                  vector_kwargs={"autoreset_mode": same}))
     ours = _run_vec(GripperDesignVectorEnv(3, autoreset_mode=same))
     _assert_same_trace(sync, ours, info_keys=("radius_m", "_radius_m", "_final_obs"))
@@ -672,34 +679,39 @@ def test_fingers_that_merely_touch_score_no_contact():
 
 
 def test_object_draws_follow_the_stated_distribution():
-    """Radius uniform over the listed radii, modulus log-uniform, strain limit uniform (KS
-    tests at 4000 draws), every draw inside its range; a degenerate range gives its value."""
+    """Radius, modulus and thickness log-uniform, Poisson ratio, strain limit and friction
+    uniform (KS tests at 4000 draws), independent, every draw inside its range; a degenerate
+    range gives its value."""
     from scipy import stats
 
     from envs.design_env import ObjectDistribution
 
-    dist = ObjectDistribution(radii_m=(0.04, 0.06, 0.09, 0.12),
-                              youngs_modulus_range_pa=(2e4, 3e6), strain_limit_range=(0.05, 0.2))
+    dist = ObjectDistribution()
     rng = np.random.default_rng(5)
     draws = [dist.sample(rng) for _ in range(4000)]
-    radii = np.array([d.radius_m for d, _ in draws])
-    moduli = np.array([d.youngs_modulus_pa for d, _ in draws])
-    limits = np.array([lim for _, lim in draws])
-    counts = np.array([np.count_nonzero(radii == r) for r in dist.radii_m])
-    assert counts.sum() == 4000
-    assert stats.chisquare(counts).pvalue > 1e-3
-    assert np.all((moduli >= 2e4) & (moduli <= 3e6))
-    u = (np.log(moduli) - math.log(2e4)) / (math.log(3e6) - math.log(2e4))
-    assert stats.kstest(u, "uniform").pvalue > 1e-3
-    assert stats.kstest((limits - 0.05) / 0.15, "uniform").pvalue > 1e-3
-    # three independent draws, not one number reused (|r| ~ 0.016 for independent ones)
-    for a, b in ((radii, u), (radii, limits), (u, limits)):
-        assert abs(np.corrcoef(a, b)[0, 1]) < 0.08
-    # the drawn disk is the radius' template with the drawn modulus: the rest is the
-    # distribution's
-    disk, _ = draws[0]
-    assert (disk.poisson_ratio, disk.thickness_m, disk.distance_m) == (0.45, 0.01, 0.0)
-    fixed = ObjectDistribution(radii_m=(0.07,), youngs_modulus_range_pa=(5e4, 5e4),
-                               strain_limit_range=(0.1, 0.1))
-    disk, limit = fixed.sample(rng)
+    columns = {
+        "radius_range_m": (np.array([d.radius_m for d, _, _ in draws]), True),
+        "youngs_modulus_range_pa": (np.array([d.youngs_modulus_pa for d, _, _ in draws]), True),
+        "thickness_range_m": (np.array([d.thickness_m for d, _, _ in draws]), True),
+        "poisson_ratio_range": (np.array([d.poisson_ratio for d, _, _ in draws]), False),
+        "strain_limit_range": (np.array([lim for _, lim, _ in draws]), False),
+        "friction_range": (np.array([mu for _, _, mu in draws]), False),
+    }
+    unit = []
+    for name, (values, log) in columns.items():
+        low, high = getattr(dist, name)
+        assert np.all((values >= low) & (values <= high)), name
+        u = ((np.log(values) - math.log(low)) / (math.log(high) - math.log(low)) if log
+             else (values - low) / (high - low))
+        assert stats.kstest(u, "uniform").pvalue > 1e-3, name
+        unit.append(u)
+    # six independent draws, not one number reused (|r| ~ 0.016 for independent ones)
+    corr = np.corrcoef(np.array(unit))
+    assert np.max(np.abs(corr - np.eye(6))) < 0.08
+    disk, _, _ = draws[0]
+    assert disk.distance_m == 0.0 and disk.stiffness_scale == 1.0
+    fixed = ObjectDistribution(radius_range_m=(0.07, 0.07), youngs_modulus_range_pa=(5e4, 5e4),
+                               strain_limit_range=(0.1, 0.1), friction_range=(0.4, 0.4))
+    disk, limit, mu = fixed.sample(rng)
     assert disk.youngs_modulus_pa == pytest.approx(5e4, rel=1e-12) and limit == 0.1
+    assert mu == 0.4 and disk.radius_m == pytest.approx(0.07, rel=1e-12)

@@ -28,7 +28,8 @@ from envs.sb3_env import SB3_INSTALL_HINT, sb3_vec_env  # noqa: E402
 N_ENVS = 6
 SEED = 11
 OBJECT_KEYS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
-               "stiffness_scale", "strain_limit")
+               "stiffness_scale", "strain_limit", "friction_coefficient")
+N_OBS = 4
 
 
 def actions_for(n: int, seed: int = 0) -> np.ndarray:
@@ -58,9 +59,9 @@ def reference(actions: np.ndarray, objects: list[dict], **kwargs) -> dict[str, n
     """evaluate_designs on the same designs and objects, without the adapter."""
     disks = [disk_of(o) for o in objects]
     designs = DesignBounds().scale(np.clip(actions.astype(np.float64), -1.0, 1.0), disks)
-    return evaluate_designs(designs, disks,
-                            strain_limits=np.array([o["strain_limit"] for o in objects]),
-                            **kwargs)
+    return evaluate_designs(
+        designs, disks, strain_limits=np.array([o["strain_limit"] for o in objects]),
+        friction_coefficients=np.array([o["friction_coefficient"] for o in objects]), **kwargs)
 
 
 @pytest.fixture()
@@ -77,8 +78,8 @@ def test_reset_observations_and_reset_infos_match_single_envs(vec):
     assert isinstance(vec, VecEnv) and vec.num_envs == N_ENVS
     assert type(vec).__name__ == "GripperDesignSB3VecEnv"
     obs = vec.reset()
-    assert obs.shape == (N_ENVS, 5) and obs.dtype == np.float32
-    assert vec.observation_space.shape == (5,) and vec.action_space.shape == (6,)
+    assert obs.shape == (N_ENVS, N_OBS) and obs.dtype == np.float32
+    assert vec.observation_space.shape == (N_OBS,) and vec.action_space.shape == (6,)
     for i, (info,) in enumerate(single_env_objects(SEED, N_ENVS)):
         expected, _ = GripperDesignEnv().reset(seed=SEED + i)
         np.testing.assert_array_equal(obs[i], expected)
@@ -150,7 +151,7 @@ def test_env_kwargs_reach_the_evaluation():
 
 def test_set_options_apply_to_the_next_reset_only(vec):
     disk = SoftDisk(0.05, 0.0, 200e3)
-    vec.set_options({"disk": disk, "strain_limit": 0.2})
+    vec.set_options({"disk": disk, "strain_limit": 0.2, "friction_coefficient": 0.7})
     obs = vec.reset()
     assert np.all(obs == obs[0])  # every sub-env got the same object
     assert all(info["radius_m"] == 0.05 and info["strain_limit"] == 0.2
@@ -279,7 +280,7 @@ def test_ppo_learns_on_it():
     rewards = model.rollout_buffer.rewards
     assert rewards.shape == (16, 8) and np.all((rewards >= -3.0) & (rewards <= 0.5))
     assert np.unique(rewards).size > 10
-    action, _ = model.predict(np.zeros(5, dtype=np.float32), deterministic=True)
+    action, _ = model.predict(np.zeros(N_OBS, dtype=np.float32), deterministic=True)
     assert action.shape == (6,) and np.all(np.abs(action) <= 1.0)
 
 
