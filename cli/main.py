@@ -1,4 +1,4 @@
-"""Command line: ``psm-grasp simulate | demo | optimize | verify``."""
+"""Command line: ``psm-grasp simulate | demo | optimize | verify | train-policy | design``."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import os
 import sys
 
 from .optimize import add_demo_parser, add_optimize_parser, add_verify_parser
+from .policy import add_policy_parsers
 from .simulate import add_simulate_parser
 
 __all__ = ["main", "build_parser", "ERROR_EXIT", "BROKEN_PIPE_EXIT"]
@@ -25,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_demo_parser(sub)
     add_optimize_parser(sub)
     add_verify_parser(sub)
+    add_policy_parsers(sub)
     return parser
 
 

@@ -25,8 +25,7 @@ _DRIVERS: dict[str, tuple[str, str, str]] = {
     "ga": ("optim.ga", "run_ga", "optim"),
     "nsga2": ("optim.ga", "run_nsga2", "optim"),
     "random": ("optim.random_search", "run_random_search", "optim"),
-    "ppo": ("optim.rl", "run_ppo", "rl"),
-    "sac": ("optim.rl", "run_sac", "rl"),
+    "policy": ("optim.rl", "run_policy", "optim"),
 }
 METHODS: tuple[str, ...] = tuple(_DRIVERS)
 # every driver's own arguments, not options

@@ -1,26 +1,44 @@
-"""PPO and SAC (stable-baselines3) on GripperDesign-v1: a policy from objects to designs.
+"""A design policy: a gripper for a new object in one forward pass, trained with RL.
 
-Unlike the other drivers, RL does not search one object's design space: it trains a policy on
-objects drawn at random (GripperDesign-v1 is a contextual bandit, one step per object) and is
-then *asked* for a design for the fixed object. To compare it with the per-object optimizers on
-equal terms, every training step counts as one evaluation of the budget, and every
-``probe_every`` evaluations the deterministic policy's design for the fixed object is evaluated
-(one more evaluation): the history is the best probe so far. :func:`evaluate_policy_regret`
-measures what the amortization costs: the policy's reward on several objects against per-object
-CMA-ES optima.
+GripperDesign-v1 is a contextual bandit: an object, one design, one reward. Trained over an
+object distribution that covers real use (:class:`envs.design_env.ObjectDistribution`), a
+stable-baselines3 agent (SAC by default, or PPO) learns a policy from the object to a design;
+:func:`train_policy` runs the training and returns a :class:`DesignPolicy`, whose
+:meth:`~DesignPolicy.design` answers a new object with one forward pass of the actor network,
+in numpy (no torch needed to use it). :meth:`~DesignPolicy.refine` starts CMA-ES at that
+design for a few evaluations more. A policy trained by ``scripts/train_shipped_policy.py``
+ships with the package (:func:`load_policy` with no path).
 
-Defaults are small (CPU torch, two 64-unit layers, a few thousand steps).
+The observation is what changes a relative design's grasp: the Poisson ratio, the strain
+limit, the friction coefficient and the calibration scale. The model is scale invariant (every
+length in radii, the torque and the joint spring in ``s E t r^2``), so radius, modulus and
+thickness need not be observed; the policy designs in the object-relative box and the design
+is scaled to the object.
+
+Training settings that learn (measured, see ``scripts/bench_policy.py``): ``gamma = 0`` (one
+step an episode), 64 environments stepped by one batched evaluation, several gradient steps a
+step, a small initial action noise (the box's centre at std 1 clips a third of the coordinates
+and misses the object with half the samples), and the reward's tail below the holding grasps
+bounded smoothly at the object's strain limit (:func:`bounded_tail`): the optimum is about a
+third of the strain limit, and a critic fitting misses at -3 cannot resolve differences of
+0.005 near it.
 """
 
 from __future__ import annotations
 
-import inspect
-from collections.abc import Sequence
-from typing import Any, NamedTuple
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, fields
+from importlib import metadata as importlib_metadata
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from envs.design_env import ObjectDistribution, observe
+from envs.design_env import OBS_FIELDS, ObjectDistribution, observe_rows
+from envs.evaluate import DesignBounds, RewardWeights
+from envs.model.family import resolve_model
 from envs.scene import SoftDisk
 
 from .problem import DesignProblem, check_budget, check_seed
@@ -28,33 +46,309 @@ from .result import OptimResult
 
 __all__ = [
     "RL_METHODS",
-    "PolicyRegret",
+    "DesignPolicy",
+    "PolicyMismatchError",
+    "TrainingSettings",
+    "bounded_tail",
+    "load_policy",
+    "run_policy",
     "train_policy",
-    "run_ppo",
-    "run_sac",
-    "policy_design",
-    "evaluate_policy_regret",
-    "training_distribution",
+    "write_training_outputs",
+    "learning_curve_figure",
+    "heldout_objects",
+    "SHIPPED_POLICY",
 ]
 
-RL_METHODS = ("ppo", "sac")
-RL_HINT = "PPO and SAC need stable-baselines3 and torch: pip install 'psm-grasp[rl]'"
-DEFAULT_N_ENVS = 4
-DEFAULT_PROBES = 20
-DEFAULT_NET = (64, 64)
-# arguments of the stable-baselines3 constructors that train_policy sets (not options)
-_SET_BY_TRAIN_POLICY = ("policy", "env", "seed", "policy_kwargs", "device", "verbose",
-                        "_init_setup_model")
+RL_METHODS = ("sac", "ppo")
+RL_HINT = "training a policy needs stable-baselines3 and torch: pip install 'psm-grasp[rl]'"
+POLICY_FORMAT = 1
+POLICY_FILES = ("policy.json", "policy.npz")
+SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
+REFINE_SIGMA = 0.1  # CMA-ES step size around the policy's design, in the normalized box
 
 
-class PolicyRegret(NamedTuple):
-    """The policy against a per-object CMA-ES optimum on one object."""
+class PolicyMismatchError(ValueError):
+    """A saved policy does not fit this package (observation, actions, model, version)."""
 
-    object: dict[str, float]
-    policy_design: dict[str, float]
-    policy_reward: float
-    cmaes_reward: float
-    regret: float  # cmaes_reward - policy_reward (negative: the policy did better)
+
+def bounded_tail(reward: np.ndarray, strain_limit: np.ndarray, scale: float = 1.0
+                 ) -> np.ndarray:
+    """The reward with its negative part bounded smoothly at ``scale`` times the strain limit.
+
+    ``r`` where ``r >= 0``, else ``b r / (b - r)`` with ``b = scale * strain_limit``: strictly
+    increasing (every tier of the reward keeps its order: a miss never outscores a grasp),
+    slope 1 at 0 (designs near the optimum keep their differences) and bounded below by
+    ``-b``, a scale of the optimum itself (about a third of the strain limit).
+    """
+    r = np.asarray(reward, dtype=np.float64)
+    b = scale * np.asarray(strain_limit, dtype=np.float64)
+    return np.where(r >= 0.0, r, b * r / (b - np.minimum(r, 0.0)))
+
+
+def _package_version() -> str:
+    try:
+        return importlib_metadata.version("psm-grasp")
+    except importlib_metadata.PackageNotFoundError:  # pragma: no cover - source checkout
+        return "0+unknown"
+
+
+@dataclass(frozen=True)
+class TrainingSettings:
+    """How a policy is trained (recorded in its metadata).
+
+    Parameters
+    ----------
+    method
+        ``"sac"`` or ``"ppo"`` (stable-baselines3).
+    steps
+        Environment steps (designs evaluated) of the training, >= ``n_envs``.
+    seed
+        Seed of the agent and of the environments.
+    n_envs
+        Environments stepped together by one batched evaluation.
+    net_arch
+        Hidden layers of the actor and the critic(s).
+    tail_scale
+        :func:`bounded_tail` scale of the training reward (0: the env's reward as it is).
+    initial_log_std
+        Initial log standard deviation of the action noise.
+    learning_rate, batch_size, gradient_steps
+        SAC's learning rate, batch and gradient steps per environment step (PPO: learning rate
+        and minibatch; ``n_steps`` per rollout is ``2048 // n_envs``).
+    """
+
+    method: str = "sac"
+    steps: int = 200_000
+    seed: int = 0
+    n_envs: int = 64
+    net_arch: tuple[int, ...] = (64, 64)
+    tail_scale: float = 1.0
+    initial_log_std: float = -1.0
+    learning_rate: float = 1e-3
+    batch_size: int = 256
+    gradient_steps: int = 8
+
+    def __post_init__(self) -> None:
+        if self.method not in RL_METHODS:
+            raise ValueError(f"method must be one of {RL_METHODS}, got {self.method!r}")
+        check_seed(self.seed)
+        for name, low in (("n_envs", 1), ("batch_size", 1), ("gradient_steps", 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+        steps = check_budget(self.steps)
+        if steps < self.n_envs:
+            raise ValueError(f"steps = {steps} must be at least n_envs = {self.n_envs}")
+        arch = tuple(int(v) for v in self.net_arch)
+        if not arch or min(arch) < 1:
+            raise ValueError(f"net_arch must be positive layer sizes, got {self.net_arch!r}")
+        object.__setattr__(self, "net_arch", arch)
+        for name, low, high in (("tail_scale", 0.0, 100.0), ("initial_log_std", -5.0, 1.0),
+                                ("learning_rate", 1e-6, 1.0)):
+            v = float(getattr(self, name))
+            if not low <= v <= high:
+                raise ValueError(f"{name} = {v!r} is outside the allowed range [{low}, {high}]")
+
+
+@dataclass
+class DesignPolicy:
+    """An object -> design policy: the actor network's layers and what it was trained for.
+
+    Attributes
+    ----------
+    layers
+        ``(weights (out, in), bias (out,))`` of each linear layer, input to output.
+    activation
+        Activation of the hidden layers (``"relu"`` or ``"tanh"``).
+    squash
+        ``"tanh"`` (SAC's deterministic action) or ``"clip"`` (PPO's mean, clipped).
+    meta
+        The metadata: format, package version, observation fields, action bounds, reward
+        weights, model member, joint spring, object distribution, training settings and
+        results.
+    """
+
+    layers: list[tuple[np.ndarray, np.ndarray]]
+    activation: str
+    squash: str
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    # --- the forward pass -------------------------------------------------------------------
+
+    def actions(self, observations: np.ndarray) -> np.ndarray:
+        """Normalized designs in [-1, 1] (B, 6) of observations (B, 4): one forward pass."""
+        x = np.asarray(observations, dtype=np.float64)
+        for k, (w, b) in enumerate(self.layers):
+            x = x @ w.T + b
+            if k < len(self.layers) - 1:
+                x = np.maximum(x, 0.0) if self.activation == "relu" else np.tanh(x)
+        return np.tanh(x) if self.squash == "tanh" else np.clip(x, -1.0, 1.0)
+
+    @property
+    def bounds(self) -> DesignBounds:
+        """The action box the policy designs in."""
+        b = self.meta["bounds"]
+        return DesignBounds(tuple(b["low"]), tuple(b["high"]))
+
+    def problem(self, disk: SoftDisk, strain_limit: float, friction_coefficient: float,
+                **kwargs: Any) -> DesignProblem:
+        """The design problem of an object with the policy's settings (box, weights, model
+        member, joint spring)."""
+        spring = self.meta["joint_spring"]
+        return DesignProblem(disk, strain_limit, friction_coefficient, bounds=self.bounds,
+                             weights=RewardWeights(**self.meta["reward_weights"]),
+                             **spring, **self.meta["model"], **kwargs)
+
+    def design(self, disk: SoftDisk, strain_limit: float,
+               friction_coefficient: float) -> dict[str, float]:
+        """The policy's design for one object, in SI units (keys of
+        :data:`envs.scene.DESIGN_FIELDS`).
+
+        Raises
+        ------
+        ValueError
+            For an object outside the observable range (the message names the field).
+        """
+        return self.problem(disk, strain_limit, friction_coefficient).design_dict(
+            self.normalized(disk, strain_limit, friction_coefficient))
+
+    def normalized(self, disk: SoftDisk, strain_limit: float,
+                   friction_coefficient: float) -> np.ndarray:
+        """The policy's design for one object, normalized (6,)."""
+        if not isinstance(disk, SoftDisk):
+            raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
+        obs = observe_rows([disk], np.array([[strain_limit, friction_coefficient]],
+                                            dtype=float))
+        return self.actions(obs)[0]
+
+    def run(self, problem: DesignProblem, *, budget: int = 1, seed: int = 0) -> OptimResult:
+        """The policy's design for a problem's object, then ``budget - 1`` evaluations of
+        CMA-ES started at it (step size :data:`REFINE_SIGMA`): an :class:`OptimResult` with
+        method ``"policy"``."""
+        from .cmaes import run_cmaes
+
+        budget, seed = check_budget(budget), check_seed(seed)
+        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient)
+        problem.start(budget)
+        problem.evaluate(x0[None, :])
+        first = (problem.best_reward, problem.n_evaluations)
+        if budget > 1:
+            run_cmaes(_Continue(problem), budget=budget - 1, seed=seed,
+                      x0=np.clip(x0, -1.0, 1.0), sigma0=REFINE_SIGMA)
+        return problem.result("policy", seed, options={"refine": budget - 1,
+                                                       "sigma0": REFINE_SIGMA},
+                              extra={"policy_reward": first[0],
+                                     "policy": self.meta.get("name", "policy")})
+
+    # --- saving and loading -----------------------------------------------------------------
+
+    def save(self, folder: str | Path) -> Path:
+        """Write ``policy.json`` (metadata) and ``policy.npz`` (layers) to ``folder``."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        arrays = {}
+        for k, (w, b) in enumerate(self.layers):
+            arrays[f"w{k}"], arrays[f"b{k}"] = w.astype(np.float32), b.astype(np.float32)
+        np.savez_compressed(folder / "policy.npz", **arrays)
+        meta = {**self.meta, "activation": self.activation, "squash": self.squash,
+                "n_layers": len(self.layers)}
+        (folder / "policy.json").write_text(json.dumps(meta, indent=1) + "\n")
+        return folder
+
+
+class _Continue:
+    """A view of a started problem whose ``start`` keeps the run going: CMA-ES refining the
+    policy's design counts into the same budget, history and best."""
+
+    def __init__(self, problem: DesignProblem) -> None:
+        self._problem = problem
+
+    def start(self, budget: int | None) -> None:
+        pass
+
+    def result(self, *args: Any, **kwargs: Any) -> None:
+        return None  # the run's result is the problem's own, made by the caller
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._problem, name)
+
+
+def _expected_meta() -> dict[str, Any]:
+    """What this package needs of a policy's metadata to use it."""
+    b = DesignBounds()
+    return {"format": POLICY_FORMAT, "obs_fields": [list(f) for f in OBS_FIELDS],
+            "bounds": {"low": list(b.low), "high": list(b.high)}}
+
+
+def _check_meta(meta: dict[str, Any], where: str) -> None:
+    expected = _expected_meta()
+    if meta.get("format") != expected["format"]:
+        raise PolicyMismatchError(f"{where}: policy format {meta.get('format')!r}, this "
+                                  f"package reads format {POLICY_FORMAT}")
+    if meta.get("obs_fields") != expected["obs_fields"]:
+        raise PolicyMismatchError(
+            f"{where}: the policy observes {meta.get('obs_fields')}, this package's env "
+            f"observes {expected['obs_fields']}: retrain it (psm-grasp train-policy)")
+    for key in ("low", "high"):
+        got = np.asarray(meta.get("bounds", {}).get(key, []), dtype=float)
+        want = np.asarray(expected["bounds"][key])
+        if got.shape != want.shape or not np.allclose(got, want, rtol=1e-12, atol=0):
+            raise PolicyMismatchError(
+                f"{where}: the policy designs in the box {meta.get('bounds')}, this package's "
+                f"default box is {expected['bounds']}: retrain it (psm-grasp train-policy)")
+    try:
+        resolve_model(**meta["model"])
+        RewardWeights(**meta["reward_weights"])
+        ObjectDistribution(**{k: tuple(v) if isinstance(v, list) else v
+                              for k, v in meta["distribution"].items()})
+    except (KeyError, TypeError, ValueError) as exc:
+        raise PolicyMismatchError(f"{where}: the policy's settings do not fit this package "
+                                  f"({exc})") from None
+    mine, theirs = _package_version(), str(meta.get("package_version", ""))
+    if theirs.split(".")[:2] != mine.split(".")[:2]:
+        raise PolicyMismatchError(f"{where}: the policy was trained with psm-grasp {theirs}, "
+                                  f"this is {mine}: retrain it (psm-grasp train-policy)")
+
+
+def load_policy(path: str | Path | None = None) -> DesignPolicy:
+    """Load a saved policy: ``path`` a folder written by :meth:`DesignPolicy.save` (or
+    ``psm-grasp train-policy --out``); ``None``: the policy shipped with the package.
+
+    Raises
+    ------
+    ValueError
+        A folder without the policy's files, or unreadable ones;
+        :class:`PolicyMismatchError` (a ``ValueError``) for a policy that does not fit this
+        package (observation, action box, model member, reward weights, version).
+    """
+    folder = SHIPPED_POLICY if path is None else Path(path)
+    where = "the shipped policy" if path is None else f"--policy {str(folder)!r}"
+    missing = [name for name in POLICY_FILES if not (folder / name).is_file()]
+    if missing:
+        raise ValueError(f"{where}: no {missing[0]} in {str(folder)!r} (a folder written by "
+                         "psm-grasp train-policy --out)")
+    try:
+        meta = json.loads((folder / "policy.json").read_text())
+        with np.load(folder / "policy.npz") as data:
+            n = int(meta["n_layers"])
+            layers = [(data[f"w{k}"].astype(np.float64), data[f"b{k}"].astype(np.float64))
+                      for k in range(n)]
+    except (OSError, KeyError, ValueError, TypeError) as exc:
+        raise ValueError(f"{where}: cannot read the policy ({exc})") from None
+    _check_meta(meta, where)
+    return DesignPolicy(layers, meta.pop("activation"), meta.pop("squash"), meta)
+
+
+def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,
+               policy: str | Path | DesignPolicy | None = None) -> OptimResult:
+    """The ``"policy"`` method of :func:`optim.optimize`: the (shipped) policy's design for
+    the problem's object and ``budget - 1`` refining CMA-ES evaluations."""
+    if not isinstance(policy, DesignPolicy):
+        policy = load_policy(policy)
+    return policy.run(problem, budget=budget, seed=seed)
+
+
+# --- training ---------------------------------------------------------------------------------
 
 
 def _import_sb3():
@@ -66,273 +360,277 @@ def _import_sb3():
     return stable_baselines3
 
 
-def option_names(method: str) -> tuple[str, ...]:
-    """The options of :func:`run_ppo` and :func:`run_sac`: :func:`train_policy`'s own and the
-    stable-baselines3 constructor's, but those :func:`train_policy` sets itself (read by
-    :func:`optim.optimize.option_names`; imports stable-baselines3)."""
-    if method not in RL_METHODS:
-        raise ValueError(f"unknown RL method {method!r}; allowed: {', '.join(RL_METHODS)}")
-    own = [p.name for p in inspect.signature(train_policy).parameters.values()
-           if p.kind is p.KEYWORD_ONLY and p.name not in ("budget", "seed")]
-    algo = inspect.signature(getattr(_import_sb3(), method.upper())).parameters.values()
-    return tuple(own + [p.name for p in algo if p.kind is not p.VAR_KEYWORD
-                        and p.name not in _SET_BY_TRAIN_POLICY])
+def _extract_actor(model: Any, method: str) -> tuple[list, str, str]:
+    """The deterministic actor of an SB3 model as numpy layers."""
+    import torch.nn as nn
+
+    if method == "sac":
+        modules = [*model.actor.latent_pi, model.actor.mu]
+        squash = "tanh"
+    else:
+        modules = [*model.policy.mlp_extractor.policy_net, model.policy.action_net]
+        squash = "clip"
+    layers, activation = [], "relu"
+    for m in modules:
+        if isinstance(m, nn.Linear):
+            layers.append((m.weight.detach().cpu().numpy().astype(np.float64),
+                           m.bias.detach().cpu().numpy().astype(np.float64)))
+        elif isinstance(m, nn.Tanh):
+            activation = "tanh"
+    return layers, activation, squash
 
 
-def training_distribution(problem: DesignProblem) -> ObjectDistribution:
-    """The env's default object distribution, widened to contain the problem's object (its
-    radius, modulus, Poisson ratio, thickness, strain limit and friction; its calibration
-    scale for every draw)."""
-    base = ObjectDistribution()
-    d = problem.disk
+def _make_agent(settings: TrainingSettings, env: Any):
+    sb3 = _import_sb3()
+    net = list(settings.net_arch)
+    if settings.method == "sac":
+        model = sb3.SAC(
+            "MlpPolicy", env, seed=settings.seed, device="cpu", verbose=0, gamma=0.0,
+            learning_rate=settings.learning_rate, batch_size=settings.batch_size,
+            buffer_size=max(settings.steps, 10_000), learning_starts=min(
+                4 * settings.n_envs * 8, settings.steps // 4),
+            train_freq=1, gradient_steps=settings.gradient_steps,
+            policy_kwargs={"net_arch": net})
+        # the squashed Gaussian's log std is a linear output: start its bias low, so the
+        # first designs scatter around the box's centre instead of piling on its faces
+        import torch
 
-    def widen(pair, value):
-        return (min(pair[0], value), max(pair[1], value))
-
-    return ObjectDistribution(
-        radius_range_m=widen(base.radius_range_m, d.radius_m),
-        youngs_modulus_range_pa=widen(base.youngs_modulus_range_pa, d.youngs_modulus_pa),
-        poisson_ratio_range=widen(base.poisson_ratio_range, d.poisson_ratio),
-        thickness_range_m=widen(base.thickness_range_m, d.thickness_m),
-        strain_limit_range=widen(base.strain_limit_range, problem.strain_limit),
-        friction_range=widen(base.friction_range, problem.friction_coefficient),
-        stiffness_scale=d.stiffness_scale,
-    )
-
-
-def policy_design(model: Any, disk: SoftDisk, strain_limit: float, problem: DesignProblem
-                  ) -> np.ndarray:
-    """The deterministic policy's normalized design (6,) for an object."""
-    action, _ = model.predict(observe(disk, strain_limit, problem.friction_coefficient),
-                              deterministic=True)
-    return np.clip(np.asarray(action, dtype=np.float64).reshape(problem.n_var), -1.0, 1.0)
+        with torch.no_grad():
+            model.actor.log_std.bias.fill_(settings.initial_log_std)
+        return model
+    n_steps = max(2, 2048 // settings.n_envs)
+    return sb3.PPO(
+        "MlpPolicy", env, seed=settings.seed, device="cpu", verbose=0, gamma=0.0,
+        gae_lambda=0.0, n_steps=n_steps, batch_size=min(settings.batch_size,
+                                                        n_steps * settings.n_envs),
+        n_epochs=10, learning_rate=settings.learning_rate, ent_coef=0.0,
+        policy_kwargs={"net_arch": net, "log_std_init": settings.initial_log_std})
 
 
-def _budget_callback(problem: DesignProblem, model_ref: list, probe_every: int):
+def _training_env(settings: TrainingSettings, distribution: ObjectDistribution,
+                  weights: RewardWeights, model: dict[str, Any]):
+    from stable_baselines3.common.vec_env import VecEnvWrapper, VecMonitor
+
+    from envs.sb3_env import sb3_vec_env
+
+    class _BoundedTail(VecEnvWrapper):
+        """The training reward: the env's with its tail bounded (:func:`bounded_tail`); the
+        env's own reward stays in each info."""
+
+        def reset(self):
+            return self.venv.reset()
+
+        def step_wait(self):
+            obs, rewards, dones, infos = self.venv.step_wait()
+            limits = np.array([info["strain_limit"] for info in infos])
+            shaped = bounded_tail(rewards, limits, settings.tail_scale)
+            return obs, shaped.astype(np.float32), dones, infos
+
+    env = VecMonitor(sb3_vec_env(settings.n_envs, seed=settings.seed, distribution=distribution,
+                                 weights=weights, **model))
+    return _BoundedTail(env) if settings.tail_scale > 0 else env
+
+
+def _callback(total: int, progress: bool, curve: list, evaluate: Callable[[], float] | None,
+              every: int):
     from stable_baselines3.common.callbacks import BaseCallback
+    from tqdm.auto import tqdm
 
-    class _Budget(BaseCallback):
-        """Counts training steps as evaluations, probes the policy, stops at the budget."""
+    class _Progress(BaseCallback):
+        """A progress bar and the learning curve: the mean env reward of recent steps and,
+        every ``every`` steps, the deterministic policy's reward on held-out objects."""
 
-        def __init__(self) -> None:
-            super().__init__()
-            self.since_probe = 0
-            self.n_probes = 0
-
-        def probe(self) -> None:
-            x = policy_design(model_ref[0], problem.disk, problem.strain_limit, problem)
-            problem.evaluate(x[None, :])
-            self.n_probes += 1
-            self.since_probe = 0
+        def _on_training_start(self) -> None:
+            self.bar = tqdm(total=total, desc="train-policy", unit="step",
+                            disable=not progress, leave=False)
+            self.since = 0
+            self.recent: list[float] = []
 
         def _on_step(self) -> bool:
             n = self.training_env.num_envs
-            problem.add_external_evaluations(n)
-            self.since_probe += n
-            if self.since_probe >= probe_every and problem.remaining >= n + 2:
-                self.probe()
-            return problem.remaining >= n + 1  # room for one more step and the final probe
+            self.bar.update(n)
+            self.since += n
+            infos = self.locals.get("infos") or []
+            self.recent.extend(float(i["reward"]) for i in infos if "reward" in i)
+            if self.since >= every or self.num_timesteps >= total:
+                point = {"steps": int(self.num_timesteps),
+                         "mean_reward": float(np.mean(self.recent)) if self.recent else None,
+                         "time_s": time.perf_counter() - self.t0}
+                if evaluate is not None:
+                    point["heldout_reward"] = evaluate()
+                curve.append(point)
+                self.bar.set_postfix(reward=f"{point['mean_reward']:.3f}", refresh=False)
+                self.since, self.recent = 0, []
+            return True
 
-    return _Budget()
+        def _on_training_end(self) -> None:
+            self.bar.close()
 
-
-def _make_model(method: str, env: Any, seed: int, net: tuple[int, ...], budget: int,
-                options: dict[str, Any]):
-    sb3 = _import_sb3()
-    policy_kwargs = {"net_arch": list(net)}
-    if method == "ppo":
-        kwargs = {"n_steps": 64, "batch_size": 64, "n_epochs": 5, "learning_rate": 3e-4,
-                  "gamma": 0.0, "gae_lambda": 0.0, "ent_coef": 0.0}
-        kwargs.update(options)
-        return sb3.PPO("MlpPolicy", env, seed=seed, policy_kwargs=policy_kwargs, device="cpu",
-                       verbose=0, **kwargs)
-    kwargs = {"learning_starts": min(100, budget // 4), "batch_size": 64,
-              "buffer_size": max(budget, 1000), "gamma": 0.0, "learning_rate": 1e-3,
-              "train_freq": 1, "gradient_steps": 1}
-    kwargs.update(options)
-    return sb3.SAC("MlpPolicy", env, seed=seed, policy_kwargs=policy_kwargs, device="cpu",
-                   verbose=0, **kwargs)
+    cb = _Progress()
+    cb.t0 = time.perf_counter()
+    return cb
 
 
-def train_policy(
-    method: str,
-    problem: DesignProblem,
-    *,
-    budget: int,
-    seed: int = 0,
-    n_envs: int = DEFAULT_N_ENVS,
-    probe_every: int | None = None,
-    net_arch: Sequence[int] = DEFAULT_NET,
-    torch_threads: int | None = 1,
-    **algo_options: Any,
-) -> tuple[Any, OptimResult]:
-    """Train PPO or SAC on GripperDesign-v1 with random objects, probing the fixed object.
+def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
+                 distribution: ObjectDistribution | None = None,
+                 weights: RewardWeights | None = None, n_triangles: int | None = None,
+                 n_rings: int | None = None, element: str | None = None,
+                 progress: bool = True, heldout: list[tuple[SoftDisk, float, float]] | None = None,
+                 curve_points: int = 20, torch_threads: int | None = 1, name: str = "policy",
+                 **settings: Any) -> DesignPolicy:
+    """Train a design policy over an object distribution (stable-baselines3).
 
     Parameters
     ----------
     method
-        ``"ppo"`` or ``"sac"``.
-    problem
-        The fixed object (probed), and the env's physics settings (N, k_f, bounds, weights).
-    budget
-        Evaluations: training steps (one design on a random object each) plus probes;
-        >= ``n_envs + 2``.
+        ``"sac"`` (default) or ``"ppo"``.
+    steps
+        Designs evaluated during training (environment steps), >= the number of envs.
     seed
-        Seed of the model and of the environments.
-    n_envs
-        Environments stepped together, their designs evaluated in one batch
-        (:func:`envs.sb3_env.sb3_vec_env`), >= 1.
-    probe_every
-        Training steps between probes of the fixed object (default ``budget / 20``).
-    net_arch
-        Hidden layer sizes of the actor and the critic.
+        Seed of the agent and the environments.
+    distribution
+        The objects trained on (default :class:`~envs.design_env.ObjectDistribution`: radius
+        1 mm - 0.2 m, modulus 10 kPa - 10 MPa, Poisson 0.25-0.49, strain limit 0.03-0.17,
+        friction 0.2-1.0).
+    weights
+        Reward weights (default :class:`~envs.evaluate.RewardWeights`).
+    n_triangles, n_rings, element
+        The model member that scores the designs (default: the default model).
+    progress
+        Show a progress bar.
+    heldout
+        Objects ``(disk, strain_limit, friction)`` on which the deterministic policy is scored
+        at every point of the learning curve (its mean reward), or ``None``.
+    curve_points
+        Points of the learning curve.
     torch_threads
-        torch intra-op threads during training (None: leave torch's setting); the small
-        networks run fastest on one thread, leaving the cores to the solver.
-    **algo_options
-        Passed to the stable-baselines3 constructor (``n_steps``, ``learning_rate``, ...).
+        torch's intra-op threads during training (the small networks run fastest on one,
+        leaving the other core to the solver); None leaves torch's setting.
+    name
+        The policy's name in its metadata.
+    **settings
+        Fields of :class:`TrainingSettings` (``n_envs``, ``net_arch``, ``tail_scale``, ...).
 
     Returns
     -------
-    model, OptimResult
-        The trained model and the result (best probe design; ``extra`` holds the training
-        steps, the number of probes and the final policy's reward).
+    DesignPolicy
+        Its ``meta["training"]`` holds the settings, the wall time and the learning curve.
     """
-    if method not in RL_METHODS:
-        raise ValueError(f"unknown RL method {method!r}; allowed: {', '.join(RL_METHODS)}")
-    budget, seed = check_budget(budget), check_seed(seed)
-    if isinstance(n_envs, bool) or int(n_envs) != n_envs or n_envs < 1:
-        raise ValueError(f"n_envs must be an integer >= 1, got {n_envs!r}")
-    n_envs = int(n_envs)
-    if budget < n_envs + 2:
-        raise ValueError(f"budget = {budget} is too small for {method}: it needs at least "
-                         f"n_envs + 2 = {n_envs + 2} evaluations")
-    if probe_every is None:
-        probe_every = max(n_envs, budget // DEFAULT_PROBES)
-    if isinstance(probe_every, bool) or int(probe_every) != probe_every or probe_every < 1:
-        raise ValueError(f"probe_every must be an integer >= 1, got {probe_every!r}")
-    net = tuple(int(v) for v in net_arch)
     _import_sb3()
     import torch
-    from stable_baselines3.common.vec_env import VecMonitor
 
-    from envs.sb3_env import sb3_vec_env
-
-    # one batched evaluation per training step of n_envs designs (n_envs evaluations of the
-    # budget); VecMonitor keeps the episode statistics that make_vec_env's Monitor gave
-    env = VecMonitor(sb3_vec_env(
-        n_envs, seed=seed,
-        bounds=problem.bounds,
-        distribution=training_distribution(problem),
-        weights=problem.weights,
-        **problem.joint_spring_kwargs(),
-        **problem.model.kwargs(),
-    ))
+    cfg = TrainingSettings(method=method, steps=steps, seed=seed, **settings)
+    distribution = ObjectDistribution() if distribution is None else distribution
+    weights = RewardWeights() if weights is None else weights
+    if not isinstance(distribution, ObjectDistribution):
+        raise ValueError(f"distribution must be an ObjectDistribution, got "
+                         f"{type(distribution).__name__}")
+    if not isinstance(weights, RewardWeights):
+        raise ValueError(f"weights must be a RewardWeights, got {type(weights).__name__}")
+    member = resolve_model(n_triangles, n_rings, element or "nhquad").kwargs()
+    env = _training_env(cfg, distribution, weights, member)
+    curve: list[dict[str, Any]] = []
     threads = torch.get_num_threads()
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))
+    t0 = time.perf_counter()
     try:
-        problem.start(budget)
-        model = _make_model(method, env, seed, net, budget, dict(algo_options))
-        model_ref = [model]
-        callback = _budget_callback(problem, model_ref, int(probe_every))
-        model.learn(total_timesteps=budget, callback=callback, progress_bar=False)
-        callback.probe()  # the final policy, always recorded
-        final = problem.evaluate_physical(problem.to_physical(
-            policy_design(model, problem.disk, problem.strain_limit, problem))[None, :])
-        final_reward = float(final["reward"][0])
+        agent = _make_agent(cfg, env)
+        shell = _policy_shell(cfg, distribution, weights, member, name)
+
+        def evaluate() -> float:
+            layers, activation, squash = _extract_actor(agent, cfg.method)
+            return _heldout_reward(DesignPolicy(layers, activation, squash, shell), heldout)
+
+        every = max(cfg.n_envs, cfg.steps // max(1, int(curve_points)))
+        agent.learn(total_timesteps=cfg.steps, callback=_callback(
+            cfg.steps, progress, curve, evaluate if heldout else None, every))
     finally:
         torch.set_num_threads(threads)
         env.close()
-    options = {"n_envs": n_envs, "probe_every": int(probe_every), "net_arch": list(net),
-               **algo_options}
-    extra = {"training_steps": int(model.num_timesteps), "n_probes": callback.n_probes,
-             "final_policy_reward": final_reward}
-    return model, problem.result(method, seed, options=options, extra=extra)
+    layers, activation, squash = _extract_actor(agent, cfg.method)
+    meta = {**shell, "training": {**asdict(cfg), "wall_time_s": time.perf_counter() - t0,
+                                  "curve": curve}}
+    policy = DesignPolicy(layers, activation, squash, meta)
+    policy.agent = agent  # the SB3 model, for saving or more training (not part of save())
+    return policy
 
 
-def run_ppo(problem: DesignProblem, *, budget: int, seed: int = 0, **options: Any
-            ) -> OptimResult:
-    """PPO on GripperDesign-v1 (see :func:`train_policy` for the options)."""
-    return train_policy("ppo", problem, budget=budget, seed=seed, **options)[1]
+def _policy_shell(cfg: TrainingSettings, distribution: ObjectDistribution,
+                  weights: RewardWeights, member: dict[str, Any], name: str) -> dict[str, Any]:
+    """The metadata of a policy trained with these settings."""
+    return {
+        **_expected_meta(), "name": name, "package_version": _package_version(),
+        "reward_weights": {f.name: getattr(weights, f.name) for f in fields(weights)},
+        "model": member, "joint_spring": {"torsion_stiffness_rel": None},
+        "distribution": {f.name: getattr(distribution, f.name) for f in fields(distribution)},
+        "method": cfg.method,
+    }
 
 
-def run_sac(problem: DesignProblem, *, budget: int, seed: int = 0, **options: Any
-            ) -> OptimResult:
-    """SAC on GripperDesign-v1 (see :func:`train_policy` for the options)."""
-    return train_policy("sac", problem, budget=budget, seed=seed, **options)[1]
+def _heldout_reward(policy: DesignPolicy, objects: list[tuple[SoftDisk, float, float]]
+                    ) -> float:
+    """Mean reward of the policy's designs on objects (one batched evaluation)."""
+    from envs.evaluate import evaluate_designs
+
+    disks = [o[0] for o in objects]
+    needs = np.array([[o[1], o[2]] for o in objects])
+    x = policy.actions(observe_rows(disks, needs))
+    designs = policy.bounds.scale(x, disks)
+    out = evaluate_designs(designs, disks, strain_limits=needs[:, 0],
+                           friction_coefficients=needs[:, 1],
+                           weights=RewardWeights(**policy.meta["reward_weights"]),
+                           **policy.meta["model"])
+    return float(np.mean(out["reward"]))
 
 
-def _as_problem(obj: Any, template: DesignProblem | None) -> DesignProblem:
-    if isinstance(obj, DesignProblem):
-        return obj
-    if isinstance(obj, SoftDisk):
-        disk, limit = obj, None
-    else:
-        try:
-            disk, limit = obj
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"objects must be DesignProblems, SoftDisks or (SoftDisk, strain_limit) pairs, "
-                f"got {obj!r}") from None
-    kwargs: dict[str, Any] = {}
-    if template is not None:
-        kwargs = {**template.joint_spring_kwargs(), "bounds": template.bounds,
-                  "weights": template.weights, "executor": template.executor,
-                  **template.model.kwargs()}
-        if limit is None:
-            limit = template.strain_limit
-    if limit is None:
-        return DesignProblem(disk, **kwargs)
-    return DesignProblem(disk, limit, **kwargs)
+def write_training_outputs(policy: DesignPolicy, out: str | Path) -> dict[str, Path]:
+    """Write a trained policy to ``out``: ``policy.json`` and ``policy.npz`` (what
+    :func:`load_policy` reads), ``sb3_model.zip`` (the whole agent, for more training),
+    ``learning_curve.json`` and ``learning_curve.png``."""
+    folder = policy.save(out)
+    paths = {"policy": folder / "policy.json", "weights": folder / "policy.npz"}
+    agent = getattr(policy, "agent", None)
+    if agent is not None:
+        paths["sb3_model"] = folder / "sb3_model.zip"
+        agent.save(paths["sb3_model"])
+    curve = policy.meta["training"]["curve"]
+    paths["curve_json"] = folder / "learning_curve.json"
+    paths["curve_json"].write_text(json.dumps(curve, indent=1) + "\n")
+    paths["curve_png"] = folder / "learning_curve.png"
+    learning_curve_figure({policy.meta.get("name", "policy"): curve}, paths["curve_png"])
+    return paths
 
 
-def evaluate_policy_regret(
-    model: Any,
-    objects: Sequence[Any],
-    cmaes_budget: int,
-    *,
-    seed: int = 0,
-    template: DesignProblem | None = None,
-) -> list[PolicyRegret]:
-    """The policy's design on each object against a per-object CMA-ES optimum (the regret).
+def learning_curve_figure(curves: dict[str, list[dict[str, Any]]], path: str | Path,
+                          title: str = "training") -> Path:
+    """Mean training reward (and held-out reward, where recorded) against steps, one line per
+    curve."""
+    from matplotlib.figure import Figure
 
-    Parameters
-    ----------
-    model
-        A trained stable-baselines3 model (``predict(obs, deterministic=True)``).
-    objects
-        :class:`~optim.problem.DesignProblem`\\ s, :class:`~envs.scene.SoftDisk`\\ s or
-        ``(SoftDisk, strain_limit)`` pairs.
-    cmaes_budget
-        Evaluations of each CMA-ES run, >= 1.
-    seed
-        Seed of the CMA-ES runs.
-    template
-        Physics settings (N, k_f, bounds, weights, executor, default strain limit) for objects
-        that are not already problems; default those of :class:`DesignProblem`.
+    fig = Figure(figsize=(6.4, 4.0), dpi=110)
+    ax = fig.add_subplot()
+    for k, (label, curve) in enumerate(curves.items()):
+        steps = [p["steps"] for p in curve]
+        ax.plot(steps, [p["mean_reward"] for p in curve], color=f"C{k}", lw=0.8, alpha=0.6,
+                label=f"{label}: training designs (env reward)")
+        if curve and "heldout_reward" in curve[0]:
+            ax.plot(steps, [p["heldout_reward"] for p in curve], color=f"C{k}", lw=1.8,
+                    label=f"{label}: policy on held-out objects")
+    ax.set_xlabel("designs evaluated in training")
+    ax.set_ylabel("mean reward")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path)
+    return Path(path)
 
-    Returns
-    -------
-    list[PolicyRegret]
-        One row per object; ``regret = cmaes_reward - policy_reward``.
-    """
-    from .cmaes import run_cmaes
 
-    cmaes_budget, seed = check_budget(cmaes_budget), check_seed(seed)
-    rows = []
-    for obj in objects:
-        problem = _as_problem(obj, template)
-        x = policy_design(model, problem.disk, problem.strain_limit, problem)
-        policy_out = problem.evaluate_physical(problem.to_physical(x)[None, :])
-        best = run_cmaes(problem, budget=cmaes_budget, seed=seed)
-        policy_reward = float(policy_out["reward"][0])
-        cmaes_reward = best.best_reward
-        rows.append(PolicyRegret(
-            object=problem.object_info(),
-            policy_design=problem.design_dict(x),
-            policy_reward=policy_reward,
-            cmaes_reward=cmaes_reward,
-            regret=cmaes_reward - policy_reward,
-        ))
-    return rows
+def heldout_objects(n: int, seed: int, distribution: ObjectDistribution | None = None
+                    ) -> list[tuple[SoftDisk, float, float]]:
+    """``n`` objects drawn from the distribution with their own seed (never a training
+    seed's stream: training envs draw from ``seed + i`` of the training seed)."""
+    rng = np.random.default_rng([int(seed), 9173])
+    dist = ObjectDistribution() if distribution is None else distribution
+    return [dist.sample(rng) for _ in range(int(n))]

@@ -163,16 +163,12 @@ def test_optimize_refuses_an_unknown_option_naming_the_allowed_ones():
         optimize("nsga2", problem, budget=5, popsize=8)
 
 
-def test_rl_options_are_the_driver_s_and_stable_baselines3_s():
-    pytest.importorskip("stable_baselines3")
+def test_the_policy_method_takes_a_policy_only():
     from optim.optimize import option_names
 
-    names = option_names("ppo")
-    assert {"n_envs", "probe_every", "net_arch", "n_steps", "learning_rate"} <= set(names)
-    # set by the driver itself: passing them would clash
-    assert not {"policy", "env", "seed", "verbose", "device", "budget"} & set(names)
-    with pytest.raises(ValueError, match=r"unknown option 'verbose' for method 'sac'"):
-        optimize("sac", DesignProblem.from_scene("paper-r070"), budget=10, verbose=1)
+    assert option_names("policy") == ("policy",)
+    with pytest.raises(ValueError, match=r"unknown option 'verbose' for method 'policy'"):
+        optimize("policy", DesignProblem.from_scene("paper-r070"), budget=10, verbose=1)
 
 
 def test_run_optimize_refuses_an_unknown_option_before_any_work(tmp_path):

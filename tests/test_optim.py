@@ -193,29 +193,7 @@ def test_cli_optimize_writes_result_and_charts(tmp_path):
     assert result.n_evaluations == 80 and result.method == "nsga2"
 
 
-# --- RL ---------------------------------------------------------------------------------------
-
-
-def test_ppo_trains_and_its_policy_evaluates():
-    from optim.rl import evaluate_policy_regret, policy_design, train_policy
-
-    problem = make_problem()
-    model, result = train_policy("ppo", problem, budget=300, seed=0, n_envs=4, n_steps=32,
-                                 batch_size=32, n_epochs=2)
-    assert result.method == "ppo" and result.n_evaluations <= 300
-    assert result.extra["training_steps"] >= 256
-    assert math.isfinite(result.best_reward) and math.isfinite(result.extra["final_policy_reward"])
-    x = policy_design(model, problem.disk, problem.strain_limit, problem)
-    assert x.shape == (6,) and np.all(np.abs(x) <= 1)
-    rows = evaluate_policy_regret(model, [(SoftDisk(0.05, 0.0), 0.1)], cmaes_budget=27)
-    assert len(rows) == 1 and math.isfinite(rows[0].regret)
-    assert rows[0].regret == pytest.approx(rows[0].cmaes_reward - rows[0].policy_reward)
-
-
-@pytest.mark.slow
-def test_sac_trains_and_its_policy_evaluates():
-    result = optimize("sac", make_problem(), budget=300, seed=0)
-    assert math.isfinite(result.best_reward) and result.n_evaluations <= 300
+# --- the design policy (tests/test_policy.py) -------------------------------------------------
 
 
 # --- executors: same results, and no evaluation lost ------------------------------------------

@@ -1,0 +1,175 @@
+"""The design policy on objects it never saw: one forward pass, and with K refining evaluations,
+against a per-object CMA-ES optimum and cold CMA-ES at the same K.
+
+For ``--objects`` held-out objects (:func:`optim.rl.heldout_objects`: the default distribution,
+a seed no training env draws from) and ``--seeds`` training seeds: each policy is trained
+(``--steps``, SAC; or read from ``out/bench_policy/seed{S}`` when it is there) and scored as a
+share of each object's CMA-ES optimum (1000 evaluations, the 100 %): the policy alone, the
+policy + K evaluations of CMA-ES started at its design, and cold CMA-ES with K evaluations, for
+K in 50, 100, 200. Also: the worst object, the seeds' spread, grasps that do not hold, the
+training time and the policy's time per design. Every score is the default model's reward
+(the search model; ``psm-grasp optimize`` reports a finer member's, the same for both sides).
+
+Writes ``out/bench_policy.json`` and ``out/bench_policy.png``.
+
+Usage: ``python scripts/bench_policy.py [--objects 24] [--seeds 0 1 2] [--steps 200000]``
+(three trainings of ~5 minutes and the baselines: ~20 minutes on 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from envs.design_env import observe_rows
+from envs.evaluate import evaluate_designs
+from optim import DesignProblem, NoGraspWarning, optimize
+from optim.rl import heldout_objects, learning_curve_figure, load_policy, train_policy
+
+HELDOUT_SEED = 12345
+REFERENCE_BUDGET = 1000
+KS = (50, 100, 200)
+
+
+def reference_optima(objects, budget: int) -> np.ndarray:
+    """Each object's CMA-ES optimum (seed 0), the 100 %."""
+    return np.array([optimize("cmaes", DesignProblem(d, lim, mu), budget=budget,
+                              seed=0).best_reward for d, lim, mu in objects])
+
+
+def policy_alone(policy, objects) -> tuple[np.ndarray, np.ndarray]:
+    """Reward and holding of the policy's designs (one batched evaluation)."""
+    disks = [o[0] for o in objects]
+    needs = np.array([[o[1], o[2]] for o in objects])
+    designs = policy.bounds.scale(policy.actions(observe_rows(disks, needs)), disks)
+    out = evaluate_designs(designs, disks, strain_limits=needs[:, 0],
+                           friction_coefficients=needs[:, 1])
+    return out["reward"], out["holds"]
+
+
+def with_budget(objects, k: int, policy=None) -> np.ndarray:
+    """Best reward after k evaluations: cold CMA-ES, or the policy's design and k - 1
+    refining evaluations."""
+    rewards = []
+    for d, lim, mu in objects:
+        problem = DesignProblem(d, lim, mu)
+        if policy is None:
+            rewards.append(optimize("cmaes", problem, budget=k, seed=0).best_reward)
+        else:
+            rewards.append(policy.run(problem, budget=k, seed=0).best_reward)
+    return np.array(rewards)
+
+
+def policy_time_ms(policy, objects, repeat: int = 200) -> float:
+    """Policy time of one design [ms]: the observation and the forward pass."""
+    d, lim, mu = objects[0]
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        policy.normalized(d, lim, mu)
+    return (time.perf_counter() - t0) / repeat * 1e3
+
+
+def get_policy(seed: int, steps: int, folder: Path, objects):
+    path = folder / f"seed{seed}"
+    if (path / "policy.json").is_file():
+        return load_policy(path)
+    policy = train_policy("sac", steps=steps, seed=seed, heldout=objects, curve_points=20,
+                          name=f"seed{seed}")
+    policy.save(path)
+    return policy
+
+
+def chart(report: dict, path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 4.2), dpi=110)
+    ax, ax2 = fig.subplots(1, 2)
+    ks = list(KS)
+    cold = [report["cold_cmaes"][str(k)]["mean"] for k in ks]
+    ax.plot(ks, cold, "o-", color="tab:gray", label="cold CMA-ES, K evaluations")
+    for seed, row in report["seeds"].items():
+        ax.plot(ks, [row["refined"][str(k)]["mean"] for k in ks], "o-", color="tab:blue",
+                alpha=0.7, label="policy + K (each seed)" if seed == "0" else None)
+        ax.axhline(row["alone"]["mean"], color="tab:blue", ls="--", lw=0.8,
+                   label="policy alone, one forward pass (each seed)" if seed == "0" else None)
+    ax.axhline(1.0, color="k", lw=0.6)
+    ax.set_xlabel("evaluations K on the new object")
+    ax.set_ylabel("mean share of the per-object CMA-ES optimum")
+    ax.set_title(f"{report['objects']} objects never trained on", fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    curves = {f"seed {s}": row["curve"] for s, row in report["seeds"].items() if row["curve"]}
+    if curves:
+        tmp = path.with_name(path.stem + "_curves.png")
+        learning_curve_figure(curves, tmp, title="learning curves")
+        for k, (label, curve) in enumerate(curves.items()):
+            ax2.plot([p["steps"] for p in curve], [p["heldout_reward"] for p in curve],
+                     color=f"C{k}", label=label)
+        ax2.axhline(report["optimum_mean_reward"], color="k", ls="--", lw=0.8,
+                    label="per-object CMA-ES optima (mean)")
+        ax2.set_xlabel("designs evaluated in training")
+        ax2.set_ylabel("mean reward on the held-out objects")
+        ax2.legend(fontsize=7)
+        ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--objects", type=int, default=24)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--steps", type=int, default=200_000)
+    parser.add_argument("--shipped", action="store_true",
+                        help="score the shipped policy instead of training seeds")
+    parser.add_argument("--out", type=Path, default=Path("out"))
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", NoGraspWarning)
+    objects = heldout_objects(args.objects, HELDOUT_SEED)
+    optima = reference_optima(objects, REFERENCE_BUDGET)
+    report: dict = {"objects": len(objects), "reference_budget": REFERENCE_BUDGET,
+                    "optimum_mean_reward": float(optima.mean()),
+                    "optima": optima.tolist(), "steps": args.steps, "seeds": {},
+                    "cold_cmaes": {}}
+    for k in KS:
+        share = with_budget(objects, k) / optima
+        report["cold_cmaes"][str(k)] = {"mean": float(share.mean()), "min": float(share.min())}
+    policies = ({"shipped": load_policy()} if args.shipped else
+                {str(s): get_policy(s, args.steps, args.out / "bench_policy", objects)
+                 for s in args.seeds})
+    for name, policy in policies.items():
+        reward, holds = policy_alone(policy, objects)
+        share = reward / optima
+        row = {"alone": {"mean": float(share.mean()), "min": float(share.min()),
+                         "worst_object": int(np.argmin(share)),
+                         "not_holding": int((~holds).sum())},
+               "refined": {},
+               "training_s": policy.meta.get("training", {}).get("wall_time_s"),
+               "policy_ms": policy_time_ms(policy, objects),
+               "curve": policy.meta.get("training", {}).get("curve", [])}
+        for k in KS:
+            s = with_budget(objects, k, policy) / optima
+            row["refined"][str(k)] = {"mean": float(s.mean()), "min": float(s.min())}
+        report["seeds"][name] = row
+        print(f"policy {name}: alone {row['alone']['mean']:.3f} (worst {row['alone']['min']:.3f},"
+              f" {row['alone']['not_holding']} not holding), + 100: "
+              f"{row['refined']['100']['mean']:.3f} (worst {row['refined']['100']['min']:.3f}); "
+              f"trained in {row['training_s'] or 0:.0f} s; {row['policy_ms']:.3f} ms a design",
+              flush=True)
+    alone = [r["alone"]["mean"] for r in report["seeds"].values()]
+    report["alone_spread"] = [min(alone), max(alone)]
+    print("cold CMA-ES: " + ", ".join(f"K = {k}: {report['cold_cmaes'][str(k)]['mean']:.3f}"
+                                       for k in KS))
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench_policy.json").write_text(json.dumps(report, indent=1) + "\n")
+    chart(report, args.out / "bench_policy.png")
+    print(f"wrote {args.out / 'bench_policy.json'} and {args.out / 'bench_policy.png'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,138 @@
+"""The design policy: the shipped one designs for new objects, saved policies round-trip and
+refuse a mismatch, the training reward's tail keeps the order, the commands work."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cli.main import main
+from envs import DesignBounds, evaluate_designs
+from envs.object_file import load_object
+from optim import DesignProblem, optimize
+from optim.rl import (
+    SHIPPED_POLICY,
+    PolicyMismatchError,
+    bounded_tail,
+    heldout_objects,
+    load_policy,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+OBJECTS = ROOT / "examples" / "objects"
+
+
+def test_the_bounded_tail_keeps_every_tier_in_order():
+    rewards = np.array([0.05, 0.0, -0.01, -0.5, -1.0, -1.2, -2.9, -3.0, -4.5])
+    for limit in (0.03, 0.1, 0.17):
+        shaped = bounded_tail(rewards, np.full(rewards.size, limit))
+        assert np.all(np.diff(shaped) < 0)  # strictly increasing in the reward
+        assert shaped[0] == 0.05 and shaped[1] == 0.0  # holds of positive reward unchanged
+        assert np.all(shaped > -limit)  # bounded at the strain limit
+        assert shaped[2] == pytest.approx(-0.01, rel=0.35)  # slope ~1 near the optimum
+
+
+def test_the_shipped_policy_designs_for_objects_it_never_saw():
+    policy = load_policy()
+    assert policy.meta["name"] == "shipped" and policy.meta["method"] == "sac"
+    objects = heldout_objects(12, seed=777)  # not the benchmark's
+    disks = [o[0] for o in objects]
+    needs = np.array([[o[1], o[2]] for o in objects])
+    x = np.array([policy.normalized(*o) for o in objects])
+    assert np.all(np.abs(x) <= 1.0)
+    out = evaluate_designs(DesignBounds().scale(x, disks), disks, strain_limits=needs[:, 0],
+                           friction_coefficients=needs[:, 1])
+    assert out["holds"].all()  # no object missed, none slips
+    # the relative design is the same for two objects that differ only in size and stiffness
+    d, lim, mu = objects[0]
+    from dataclasses import replace
+
+    small = replace(d, radius_m=d.radius_m / 20, youngs_modulus_pa=d.youngs_modulus_pa * 50)
+    np.testing.assert_array_equal(policy.normalized(d, lim, mu),
+                                  policy.normalized(small, lim, mu))
+    t0 = time.perf_counter()
+    for _ in range(100):
+        policy.normalized(d, lim, mu)
+    assert (time.perf_counter() - t0) / 100 < 5e-3  # a design in well under 5 ms
+
+
+def test_the_policy_as_a_method_refines_within_its_budget():
+    spec = load_object(OBJECTS / "cherry_tomato.toml")
+    problem = DesignProblem(spec.disk, spec.strain_limit, spec.friction_coefficient)
+    alone = optimize("policy", problem, budget=1, seed=0)
+    refined = optimize("policy", problem, budget=60, seed=0)
+    assert alone.n_evaluations == 1 and refined.n_evaluations == 60
+    assert refined.best_reward >= alone.best_reward == refined.extra["policy_reward"]
+    assert alone.extra["grasp_found"] and refined.method == "policy"
+
+
+def test_a_saved_policy_round_trips_and_a_mismatch_is_a_clear_error(tmp_path):
+    policy = load_policy()
+    folder = policy.save(tmp_path / "copy")
+    again = load_policy(folder)
+    obs = np.random.default_rng(0).uniform(-1, 1, (5, 4))
+    np.testing.assert_allclose(again.actions(obs), policy.actions(obs), rtol=0, atol=1e-6)
+    meta = json.loads((folder / "policy.json").read_text())
+    for key, value, match in (
+            ("obs_fields", [["radius_m", "log10", -3.0, 0.0]], "retrain it"),
+            ("package_version", "9.9.0", "trained with psm-grasp 9.9.0"),
+            ("format", 99, "policy format 99"),
+            ("model", {"n_triangles": 3}, "settings do not fit")):
+        bad = tmp_path / f"bad_{key}"
+        shutil.copytree(folder, bad)
+        (bad / "policy.json").write_text(json.dumps({**meta, key: value}))
+        with pytest.raises(PolicyMismatchError, match=match):
+            load_policy(bad)
+    with pytest.raises(ValueError, match="no policy.json"):
+        load_policy(tmp_path)
+    assert (SHIPPED_POLICY / "policy.npz").stat().st_size < 200_000  # a small file
+
+
+def test_the_design_command_writes_a_result_like_optimize(tmp_path, capsys):
+    code = main(["design", "--object", str(OBJECTS / "cherry_tomato.toml"), "--out",
+                 str(tmp_path), "--no-progress", "--refine", "30"])
+    assert code == 0
+    data = json.loads((tmp_path / "design_result.json").read_text())
+    assert data["method"] == "policy" and data["n_evaluations"] == 31
+    assert data["extra"]["grasp_found"] is True and data["object"]["name"] == "cherry tomato"
+    assert data["best_reward"] > 0.02 and set(data["best_design"]) >= {"torque_nm"}
+    assert (tmp_path / "design_drawing.png").stat().st_size > 0
+    bad = tmp_path / "nothing"
+    bad.mkdir()
+    assert main(["design", "--object", str(OBJECTS / "cherry_tomato.toml"), "--policy",
+                 str(bad), "--out", str(tmp_path)]) == 2
+    assert "no policy.json" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_train_policy_writes_a_policy_that_design_uses(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path / "policy"
+    assert main(["train-policy", "--steps", "20000", "--out", str(out), "--no-progress"]) == 0
+    for name in ("policy.json", "policy.npz", "sb3_model.zip", "learning_curve.png"):
+        assert (out / name).stat().st_size > 0
+    assert main(["design", "--object", str(OBJECTS / "foam_disk.toml"), "--policy", str(out),
+                 "--out", str(tmp_path / "d"), "--no-progress"]) in (0, 3)
+    data = json.loads((tmp_path / "d" / "design_result.json").read_text())
+    assert data["method"] == "policy" and np.isfinite(data["best_reward"])
+
+
+def test_a_short_training_run_learns_something():
+    """1000 SAC steps: the machinery runs end to end and the policy's actions are the SB3
+    actor's deterministic actions."""
+    pytest.importorskip("stable_baselines3")
+    from optim.rl import train_policy
+
+    objects = heldout_objects(4, seed=3)
+    policy = train_policy("sac", steps=1024, seed=0, n_envs=32, progress=False,
+                          heldout=objects, curve_points=2)
+    curve = policy.meta["training"]["curve"]
+    assert len(curve) >= 2 and all(np.isfinite(p["heldout_reward"]) for p in curve)
+    obs = np.random.default_rng(1).uniform(-1, 1, (6, 4)).astype(np.float32)
+    sb3, _ = policy.agent.predict(obs, deterministic=True)
+    np.testing.assert_allclose(policy.actions(obs), sb3, atol=1e-5)
