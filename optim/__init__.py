@@ -8,8 +8,11 @@ Every method shares one interface and one result type::
     result = optimize("cmaes", problem, budget=2000, seed=0)
     result.to_json("out/cmaes.json")
 
-Methods (:data:`METHODS`): ``cmaes`` (pycma), ``ga`` and ``nsga2`` (pymoo), ``random``, ``ppo``
-and ``sac`` (stable-baselines3). Their heavy dependencies are imported only when used.
+Methods (:data:`METHODS`): ``cmaes`` (pycma), ``ga`` and ``nsga2`` (pymoo), ``random`` and
+``policy`` (the shipped design policy's design, then CMA-ES refining it; the policy is trained
+with stable-baselines3 by :func:`optim.rl.train_policy`). Their heavy dependencies are
+imported only when used. With a scene preset or an object file, :func:`optim.run.run_optimize`
+also writes the files of ``psm-grasp optimize``.
 Populations are evaluated in-process by default, or through an executor of
 :mod:`optim.executors` (local processes, Dask).
 """

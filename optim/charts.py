@@ -28,7 +28,7 @@ from .result import OptimResult
 __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure"]
 
 METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
-                  "random": "tab:gray", "ppo": "tab:purple", "sac": "tab:pink"}
+                  "random": "tab:gray", "policy": "tab:purple"}
 
 
 def _save(fig: Figure, path: str | Path | None) -> Figure:

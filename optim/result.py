@@ -71,8 +71,8 @@ class OptimResult:
     Parameters
     ----------
     method
-        Name of the optimizer (``"cmaes"``, ``"ga"``, ``"nsga2"``, ``"random"``, ``"ppo"``,
-        ``"sac"``).
+        Name of the optimizer (``"cmaes"``, ``"ga"``, ``"nsga2"``, ``"random"``,
+        ``"policy"``).
     seed
         Seed of the run (>= 0).
     budget

@@ -26,6 +26,7 @@ third of the strain limit, and a critic fitting misses at -3 cannot resolve diff
 
 from __future__ import annotations
 
+import functools
 import json
 import time
 from collections.abc import Callable
@@ -343,9 +344,17 @@ def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,
                policy: str | Path | DesignPolicy | None = None) -> OptimResult:
     """The ``"policy"`` method of :func:`optim.optimize`: the (shipped) policy's design for
     the problem's object and ``budget - 1`` refining CMA-ES evaluations."""
-    if not isinstance(policy, DesignPolicy):
+    if policy is None:
+        policy = _shipped_policy()
+    elif not isinstance(policy, DesignPolicy):
         policy = load_policy(policy)
     return policy.run(problem, budget=budget, seed=seed)
+
+
+@functools.cache
+def _shipped_policy() -> DesignPolicy:
+    """The shipped policy, read once per process (an optimizer comparison asks it often)."""
+    return load_policy()
 
 
 # --- training ---------------------------------------------------------------------------------

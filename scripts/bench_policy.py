@@ -10,10 +10,18 @@ K in 50, 100, 200. Also: the worst object, the seeds' spread, grasps that do not
 training time and the policy's time per design. Every score is the default model's reward
 (the search model; ``psm-grasp optimize`` reports a finer member's, the same for both sides).
 
+``--ablation`` also trains seed 0 with the env's reward as it is (no bounded tail,
+:func:`optim.rl.bounded_tail`) and draws both learning curves. ``--object-files N`` checks the
+commands as a user runs them: N objects of the distribution written as TOML files (with their
+strain limit and friction), ``psm-grasp design --object F`` (the shipped policy) and ``--refine
+100`` against ``psm-grasp optimize --object F --budget 1000``, each as reported (the finer
+member's reward after the finish).
+
 Writes ``out/bench_policy.json`` and ``out/bench_policy.png``.
 
-Usage: ``python scripts/bench_policy.py [--objects 24] [--seeds 0 1 2] [--steps 200000]``
-(three trainings of ~5 minutes and the baselines: ~20 minutes on 2 cores).
+Usage: ``python scripts/bench_policy.py [--objects 24] [--seeds 0 1 2] [--steps 200000]
+[--ablation] [--object-files 12] [--shipped]`` (three trainings of ~5 minutes and the
+baselines: ~20 minutes on 2 cores).
 """
 
 from __future__ import annotations
@@ -84,6 +92,49 @@ def get_policy(seed: int, steps: int, folder: Path, objects):
     return policy
 
 
+def object_file_check(n: int, folder: Path) -> dict:
+    """``design`` (alone and ``--refine 100``) against ``optimize --budget 1000`` on n object
+    files, through the command line's own entry point."""
+    from cli.main import main as cli
+
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for k, (disk, limit, mu) in enumerate(heldout_objects(n, HELDOUT_SEED + 1)):
+        path = folder / f"object_{k}.toml"
+        path.write_text(
+            "[object]\n"
+            f"name = \"object {k}\"\nradius_m = {disk.radius_m!r}\n"
+            f"youngs_modulus_pa = {disk.youngs_modulus_pa!r}\n"
+            f"poisson_ratio = {disk.poisson_ratio!r}\nthickness_m = {disk.thickness_m!r}\n"
+            f"strain_limit = {limit!r}\nfriction_coefficient = {mu!r}\n")
+        row = {"file": str(path)}
+        for key, argv in (("optimize", ["optimize", "--budget", "1000"]),
+                          ("design", ["design"]), ("design_refine_100", ["design", "--refine",
+                                                                          "100"])):
+            out = folder / f"{key}_{k}"
+            code = cli([*argv, "--object", str(path), "--out", str(out), "--no-progress"])
+            name = "cmaes_seed0_result.json" if key == "optimize" else "design_result.json"
+            data = json.loads((out / name).read_text())
+            # the search model's optimum: the best of the designs it kept (the finish reports
+            # the one the finer member scores best, not always the search model's best)
+            search = max(t.get("search_reward", t["reward"]) for t in data["top_designs"])
+            row[key] = {"exit": code, "reward": data["best_reward"], "search_reward": search,
+                        "grasp_found": data["extra"]["grasp_found"]}
+        rows.append(row)
+    out: dict = {"objects": n, "rows": rows,
+                 "missed": sum(not r["design"]["grasp_found"] for r in rows)}
+    for key in ("design", "design_refine_100"):
+        share = np.array([r[key]["search_reward"] / r["optimize"]["search_reward"]
+                          for r in rows])
+        reported = np.array([r[key]["reward"] for r in rows])
+        out[f"{key}_share"] = {"mean": float(share.mean()), "min": float(share.min())}
+        # as reported (the finer member's rewards): the ratio of the means (a per-object
+        # ratio is meaningless where an optimum is reported near or below zero)
+        out[f"{key}_reported_ratio_of_means"] = float(
+            reported.sum() / sum(r["optimize"]["reward"] for r in rows))
+    return out
+
+
 def chart(report: dict, path: Path) -> None:
     from matplotlib.figure import Figure
 
@@ -104,6 +155,8 @@ def chart(report: dict, path: Path) -> None:
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     curves = {f"seed {s}": row["curve"] for s, row in report["seeds"].items() if row["curve"]}
+    if "ablation_no_tail" in report:
+        curves["seed 0, no bounded tail"] = report["ablation_no_tail"]["curve"]
     if curves:
         tmp = path.with_name(path.stem + "_curves.png")
         learning_curve_figure(curves, tmp, title="learning curves")
@@ -127,6 +180,10 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=200_000)
     parser.add_argument("--shipped", action="store_true",
                         help="score the shipped policy instead of training seeds")
+    parser.add_argument("--ablation", action="store_true",
+                        help="also train seed 0 without the bounded tail (learning curves)")
+    parser.add_argument("--object-files", type=int, default=0, metavar="N",
+                        help="check design against optimize on N object files")
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
     warnings.simplefilter("ignore", NoGraspWarning)
@@ -160,6 +217,28 @@ def main() -> None:
               f" {row['alone']['not_holding']} not holding), + 100: "
               f"{row['refined']['100']['mean']:.3f} (worst {row['refined']['100']['min']:.3f}); "
               f"trained in {row['training_s'] or 0:.0f} s; {row['policy_ms']:.3f} ms a design",
+              flush=True)
+    if args.ablation:
+        plain = train_policy("sac", steps=args.steps, seed=0, heldout=objects, curve_points=20,
+                             name="no bounded tail", tail_scale=0.0)
+        reward, holds = policy_alone(plain, objects)
+        report["ablation_no_tail"] = {
+            "alone": {"mean": float((reward / optima).mean()),
+                      "min": float((reward / optima).min()), "not_holding": int((~holds).sum())},
+            "curve": plain.meta["training"]["curve"]}
+        print(f"without the bounded tail (seed 0): alone "
+              f"{report['ablation_no_tail']['alone']['mean']:.3f}", flush=True)
+    if args.object_files:
+        report["object_files"] = object_file_check(args.object_files,
+                                                   args.out / "bench_policy_objects")
+        of = report["object_files"]
+        print(f"object files ({args.object_files}), share of optimize --budget 1000 in the "
+              f"search model: design {of['design_share']['mean']:.3f} (worst "
+              f"{of['design_share']['min']:.3f}), --refine 100 "
+              f"{of['design_refine_100_share']['mean']:.3f} (worst "
+              f"{of['design_refine_100_share']['min']:.3f}); as reported (ratio of the means): "
+              f"{of['design_reported_ratio_of_means']:.3f} and "
+              f"{of['design_refine_100_reported_ratio_of_means']:.3f}; missed {of['missed']}",
               flush=True)
     alone = [r["alone"]["mean"] for r in report["seeds"].values()]
     report["alone_spread"] = [min(alone), max(alone)]
