@@ -197,14 +197,30 @@ def _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11):
 def cst_energy(ds00, ds01, ds10, ds11, m00, m01, m10, m11, a0, mu, lam):
     """``A0 W(F)``, ``W = mu/2 (I1 - 2) - mu ln J + lam/2 (ln J)^2`` (plane strain: the
     out-of-plane stretch is 1); infinite for ``J <= 0``. ``Ds`` holds the current edges
-    ``[b - a, c - a]`` by rows (x row, y row)."""
+    ``[b - a, c - a]`` by rows (x row, y row).
+
+    Evaluated in the displacement gradient ``H = F - I`` free of first-order cancellations,
+    as the FEM reference does (:func:`envs.fem.material._neo_hookean`):
+    ``I1 - 2 - 2 ln J = (H00 - H11)^2 + (H01 + H10)^2 + 2 (u - ln(1 + u))`` with
+    ``u = J - 1 = tr H + det H``. Why: the textbook form subtracts terms of size ``mu A0``
+    whose difference is of the order of the strain squared, so each triangle's energy had an
+    absolute round-off of about ``eps mu A0`` however small its strain (here: about ``eps``
+    times the strain). The interior point's line search compares merit values with a
+    round-off allowance relative to the merit; on a contact-free answer the merit is nearly
+    zero, the Newton step's last decreases (about 1e-19, scaled) drowned in that noise (about
+    5e-18) and the solve crawled into the iteration limit.
+    """
     f00, f01, f10, f11 = _deformation(ds00, ds01, ds10, ds11, m00, m01, m10, m11)
     det = f00 * f11 - f01 * f10
-    if not det > 0.0:
+    h00 = f00 - 1.0
+    h11 = f11 - 1.0
+    u = h00 + h11 + (h00 * h11 - f01 * f10)
+    # both tests: the two ways to J may round apart where J is within eps of 0
+    if not (det > 0.0 and u > -1.0):
         return math.inf
-    lnj = math.log(det)
-    i1 = f00 * f00 + f01 * f01 + f10 * f10 + f11 * f11
-    return a0 * (0.5 * mu * (i1 - 2.0) - mu * lnj + 0.5 * lam * lnj * lnj)
+    lnj = math.log1p(u)
+    shear = (h00 - h11) ** 2 + (f01 + f10) ** 2
+    return a0 * (0.5 * mu * shear + mu * (u - lnj) + 0.5 * lam * lnj * lnj)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

@@ -410,6 +410,10 @@ def _ipm_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0, 
         for _ls in range(60):
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
+            # the round-off allowance is relative to the merit's value: it assumes every
+            # energy term is evaluated to round-off relative to itself (no cancellation of
+            # large parts, envs.model.energy.cst_energy); on a contact-free answer the merit
+            # is nearly zero and so is the allowance
             bound = phi0 + 1e-4 * alpha * slope + 1e-15 * abs(phi0)
             accepted, wall, e_t, l_t = _trial(x, xt, n, prm, kinds, fj, fidx, mcount, g, gt,
                                               shrink, mu, bound)
