@@ -29,7 +29,7 @@ from .evaluate import (
 )
 from .model.defaults import DEFAULT_ELEMENT
 from .model.family import ModelSpec, resolve_model
-from .scene import Design, SoftDisk, joint_spring
+from .scene import Design, SoftDisk, joint_spring_kwargs
 from .validation import check_range
 
 __all__ = [
@@ -316,15 +316,6 @@ def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element
                                     DEFAULT_ELEMENT if element is None else element, calibrated))
 
 
-def _spring_kwargs(rel, absolute) -> dict[str, float]:
-    """The joint spring as the keyword argument of :func:`~envs.evaluate.evaluate_designs`
-    (validated by :func:`envs.scene.joint_spring`; default: relative to each object)."""
-    rel, absolute = joint_spring(rel, absolute)
-    if rel is None:
-        return {"torsion_stiffness_nm_per_rad": absolute}
-    return {"torsion_stiffness_rel": rel}
-
-
 def _spaces() -> tuple[spaces.Box, spaces.Box]:
     action = spaces.Box(-1.0, 1.0, shape=(N_DESIGN,), dtype=np.float32)
     obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
@@ -534,7 +525,7 @@ class GripperDesignEnv(gym.Env):
         self.render_mode = render_mode
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
-        self.joint_spring = _spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces()
         self._disk: SoftDisk | None = None
         self._needs = np.zeros(len(NEED_KEYS))  # strain limit, friction coefficient
@@ -692,7 +683,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
-        self.joint_spring = _spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.max_episode_steps = max_episode_steps
         self.single_action_space, self.single_observation_space = _spaces()
         self.action_space = batch_space(self.single_action_space, self.num_envs)

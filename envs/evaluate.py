@@ -49,6 +49,7 @@ from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
     RELATIVE_FIELDS,
+    SPRING_TWICE,
     Design,
     SoftDisk,
     design_from_relative,
@@ -419,8 +420,7 @@ def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
     with the disk's own scale (see :func:`envs.scene.joint_spring`)."""
     if absolute is not None:
         if rel is not None:
-            raise ValueError("give the joint spring once: torsion_stiffness_rel (relative to the "
-                             "object) or torsion_stiffness_nm_per_rad (absolute), not both")
+            raise ValueError(SPRING_TWICE)
         return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0, math.inf,
                         low_open=True)
     rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,

@@ -47,6 +47,7 @@ __all__ = [
     "design_from_relative",
     "relative_from_design",
     "joint_spring",
+    "joint_spring_kwargs",
     "joint_spring_nm_per_rad",
 ]
 
@@ -358,6 +359,10 @@ class Design:
         return cls(*arr.tolist())
 
 
+SPRING_TWICE = ("give the joint spring once: torsion_stiffness_rel (relative to the object) or "
+                "torsion_stiffness_nm_per_rad (absolute), not both")
+
+
 def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
                  ) -> tuple[float | None, float | None]:
     """The joint torsion spring of a design problem, validated: ``(rel, None)`` or
@@ -377,12 +382,21 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
     """
     if torsion_stiffness_nm_per_rad is not None:
         if torsion_stiffness_rel is not None:
-            raise ValueError("give the joint spring once: torsion_stiffness_rel (relative to the "
-                             "object) or torsion_stiffness_nm_per_rad (absolute), not both")
+            raise ValueError(SPRING_TWICE)
         return None, check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad,
                                  0.0, math.inf, low_open=True)
     rel = PAPER_TORSION_STIFFNESS_REL if torsion_stiffness_rel is None else torsion_stiffness_rel
     return check_range("torsion_stiffness_rel", rel, 0.0, math.inf, low_open=True), None
+
+
+def joint_spring_kwargs(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
+                        ) -> dict[str, float]:
+    """The joint spring, validated, as the one keyword argument that gives it
+    (``torsion_stiffness_rel`` or ``torsion_stiffness_nm_per_rad``; see :func:`joint_spring`)."""
+    rel, absolute = joint_spring(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+    if rel is None:
+        return {"torsion_stiffness_nm_per_rad": absolute}
+    return {"torsion_stiffness_rel": rel}
 
 
 def joint_spring_nm_per_rad(disk: SoftDisk, torsion_stiffness_rel=None,

@@ -33,7 +33,7 @@ from envs.model.defaults import (
     MAX_FRICTION_COEFFICIENT,
 )
 from envs.model.family import resolve_model
-from envs.scene import PRESETS, Scene, SoftDisk, joint_spring
+from envs.scene import PRESETS, Scene, SoftDisk, joint_spring, joint_spring_kwargs
 from envs.validation import check_range
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
@@ -252,9 +252,7 @@ class DesignProblem:
     def joint_spring_kwargs(self) -> dict[str, float]:
         """The joint spring as keyword arguments of :func:`envs.evaluate_designs` and the envs
         (relative or absolute, as given)."""
-        if self.torsion_stiffness_rel is None:
-            return {"torsion_stiffness_nm_per_rad": self._torsion_absolute}
-        return {"torsion_stiffness_rel": self.torsion_stiffness_rel}
+        return joint_spring_kwargs(self.torsion_stiffness_rel, self._torsion_absolute)
 
     @classmethod
     def from_scene(cls, scene: str | Scene = "paper-r070",

@@ -154,7 +154,7 @@ def _problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fri
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
-    from envs.scene import joint_spring
+    from envs.scene import joint_spring_kwargs
 
     if obj is not None and scene is not None:
         raise ValueError("give the object once: a scene preset or an object (file), not both")
@@ -173,9 +173,7 @@ def _problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fri
     kwargs: dict[str, Any] = {"strain_limit": check_strain_limit(limit),
                               "friction_coefficient": check_friction(mu)}
     if spring_rel is not None or spring_nm is not None:
-        rel, absolute = joint_spring(spring_rel, spring_nm)
-        kwargs["torsion_stiffness_rel" if absolute is None else
-               "torsion_stiffness_nm_per_rad"] = rel if absolute is None else absolute
+        kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
     return (obj.disk if obj is not None else scene), kwargs
 
 
