@@ -3,12 +3,12 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean clean-cache
+.PHONY: demo test docs lint bench clean clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[all,dev]"
+	$(BIN)/python -m pip install --quiet -e ".[all,dev,docs]"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -17,6 +17,12 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/ruff check envs optim cli tests scripts
 	$(BIN)/python -m pytest -q
+	$(BIN)/mkdocs build --strict
+
+# the documentation site (mkdocs.yml): a strict build, then served at http://127.0.0.1:8000
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict
+	$(BIN)/mkdocs serve
 
 lint: $(STAMP)
 	$(BIN)/ruff check envs optim cli tests scripts
@@ -32,4 +38,4 @@ clean-cache:
 	rm -rf envs/__pycache__/numba-*
 
 clean: clean-cache
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out .pytest_cache site

@@ -1,0 +1,34 @@
+"""MkDocs hook: show the docstrings' Sphinx roles as cross-references.
+
+The package's numpy-style docstrings name objects with Sphinx roles (``:func:`envs.simulate```,
+``:class:`~envs.evaluate.DesignBounds```). mkdocstrings renders the role's name as plain text in
+front of the code span; this hook turns each role into an optional mkdocs-autorefs reference:
+a link where the object has an API page, the code span alone where it has none. A leading
+``~`` shows the last component only, as in Sphinx.
+
+It also drops the docstrings' parenthetical pointers to the model's development notes
+(``(CONVENTIONS.md)``), a file that is not part of the repository: the conventions themselves
+are stated on the documentation's page about the model.
+"""
+
+from __future__ import annotations
+
+import re
+
+_ROLE = re.compile(
+    r":(?:py:)?(?:func|class|meth|mod|data|attr|exc|obj|const):<code>(~?)([\w.]+)(\(\))?</code>"
+)
+
+
+_NOTES = re.compile(r" ?\((?:<code>)?(?:shared/)?CONVENTIONS\.md(?:</code>)?\)")
+
+
+def _reference(match: re.Match) -> str:
+    tilde, target, call = match.group(1), match.group(2), match.group(3) or ""
+    shown = target.rsplit(".", 1)[-1] if tilde else target
+    identifier = target.lstrip(".")
+    return f'<autoref identifier="{identifier}" optional><code>{shown}{call}</code></autoref>'
+
+
+def on_page_content(html: str, **kwargs) -> str:
+    return _NOTES.sub("", _ROLE.sub(_reference, html))
