@@ -122,7 +122,7 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "*_result.json in OUT_DIR) with the model the run used and with the "
                     "finite-element reference (same metrics and reward), and write verify.json "
                     "and verify.png (both rewards and rankings) to OUT_DIR. Each FEM grasp "
-                    "takes 0.3-2 s and is cached (out/cache/fem).")
+                    "is cached (out/cache/fem).")
     p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the run (psm-grasp optimize "
                    "--out, or the demo's out)")
     p.add_argument("--top", type=int, default=DEFAULT_TOP,
@@ -176,9 +176,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int,
                    help="parallel workers: local processes without --dask, LocalCluster "
                         "workers with --dask local (default: in-process, batched, already on "
-                        "every core; on one machine workers do not pay: 2 processes measured "
-                        "4200-4700 designs/s against 4400-4900 in process on 2 cores, and "
-                        "far less for CMA-ES's 9-design populations)")
+                        "every core; on one machine workers do not pay, least of all for "
+                        "CMA-ES's 9-design populations)")
     p.add_argument("--strain-limit", type=float, default=None,
                    help=f"admissible peak compression of the object, in (0, 1] (default: the "
                    f"object file's, else {DEFAULT_STRAIN_LIMIT})")
@@ -194,7 +193,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="an absolute joint torsion spring [N·m/rad] instead")
     p.add_argument("--element", default=None, choices=ELEMENTS,
                    help="element of the disk model (default nhquad: the default model, within "
-                   "2 %% RMS of the FEM; spring: the paper's fan, ~5x cheaper, 30-40 %% off)")
+                   "2 %% RMS of the FEM; spring: the paper's fan, cheaper, far off the FEM)")
     p.add_argument("--triangles", type=int, default=None,
                    help=f"contour points N (default 40 for nhquad, 20 for the fan), in [4, "
                    f"{MAX_TRIANGLES}] for the fan, [4, {MAX_TRIANGLES_FAMILY}] otherwise")

@@ -75,7 +75,7 @@ def add_policy_parsers(subparsers: Any) -> None:
                     "learning curve). The shipped policy was trained this way.")
     train.add_argument("--method", default="sac", choices=RL_METHODS)
     train.add_argument("--steps", type=int, default=DEFAULT_TRAIN_STEPS,
-                       help="designs evaluated in training (default %(default)s, ~5 min on 2 "
+                       help="designs evaluated in training (default %(default)s, minutes on 2 "
                        "cores)")
     train.add_argument("--seed", type=int, default=0)
     train.add_argument("--no-progress", action="store_true", help="no progress bar")

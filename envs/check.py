@@ -9,7 +9,7 @@ force and complementarity.
 
 It is independent of the solver on purpose: nothing here comes from the solver's code; the
 finger frames, the rounded-bar distance, the corners, the closed-jaw angle and the polygon tests
-are written again from ``shared/CONVENTIONS.md``. Only the Python wrapper (:func:`check_params`)
+are written again from ``docs/model.md``. Only the Python wrapper (:func:`check_params`)
 takes two things from the model, because they define the model being checked rather than how it
 is solved: the spring stiffness rule and the corner rounding radius (``spring_stiffness`` and
 ``corner_radius`` of :mod:`envs.model`). The compiled core gets plain numbers; the batch
@@ -317,7 +317,7 @@ def _npclip(a, lo, hi):
 
 @njit(inline="always", **_FLAGS)
 def _frame(prm, j, theta):
-    """Joint, unit axis ``e`` and inward face normal ``n`` of finger j (CONVENTIONS.md).
+    """Joint, unit axis ``e`` and inward face normal ``n`` of finger j (docs/model.md).
 
     Returns ``jx, jy, ex, ey, nx, ny``; j = 0 is the right finger, 1 the left one.
     """
@@ -923,7 +923,7 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     vals[CK_KINT] = k_int
     vals[CK_KEXT] = k_ext
     vals[CK_REST_CONTOUR] = 2 * r * math.sin(math.pi / n)
-    # area energy (CONVENTIONS.md): kappa = c_A K, K the plane-strain bulk modulus lambda + mu
+    # area energy (docs/model.md): kappa = c_A K, K the plane-strain bulk modulus lambda + mu
     nu = float(d.poisson_ratio)
     bulk = d.youngs_modulus_pa / (2 * (1 + nu) * (1 - 2 * nu))
     vals[CK_AREA_STIFF] = getattr(d, "area_stiffness_scale", 0.0) * bulk * d.thickness_m

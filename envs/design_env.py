@@ -477,9 +477,10 @@ class GripperDesignEnv(gym.Env):
     - `weights`: :class:`~envs.evaluate.RewardWeights`.
     - `n_triangles`, `n_rings`, `element`, `calibrated`: the member of the model family that
       solves each grasp, as in :func:`envs.simulate` (default: the default model, nh-quad with
-      `N = 40` contour points, 2 rings and its shipped calibration, within 2 % RMS and 4 % max
-      of the FEM closing angle; `element="spring"` is the paper's fan with `N = 20`, about 5x
-      cheaper and 30-40 % off the FEM at `s = 1`). `self.model` holds the resolved member.
+      `N = 40` contour points, 2 rings and its shipped calibration, chosen to be within 2 %
+      RMS and 4 % max of the FEM closing angle; `element="spring"` is the paper's fan with
+      `N = 20`, cheaper and far off the FEM at `s = 1`; docs/accuracy.md). `self.model` holds
+      the resolved member.
     - `torsion_stiffness_rel`: joint torsion spring `k_f` in the object's torque unit
       `s E t r^2` per radian (default: the paper gripper's 0.073 N·m/rad on its r = 0.07 m
       disk, 0.0149 per radian: the spring scales with each object like the torque, so an

@@ -156,10 +156,8 @@ class DesignBounds:
     rest clearance between the disk and the gripping faces in radii
     (:func:`~envs.scene.design_from_relative`). The model is invariant under this scaling, so
     a box means the same for every object: the paper's foam disks and the forceps' 2 mm TPU
-    beads alike. Every design of the default box is valid at rest (its clearance is positive)
-    and 82-84 % of its random designs grasp with both fingers, on every preset (2000 random
-    designs each; the previous box in metres: 48-73 % valid on the paper disks, 7-14 % on the
-    forceps' beads, of which under 1 % touched with both fingers).
+    beads alike. Every design of the default box is valid at rest (its clearance is positive),
+    and most of its random designs grasp with both fingers, on every preset.
 
     ==  ====================  ==========================  =======  =======
     #   field                 meaning                     low      high
@@ -756,8 +754,8 @@ def evaluate_designs(
         ``E`` and ``nu``, the disk's calibration scales ignored) on a structured mesh of
         ``fem_rings`` rings (element size ``r / fem_rings``; the default 12 gives 864
         quadratic triangles, ~3,500 unknowns, within ~0.5 % of the mesh-converged closing
-        angle), ramped from the open gripper to the design's torque. It costs 0.3-2 s per
-        design on one core (~10^4 times the point-spring model) and is cached on disk per
+        angle), ramped from the open gripper to the design's torque. It costs about 10^4
+        times the point-spring model (docs/performance.md) and is cached on disk per
         design (``$PSM_GRASP_CACHE/fem``, default ``out/cache/fem``), so a design is solved
         once; with an executor the designs run in parallel (one per task by default). The
         keys, their meaning and the reward are the same at both fidelities (see below);
@@ -792,12 +790,13 @@ def evaluate_designs(
           spacing, a light touch, counts with its physical width, not a whole facet), as far
           as the actuation grips the object. FEM: the share of the rim's length whose nodes
           press on each face (each node with its share of the rim), capped alike: the same
-          measure. Both rank 100 random designs a paper disk alike (Spearman 0.99; 0.95 for the
-          node count alone, whose facets the optimizer exploited with forces near zero).
+          measure (the node count alone would let an optimizer exploit facets with forces
+          near zero).
         - ``grip_share``: the share of the actuation torque that grips the object (not taken
           by the torsion springs or the joint stops), the smaller finger's (:func:`grip_share`):
           near 1 for a squeeze with little travel, 0 for fingers that merely touch the object
-          (such a design once scored contact with forces of 1e-7 N).
+          (a torque tuned so that the springs stop the fingers at the object, with contact
+          forces of 1e-7 N, earns no contact).
         - ``peak_strain``: max ``|L - L0| / L0`` over the springs (mesh edges) [-]; FEM:
           the largest principal engineering strain ``max |lambda - 1|``, the largest length
           change of any fibre (an edge's strain never exceeds it).
@@ -811,8 +810,8 @@ def evaluate_designs(
           the engineering strain of the most compressed radius, how deep the grasp presses
           into the object; the deformation the reward penalises. Unlike the peak strain, whose
           value under a finger's tip corner (a point load) depends on the mesh in either model,
-          it converges with the mesh: the default model and the FEM rank 100 random designs a
-          paper disk alike (Spearman 0.999, median ratio 1.004; peak log strain 0.93).
+          it converges with the mesh, and the default model and the FEM rank designs by it
+          alike (docs/accuracy.md).
         - ``strain_limit``: the limit used [-].
         - ``pin_force_n`` (B, 2): the force the fixed centre exerts on the object, x and y in
           the gripper frame [N]: what the frictionless contacts leave unbalanced (inclined jaws

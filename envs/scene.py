@@ -1,7 +1,7 @@
 """Scene description: the angular gripper, the soft disk and the named paper presets.
 
 All quantities are SI (metres, radians, newtons, N·m, pascals). The frame and the sign
-conventions are those of ``shared/CONVENTIONS.md``: x to the right, y up, the gripper's symmetry
+conventions are those of ``docs/model.md``: x to the right, y up, the gripper's symmetry
 axis is the y axis, the right joint is at ``(+d_3, 0)`` and the left one at ``(-d_3, 0)``, finger
 angles are measured from +y, positive when opening.
 """

@@ -1,18 +1,16 @@
 """A multi-fidelity finish: the reported optimum scored by a member that ranks like the FEM.
 
-An optimizer searching with the default model (nh-quad 40 x 2, ~1 ms a grasp) finds where that
-model is optimistic: its optima are light touches, whose peak compression the coarse mesh
-underestimates by ~20 %, and the reward (a difference of two similar terms) amplifies it, so
-the best reward it reports was a third above the FEM's. :func:`finish_result` re-scores the
-run's best distinct designs (:attr:`~optim.result.OptimResult.top_designs`) with
-:data:`RANKING_MEMBER` (nh-quad 96 x 6, 10-20 ms a grasp, within ~3 % of the FEM's reward on
-such optima) and reports the best of them by that member: its reward, its metrics and the model
-that produced them (``extra["reward_model"]``). It costs ten evaluations of the finer member,
-well under a second (measured: 0.06-0.08 s after CMA-ES runs of 0.5-1.7 s).
+An optimizer searching with the default model (nh-quad 40 x 2) finds where that model is
+optimistic: its optima are light touches, whose peak compression the coarse mesh underestimates,
+and the reward (a difference of two similar terms) amplifies it, so the search model's own
+reward of its optimum is well above the FEM's. :func:`finish_result` re-scores the run's best
+distinct designs (:attr:`~optim.result.OptimResult.top_designs`) with :data:`RANKING_MEMBER`
+(nh-quad 96 x 6, which ranks designs like the FEM) and reports the best of them by that member:
+its reward, its metrics and the model that produced them (``extra["reward_model"]``). It costs
+ten evaluations of the finer member (their time is in ``extra["finish"]``).
 
-A local search on the finer member instead finds *its* optimistic spots (a cherry tomato:
-0.0203 by it against the FEM's 0.0166); choosing among designs the coarse search found, and
-scoring them finely, does not.
+It chooses among designs the coarse search found: a local search on the finer member instead
+finds that member's own optimistic spots.
 """
 
 from __future__ import annotations
@@ -31,10 +29,10 @@ from .result import OptimResult, to_jsonable
 
 __all__ = ["RANKING_MEMBER", "FINISH_TOP", "finish_result", "member_of"]
 
-# the finer member whose reward ranks random designs like the FEM's (Spearman 0.991 / 0.993 /
-# 0.994 on the paper disks against the default's 0.981-0.987, and 0.99 where the default drops
-# to 0.88-0.92 at a soft strain limit of 0.15; scripts/fidelity.py): the re-ranking to trust
-# when the FEM is not at hand, and the member that reports an optimization's optimum
+# the finer member whose reward ranks random designs like the FEM's, also at soft strain
+# limits where the default's ranking drops (scripts/fidelity.py, docs/accuracy.md): the
+# re-ranking to trust when the FEM is not at hand, and the member that reports an
+# optimization's optimum
 RANKING_MEMBER = {"n_triangles": 96, "n_rings": 6, "element": "nhquad", "calibrated": True}
 FINISH_TOP = 10  # distinct designs re-scored (what an OptimResult keeps)
 

@@ -332,7 +332,7 @@ def run_demo(out_dir: Path) -> int:
     ``demo_front_result.json`` and its front ``demo_front_pareto.png``. Then four distinct
     designs, CMA-ES's optimum and the ends and knee of the front, are re-scored by the FEM
     (``verify.json``, ``verify.png``): designs that differ, so that the FEM's ranking can
-    disagree with the model's. Takes well under 2 minutes on 2 cores once the kernels are
+    disagree with the model's. Takes seconds on 2 cores once the kernels are
     compiled.
     """
     from .verify import print_report, verify_figure, verify_result

@@ -2,7 +2,7 @@
 
 The K best distinct designs of a run (:attr:`OptimResult.top_designs`) are scored again by
 :func:`envs.evaluate.evaluate_designs` with the model the run used, with a finer point-spring
-member that ranks designs like the FEM (:data:`RANKING_MEMBER`, 10-20 ms a design) and with the
+member that ranks designs like the FEM (:data:`RANKING_MEMBER`) and with the
 finite-element reference (``fidelity="fem"``, same metrics and reward), and the three rankings
 are written beside the run: ``verify.json`` and ``verify.png`` (reward per design and fidelity,
 and the rankings).

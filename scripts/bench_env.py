@@ -8,7 +8,7 @@ stable-baselines3 ``VecEnv`` of :func:`envs.sb3_env.sb3_vec_env` (one batched ev
 step, every sub-env resetting itself with a new object drawn from a distribution holding only
 that disk); it is skipped if stable-baselines3 is not installed.
 
-Targets of the project's issue 3: batched >= 20,000 designs/s and >= 10x the step loop.
+Targets: batched >= 20,000 designs/s and >= 10x the step loop.
 
 Usage::
 

@@ -82,12 +82,14 @@ def policy_time_ms(policy, objects, repeat: int = 200) -> float:
     return (time.perf_counter() - t0) / repeat * 1e3
 
 
-def get_policy(seed: int, steps: int, folder: Path, objects):
-    path = folder / f"seed{seed}"
+def get_policy(seed: int, steps: int, folder: Path, objects, tail_scale: float = 1.0):
+    """A trained policy: read from ``folder`` when it was trained before, else trained and
+    saved there."""
+    path = folder / (f"seed{seed}" if tail_scale else f"seed{seed}_no_tail")
     if (path / "policy.json").is_file():
         return load_policy(path)
     policy = train_policy("sac", steps=steps, seed=seed, heldout=objects, curve_points=20,
-                          name=f"seed{seed}")
+                          name=path.name, tail_scale=tail_scale, progress=False)
     policy.save(path)
     return policy
 
@@ -219,8 +221,7 @@ def main() -> None:
               f"trained in {row['training_s'] or 0:.0f} s; {row['policy_ms']:.3f} ms a design",
               flush=True)
     if args.ablation:
-        plain = train_policy("sac", steps=args.steps, seed=0, heldout=objects, curve_points=20,
-                             name="no bounded tail", tail_scale=0.0)
+        plain = get_policy(0, args.steps, args.out / "bench_policy", objects, tail_scale=0.0)
         reward, holds = policy_alone(plain, objects)
         report["ablation_no_tail"] = {
             "alone": {"mean": float((reward / optima).mean()),

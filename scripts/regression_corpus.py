@@ -14,8 +14,8 @@ Stores in ``tests/data/regression_corpus.npz``:
   of the object-relative box (:class:`envs.DesignBounds`) on the three paper disks, and every
   preset at three torques, with the same answers (keys ``default_*``), and for the designs
   also the peak compression, the contact score, the pin force and the required friction. The
-  fan rows above were stored when the fan was the default; the ring meshes have their own
-  kernels (element energies, the scalar banded factor), which these rows pin.
+  ring meshes have their own kernels (element energies, the scalar banded factor), which these
+  rows pin beside the fan's.
 
 ``tests/test_regression.py`` recomputes every answer and compares. Rerun this script only for
 an intended change of answers, and say in the commit which rows changed and why.

@@ -157,7 +157,7 @@ def test_random_designs_same_verdict(design_results):
 
 
 def _face_frame(res, j):
-    """Inward face normal of finger j (CONVENTIONS.md)."""
+    """Inward face normal of finger j (docs/model.md)."""
     th = res.jaw_angles_rad[j]
     return np.array([-math.cos(th), math.sin(th)]) if j == 0 else np.array(
         [math.cos(th), math.sin(th)])

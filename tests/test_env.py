@@ -648,7 +648,7 @@ def test_a_nan_row_is_reported_and_the_others_answered():
     (np.nan, r"n_triangles must be an integer"),
 ])
 def test_envs_check_the_mesh_size_at_construction(value, match):
-    # before: 20.7 ran N = 20 silently and 100000 failed only at the first step
+    # at construction, not at the first step; 20.7 is not N = 20
     with pytest.raises(ValueError, match=match):
         GripperDesignEnv(n_triangles=value, element="spring")
     with pytest.raises(ValueError, match=match):

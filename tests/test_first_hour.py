@@ -1,4 +1,4 @@
-"""A designer's first hour (issue 15): options checked before work, honest output, safe executors.
+"""A designer's first hour: options checked before work, honest output, safe executors.
 
 Each test reproduces one report of the issue and fails on the behaviour it describes.
 """
@@ -138,7 +138,7 @@ def test_only_public_statuses_reach_results():
 
 def test_a_forking_process_pool_works_after_the_kernels_ran_here():
     # the batch rows run on Python threads (envs.parallel), not on numba's OpenMP pool, which a
-    # child forked after it started could not use (it used to crash the pool)
+    # child forked after it started could not use (it would crash the pool)
     designs = DesignBounds().sample(np.random.default_rng(0), 8, DISK)
     here = evaluate_designs(designs, DISK)  # the kernels and the row threads ran here
     pool = ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork"))
@@ -207,8 +207,7 @@ def test_convergence_chart_curves_are_monotone():
 
 
 def test_the_forceps_objects_are_observable():
-    # before: the TPU scale 0.033 took the softest draws below the observable 1 kPa and PPO
-    # crashed mid-training on forceps scenes; the observation is now scale-free
+    # the forceps' TPU (calibration scale 0.033) is observable: the observation is scale-free
     from envs.design_env import observe
 
     for name in PRESETS:
@@ -237,8 +236,8 @@ def test_compile_notice_only_when_the_kernels_are_not_cached(tmp_path, monkeypat
 
 
 def test_the_fidelity_script_accepts_its_default_members():
-    # session 12's validation required a shipped scale and refused the default 160x8 (8 rings
-    # have none; evaluated, a member takes the shipped scale where there is one)
+    # a member without a shipped scale (8 rings have none) is valid: evaluated, a member takes
+    # the shipped scale where there is one
     import argparse
 
     fidelity = _script("fidelity")

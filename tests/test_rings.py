@@ -1,4 +1,4 @@
-"""Ring meshes of the model family (CONVENTIONS.md): geometry, energy, Newton matrix, solves.
+"""Ring meshes of the model family (docs/model.md): geometry, energy, Newton matrix, solves.
 
 The paper's fan is the one-ring member (its answers are pinned by the regression corpus); these
 tests cover what rings add: the mesh's rest geometry, exact derivatives of the energy on it,

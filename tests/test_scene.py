@@ -21,7 +21,7 @@ def test_presets_build_and_match_conventions():
 
 
 def test_rest_gap_about_one_millimetre_for_paper_disks():
-    # CONVENTIONS.md: with Tables 1 and 2 the rest gap between disk and each face is ~1 mm
+    # docs/model.md: with Tables 1 and 2 the rest gap between disk and each face is ~1 mm
     for name in ("paper-r050", "paper-r070", "paper-r100"):
         s = Scene.preset(name)
         g, d = s.gripper, s.disk

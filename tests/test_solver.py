@@ -291,8 +291,8 @@ def test_light_tip_corner_contact_converges():
 
 def test_tip_corner_meeting_an_edge_outside_its_swept_band_converges():
     # short fingers on a turned disk: a tip corner runs into a contour edge that was not near
-    # its path at rest. The interior-point run used to crawl for hundreds of iterations
-    # against the anti-tunnelling wall; now the edge joins the candidates and the solve ends.
+    # its path at rest: the edge must join the candidates, or the interior point crawls for
+    # hundreds of iterations against the anti-tunnelling wall.
     g = replace(R070.gripper, finger_length_m=0.08579017217720118,
                 rest_angle_rad=0.5286745051921705, joint_offset_m=0.031435695473990236,
                 finger_width_m=0.010201435557562994)

@@ -5,10 +5,6 @@ The package's numpy-style docstrings name objects with Sphinx roles (``:func:`en
 front of the code span; this hook turns each role into an optional mkdocs-autorefs reference:
 a link where the object has an API page, the code span alone where it has none. A leading
 ``~`` shows the last component only, as in Sphinx.
-
-It also drops the docstrings' parenthetical pointers to the model's development notes
-(``(CONVENTIONS.md)``), a file that is not part of the repository: the conventions themselves
-are stated on the documentation's page about the model.
 """
 
 from __future__ import annotations
@@ -20,9 +16,6 @@ _ROLE = re.compile(
 )
 
 
-_NOTES = re.compile(r" ?\((?:<code>)?(?:shared/)?CONVENTIONS\.md(?:</code>)?\)")
-
-
 def _reference(match: re.Match) -> str:
     tilde, target, call = match.group(1), match.group(2), match.group(3) or ""
     shown = target.rsplit(".", 1)[-1] if tilde else target
@@ -31,4 +24,4 @@ def _reference(match: re.Match) -> str:
 
 
 def on_page_content(html: str, **kwargs) -> str:
-    return _NOTES.sub("", _ROLE.sub(_reference, html))
+    return _ROLE.sub(_reference, html)

@@ -14,7 +14,7 @@ provides the two tools behind those studies:
 * :func:`choose_n_triangles` picks the smallest ``N`` whose closing angle and peak strain stay
   within a relative tolerance of a fine PSM reference over a torque range (cached per scene).
 
-Conventions (``shared/CONVENTIONS.md``): the jaw angle of a reference curve is the finger angle
+Conventions (``docs/model.md``): the jaw angle of a reference curve is the finger angle
 ``theta`` from the +y axis [rad] (mean of the right and left fingers); the closing angle is
 ``theta_a0 - theta`` with ``theta_a0`` the gripper's rest angle; relative errors are
 ``closing_psm / closing_ref - 1``. Every PSM curve is solved as a loading ramp

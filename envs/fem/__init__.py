@@ -1,7 +1,7 @@
 """Finite-element reference for the soft-disk grasp (scikit-fem, quadratic triangles).
 
 This package solves the same quasi-static grasp as the point-spring model (see
-``shared/CONVENTIONS.md``) with a continuum model, so that the point-spring results can be
+``docs/model.md``) with a continuum model, so that the point-spring results can be
 checked against a mesh-converged reference:
 
 * the disk is meshed with quadratic triangles: isoparametric P2 geometry (``MeshTri2``, the

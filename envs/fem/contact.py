@@ -66,7 +66,7 @@ class _Obstacle:
 
 
 class _JawFace(_Obstacle):
-    """Gripping face of one finger (CONVENTIONS.md): ``g = n.(p - J) - w/2``, 0 <= e.(p-J) <= l."""
+    """Gripping face of one finger (docs/model.md): ``g = n.(p - J) - w/2``, 0 <= e.(p-J) <= l."""
 
     def __init__(self, scene: Scene, side: int, qi: int) -> None:
         self.gripper = scene.gripper

@@ -1,7 +1,8 @@
 """Defaults of the model, each stated once, with where it comes from.
 
-Paper values are from Tables 1 and 2 of the source paper (``shared/paper.md``) as fixed by
-``shared/CONVENTIONS.md``; the others are choices of this package, with the reason.
+Paper values are from Tables 1 and 2 of the source paper (*Point-spring modeling of the grasp
+of a deformable object by an angular gripper*), as the model's conventions fix them
+(``docs/model.md``); the others are choices of this package, with the reason.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ MODEL_MAX_TRIANGLES = 20000
 DEFAULT_N_TRIANGLES = 20  # the paper's mesh; ~3 % of the FEM closing angle after calibration
 PAPER_N_TRIANGLES = DEFAULT_N_TRIANGLES  # the paper's fan: N = 20, one ring, springs only
 
-# --- the default model: a member of the family (CONVENTIONS.md) --------------------------------
+# --- the default model: a member of the family (docs/model.md) --------------------------------
 # The cheapest member within 2 % RMS and 4 % max of the FEM closing angle over 0.05-0.5 N·m on
 # disks it was not fitted to (scripts/calibrate_family.py --element nhquad, 2026-11-24; held
 # out: r = 0.06 / 0.085 m, E = 50 / 300 kPa, nu = 0.30 / 0.40): nh-quad, N = 40, M = 2 with
@@ -60,9 +61,9 @@ DEFAULT_MODEL_RINGS = 2
 DEFAULT_TOLERANCE = 0.04  # largest relative closing-angle error the default model is chosen for
 DEFAULT_PHASE_RAD = math.pi / 2  # first contour point at the top: mirror-symmetric for even N
 STIFFNESS_RULES = ("van_gelder", "cst_fit")
-DEFAULT_STIFFNESS_RULE = "van_gelder"  # CONVENTIONS.md: the area rule
+DEFAULT_STIFFNESS_RULE = "van_gelder"  # docs/model.md: the area rule
 
-# --- gripper and material (CONVENTIONS.md, paper Tables 1 and 2) -----------------------------
+# --- gripper and material (docs/model.md, paper Tables 1 and 2) -----------------------------
 PAPER_TORSION_STIFFNESS_NM_PER_RAD = 0.073  # k_f of the paper gripper
 DEFAULT_YOUNGS_MODULUS_PA = 100e3
 DEFAULT_POISSON_RATIO = 0.45
@@ -93,10 +94,10 @@ CORNER_ROUNDING = 1e-3
 # admissible compressive strain of the grasped object: a limit on the peak compression (the
 # largest shortening of a radius by the fingers, over r; envs.evaluate_designs), the
 # optimizers' and the batch evaluator's default; the environment draws its own per object.
-# It was 0.15 on the peak log strain (soft tissue and produce bruise at strains of 0.1-0.2);
-# the compression, which converges with the mesh where the point-load strain does not, is
-# 0.66 of it at the median of 300 random designs on the paper disks (FEM: 0.066 against
-# 0.100), so 0.10 keeps the reward's balance of contact against deformation
+# Soft tissue and produce bruise at strains of 0.1-0.2 (0.15 on the peak log strain); the
+# compression, which converges with the mesh where the point-load strain does not, is 0.66 of
+# the log strain at the median of 300 random designs on the paper disks (FEM: 0.066 against
+# 0.100), so 0.10 on it is that limit
 DEFAULT_STRAIN_LIMIT = 0.10
 
 # Coulomb friction coefficient between the fingers and the object: a design whose grasp needs

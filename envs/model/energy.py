@@ -14,7 +14,7 @@ Terms
 * area (each fan triangle centre, ``q_i``, ``q_i+1``, when ``k_A > 0``): ``k_A A0 / 2
   (ln(A / A0))^2`` with ``A`` the signed area (counter-clockwise positive) and ``A0`` its rest
   value; infinite for ``A <= 0``, so a solver that keeps the energy finite keeps every triangle
-  unfolded (CONVENTIONS.md, model family);
+  unfolded (docs/model.md, model family);
 * constant-strain neo-Hookean triangle (``P_MU > 0``): the FEM reference's energy on each
   linear triangle of the mesh;
 * nh-quad (``P_MU > 0``, ``P_LAM = 0``, ``P_QUAD > 0``): each triangle's neo-Hookean energy

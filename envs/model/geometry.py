@@ -1,6 +1,6 @@
 """Geometry of the model: the disk's contour points and the two finger bars.
 
-Conventions of ``shared/CONVENTIONS.md``: x to the right, y up, the gripper's symmetry axis is
+Conventions of ``docs/model.md``: x to the right, y up, the gripper's symmetry axis is
 the y axis, the right finger's joint at ``(+d_3, 0)`` and the left one's at ``(-d_3, 0)``, finger
 angles from +y, positive when opening. Finger ``j`` (0 right, 1 left) at angle ``theta`` has the
 unit axis ``e`` and the inward face normal ``n``::

@@ -1,6 +1,6 @@
 """Deformation measures of a state of the fan, compiled (they run on every solved grasp).
 
-Peak deformation per CONVENTIONS.md: the largest ``|L - L0| / L0`` over the radial and contour
+Peak deformation per docs/model.md: the largest ``|L - L0| / L0`` over the radial and contour
 springs, and the largest contour-point displacement over r; and, per triangle, the largest
 principal logarithmic (Hencky) strain ``max |ln lambda|`` of its constant deformation gradient,
 the measure the FEM reference reports.

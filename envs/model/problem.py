@@ -245,7 +245,7 @@ def pack_params(cols: SceneColumns, n_triangles: int, stiffness_rule: str = "van
         Rings ``M`` of the point mesh (1: the paper's fan; :mod:`envs.model.rings`). Ring
         meshes take the area rule on every edge (``stiffness_rule`` must be ``"van_gelder"``).
     element
-        ``"spring"`` (springs and the area energy, CONVENTIONS.md), ``"cst"`` (the
+        ``"spring"`` (springs and the area energy, docs/model.md), ``"cst"`` (the
         constant-strain neo-Hookean triangle of the FEM's material instead, scaled by the
         disk's ``stiffness_scale``) or ``"nhquad"`` (those triangles without their volumetric
         term, which acts once per quad; evenly spaced rings; ``n_rings >= 2``).

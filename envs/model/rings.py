@@ -1,6 +1,6 @@
 """The disk's point mesh: the paper's fan (one ring) and the ring meshes of the model family.
 
-Layout (CONVENTIONS.md, model family), in units of the radius r:
+Layout (docs/model.md, model family), in units of the radius r:
 
 * ``M`` rings ``k = 1 .. M`` of ``N`` points each, point ``(k, i)`` at angle
   ``phase + 2 pi i / N`` on the circle of radius ``rho_k``; ring ``M`` is the contour

@@ -1,6 +1,6 @@
 """Spring stiffness rules of the fan (per unit ``s E t``, and in N/m for a disk).
 
-``"van_gelder"`` is the area rule of CONVENTIONS.md, ``k_c = s E t sum_e A_e / |c|^2`` over the
+``"van_gelder"`` is the area rule of docs/model.md, ``k_c = s E t sum_e A_e / |c|^2`` over the
 triangles e that share spring c; ``"cst_fit"`` is a Poisson-aware rule. The disk's
 ``contour_stiffness_ratio`` multiplies the contour springs only, on top of ``s``.
 """
@@ -71,7 +71,7 @@ def spring_stiffness(
     radius_m
         Disk radius ``r`` [m] (the rules are scale free; kept for clarity of units).
     rule
-        ``"van_gelder"``: area rule ``k_c = s E t sum_e A_e / |c|^2`` of CONVENTIONS.md.
+        ``"van_gelder"``: area rule ``k_c = s E t sum_e A_e / |c|^2`` of docs/model.md.
         ``"cst_fit"``: Poisson-aware rule; the three spring stiffnesses of each triangle are the
         least-squares fit of its plane-stress constant-strain (linear FEM) stiffness matrix, in
         the spirit of Lloyd, Szekely and Harders (2007); shared springs add both triangles'.

@@ -29,7 +29,7 @@ CORNER_NEAR = 0.25  # corner-edge constraints for edges this close to a corner's
 # off would need the disk squeezed by a whole radius to touch it (the polygon's far half). On
 # 4000 random fan designs (N = 20) per paper disk the far half's 20 constraints cost 15-20 % of
 # the solve (each is evaluated in every Newton matrix and merit); an edge met later joins in
-# the next round (_grow_candidates), which raised the mean iterations by 0.3 (session 14)
+# the next round (_grow_candidates), which costs 0.3 iterations on the mean
 FACE_NEAR = 1.0
 CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
 

@@ -60,10 +60,10 @@ MAX_POINT_STEP = 0.1  # largest point move of one step [scaled by the radius]
 MAX_FINGER_STEP = 0.05  # largest finger turn of one step [rad]
 GAP_TARGET = 0.05  # a shrinking gap's share left after a step cut back for it
 # mu is cut once the barrier problem is solved to CENTRALITY * mu (stationarity and every
-# lam g - mu). Measured on 4000 random fan designs and 2000 of the default model per paper disk
-# (session 13): 10 -> 100 takes the mean iterations from 24.0-24.6 to 19.6-20.9 (fan) and from
-# 16.7-17.3 to 13.1-13.6 (default; its asymmetric answers 71-80 -> 37), convergence unchanged;
-# 30 and 300 cost 1-2 iterations more, 1000 undoes the gain on the fan
+# lam g - mu). Measured on 4000 random fan designs and 2000 of the default model per paper disk:
+# 100 against 10 takes the mean iterations from 24.0-24.6 to 19.6-20.9 (fan) and from 16.7-17.3
+# to 13.1-13.6 (default; its asymmetric answers 71-80 -> 37), convergence unchanged; 30 and 300
+# cost 1-2 iterations more, 1000 undoes the gain on the fan
 CENTRALITY = 100.0
 
 

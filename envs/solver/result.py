@@ -70,7 +70,7 @@ class GraspResult:
         Outer rounds updating the contact candidate set.
     peak_log_strain : float
         Largest principal logarithmic (Hencky) strain ``max |ln lambda|`` over the fan
-        triangles [-]: the FEM reference's measure (CONVENTIONS.md); infinite where a triangle
+        triangles [-]: the FEM reference's measure (docs/model.md); infinite where a triangle
         has folded.
     peak_compression : float
         Largest shortening of a radius by the fingers, ``max (r - |p - C|) / r`` over the
