@@ -164,8 +164,8 @@ def paper_distribution() -> ObjectDistribution:
     """Objects identical to the paper-r070 disk (the strain limit does not change the solve)."""
     d = paper_disk()
     return ObjectDistribution(
-        radii_m=(d.radius_m,), youngs_modulus_range_pa=(d.youngs_modulus_pa,) * 2,
-        poisson_ratio=d.poisson_ratio, thickness_m=d.thickness_m,
+        radius_range_m=(d.radius_m,) * 2, youngs_modulus_range_pa=(d.youngs_modulus_pa,) * 2,
+        poisson_ratio_range=(d.poisson_ratio,) * 2, thickness_range_m=(d.thickness_m,) * 2,
         stiffness_scale=d.stiffness_scale)
 
 
