@@ -3,7 +3,9 @@ and the FEM (envs.model.holding, envs.solver.reaction, the FEM's contact list)."
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -158,3 +160,34 @@ def test_the_point_spring_model_carries_what_the_fem_carries():
     mu_p, mu_f = psm["required_friction"][both], fem["required_friction"][both]
     assert np.median(np.abs(mu_p - mu_f) / mu_f) <= 0.05
     np.testing.assert_array_equal(psm["holds"][both], fem["holds"][both])
+
+
+def test_an_optimizer_given_a_friction_returns_a_design_that_holds_with_it():
+    from optim import DesignProblem, optimize
+
+    for mu in (0.3, 0.15):
+        result = optimize("cmaes", DesignProblem(R070.disk, friction_coefficient=mu),
+                          budget=400, seed=0)
+        m = result.best_metrics
+        assert result.extra["grasp_found"] and m["holds"]
+        assert m["required_friction"] <= mu and m["friction_coefficient"] == mu
+
+
+@pytest.mark.parametrize("argv", [[], ["--object", "examples/objects/foam_disk.toml"]],
+                         ids=["paper-r070", "foam-disk"])
+def test_the_reported_optimum_is_the_fem_s_within_ten_percent(argv, tmp_path, capsys):
+    """psm-grasp optimize --budget 1000 --verify-top 1: the reward the run reports for its best
+    design (the finer member's, after the finish) within 10 % (+ 0.002) of the FEM's."""
+    pytest.importorskip("skfem")
+    from cli.main import main
+
+    root = Path(__file__).resolve().parents[1]
+    argv = [a if not a.endswith(".toml") else str(root / a) for a in argv]
+    assert main(["optimize", "--budget", "1000", "--verify-top", "1", "--no-progress",
+                 "--out", str(tmp_path), *argv]) == 0
+    report = json.loads((tmp_path / "verify.json").read_text())
+    s = report["summary"]
+    assert s["best_confirmed"]
+    assert abs(s["reported_reward"] - s["fem_reward_of_reported"]) <= (
+        0.10 * abs(s["fem_reward_of_reported"]) + 0.002)
+    assert s["reward_model"]["n_rings"] == 6
