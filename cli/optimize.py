@@ -44,6 +44,11 @@ def _optimize_command(args: argparse.Namespace) -> int:
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
     check_output_dir("--out", args.out)
+    if args.method == "policy":  # an object the policy cannot observe, before any work
+        target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
+                                            obj, args.strain_limit, args.friction,
+                                            args.joint_spring, args.joint_spring_nm_per_rad)
+        run.check_observable(target, kwargs)
     if args.verify_top is not None:
         check_integer("--verify-top", args.verify_top, 1, MAX_TOP)
         if not run.fem_available():

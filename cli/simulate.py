@@ -164,8 +164,12 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
     print(f"  peak compr.    : {res.peak_compression:.4%}")
     print(f"  pin force      : ({res.pin_force_n[0]:.4g}, {res.pin_force_n[1]:.4g}) N, moment "
           f"{res.pin_moment_nm:.3g} N·m (what the fixed centre carries)")
+    touching = all(res.contact_mask[j].any() or res.corner_forces_n[j].sum() > 0.0
+                   for j in range(2))
+    verdict = ("holds" if res.holds(friction) else "would slip" if touching and res.converged
+               else "no grasp: a finger does not touch the object")
     print(f"  friction needed: {res.required_friction:.4g} to hold it without the pin; with "
-          f"{friction:g}: " + ("holds" if res.holds(friction) else "would slip"))
+          f"{friction:g}: {verdict}")
     print(f"  stable         : {res.stable}")
     print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
           f"moment {res.kkt.moment_residual_rel:.1e}")

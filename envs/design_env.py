@@ -83,7 +83,7 @@ class ObjectDistribution:
     youngs_modulus_range_pa
         Young's modulus [Pa].
     poisson_ratio_range
-        Poisson's ratio [-], inside (-1, 0.5).
+        Poisson's ratio [-], inside [0, 0.5) (the observable range).
     thickness_range_m
         Thickness [m].
     strain_limit_range
@@ -431,7 +431,7 @@ class GripperDesignEnv(gym.Env):
       the object (`w_contact = 1`, `c_max = 0.5`), and `eps` the peak compression, the
       largest shortening of a radius by the fingers over r (`w_deform = 0.25`, `q_max = 4`);
     - a grasp that would **slip** (it needs friction `mu_req > mu`): *-1 - w_slip x / (1 + x)*,
-      `x = mu_req / mu - 1`, in `(-1.5, -1)` (`w_slip = 0.5`);
+      `x = mu_req / mu - 1`, in `[-1.5, -1)` (`w_slip = 0.5`);
     - a **miss** (a finger does not touch): *-1.5 - w_miss m - w_gap g / (1 + g)*, `m` the
       fingers missing, `g` the largest gap of such a finger to the disk in radii, in
       `(-3, -2]` (`w_miss = 0.5`, `w_gap = 0.5`): closer fingers score higher;

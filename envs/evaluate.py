@@ -257,8 +257,9 @@ class RewardWeights:
        strain_limit, deform_cap)``, in ``[-F, contact * contact_cap]`` with ``F = deform *
        deform_cap`` (-1 with the defaults);
     2. a grasp that would **slip** (it needs more friction than ``mu``):
-       ``-F - slip * x / (1 + x)``, ``x = required_friction / mu - 1`` (1 for an infinite
-       need), in ``(-F - slip, -F)``: the less friction it needs, the higher;
+       ``-F - slip * x / (1 + x)``, ``x = required_friction / mu - 1`` (``x / (1 + x)`` = 1
+       for an infinite need), in ``[-F - slip, -F)``: the less friction it needs, the
+       higher;
     3. a **miss** (converged, a finger not touching the object):
        ``-F - slip - miss * m - gap * g / (1 + g)`` with ``m`` the fingers not touching and
        ``g`` the largest gap of such a finger to the disk, in radii: closer fingers score
@@ -268,7 +269,7 @@ class RewardWeights:
        it is from valid (overlap depth and the other violated limits, in radii or radians;
        :func:`rest_violation`); ``invalid`` at least ``fail``.
 
-    With the defaults: holds ``[-1, 0.5]``, slips ``(-1.5, -1)``, misses ``(-3, -2]``, a failure
+    With the defaults: holds ``[-1, 0.5]``, slips ``[-1.5, -1)``, misses ``(-3, -2]``, a failure
     -3, invalid designs ``[-4.5, -3.5]``. Weights that would break the order are rejected.
 
     Parameters

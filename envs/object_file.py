@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .model.defaults import DEFAULT_STIFFNESS_SCALE
+from .model.defaults import DEFAULT_STIFFNESS_SCALE, MAX_FRICTION_COEFFICIENT
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
 from .validation import check_range
 
@@ -52,7 +52,7 @@ OBJECT_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
     "thickness_m": (0.0, math.inf, True, False, True),
     "stiffness_scale": (0.0, math.inf, True, False, False),
     "strain_limit": (0.0, 1.0, True, False, False),
-    "friction_coefficient": (0.0, math.inf, False, False, False),
+    "friction_coefficient": (0.0, MAX_FRICTION_COEFFICIENT, True, False, False),
 }
 # key -> (low, high, low_open, high_open, required) of the [gripper] table
 GRIPPER_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {

@@ -4,7 +4,7 @@ arguments checked outside it.
 Gymnasium's :class:`~gymnasium.wrappers.PassiveEnvChecker` (which ``gym.make`` puts around every
 env unless told not to) marks its first ``reset`` as checked *before* calling the env, and keeps
 that reset's data for its first ``step`` check only when the call returns. A first reset the env
-refuses (an unknown option, a strain limit outside (0, 1], ...) leaves it marked but without
+refuses (an unknown option, a strain limit outside (0, 0.5], ...) leaves it marked but without
 data, and every later first ``step`` then fails in its check with a ``TypeError``: one typo
 would break the env for good. So the registered entry point, :func:`make_env`, builds the
 checker itself, with :class:`ResetCheck` around it, and the registration disables the checker

@@ -126,11 +126,11 @@ class _BatchedVecEnvMethods:
     # --- reset and step ------------------------------------------------------------------------
 
     def reset(self) -> np.ndarray:
-        """Reset every sub-env; return the observations, float32 (num_envs, 5).
+        """Reset every sub-env; return the observations, float32 (num_envs, 4).
 
         Uses the seeds of :meth:`seed` (sub-env ``i`` gets ``seed + i``) and the options of
-        :meth:`set_options` (``disk``, ``strain_limit``), then forgets both, as SB3's vector envs
-        do. The objects' info goes to ``reset_infos``.
+        :meth:`set_options` (``disk``, ``strain_limit``, ``friction_coefficient``), then forgets
+        both, as SB3's vector envs do. The objects' info goes to ``reset_infos``.
         """
         n = self.num_envs
         self.reset_infos = [{} for _ in range(n)]

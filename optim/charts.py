@@ -141,7 +141,9 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
         row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)")
         return _save(fig, path)
-    res = simulate(scene, result.best_design["torque_nm"], **model_of(obj))
+    # the member that reported the metrics in the title (the finer one after the finish)
+    member = result.extra.get("reward_model") or model_of(obj)
+    res = simulate(scene, result.best_design["torque_nm"], **member)
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
                        figsize=(6.0, 6.0))
     return _save(fig, path)

@@ -109,6 +109,10 @@ def check_friction(friction_coefficient: Any) -> float:
 def paper_design(scene: str | Scene = "paper-r070", torque_nm: float = 0.1) -> np.ndarray:
     """The scene's own gripper and placement as a design row (6,) in SI units.
 
+    The row has no joint spring: evaluated by :func:`envs.evaluate_designs` with its default,
+    the spring is relative to the disk (the paper gripper's own 0.073 N·m/rad only on the
+    r = 0.07 m disk); pass ``torsion_stiffness_nm_per_rad`` for the scene's own.
+
     Parameters
     ----------
     scene
@@ -275,9 +279,9 @@ class DesignProblem:
             scene = Scene.preset(scene)
         if not isinstance(scene, Scene):
             raise ValueError(f"scene must be a preset name or a Scene, got {scene!r}")
-        if kwargs.get("torsion_stiffness_rel") is None:
-            kwargs.setdefault("torsion_stiffness_nm_per_rad",
-                              scene.gripper.torsion_stiffness_nm_per_rad)
+        if (kwargs.get("torsion_stiffness_rel") is None
+                and kwargs.get("torsion_stiffness_nm_per_rad") is None):
+            kwargs["torsion_stiffness_nm_per_rad"] = scene.gripper.torsion_stiffness_nm_per_rad
         return cls(scene.disk, strain_limit, friction_coefficient, **kwargs)
 
     # --- bookkeeping --------------------------------------------------------------------------

@@ -229,6 +229,9 @@ class DesignPolicy:
         from .cmaes import run_cmaes
 
         budget, seed = check_budget(budget), check_seed(seed)
+        if problem.bounds != self.bounds:
+            raise ValueError(f"the problem's design box {problem.bounds} is not the one the "
+                             f"policy designs in, {self.bounds}")
         x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient)
         problem.start(budget)
         problem.evaluate(x0[None, :])
@@ -306,7 +309,8 @@ def _check_meta(meta: dict[str, Any], where: str) -> None:
         raise PolicyMismatchError(f"{where}: the policy's settings do not fit this package "
                                   f"({exc})") from None
     mine, theirs = _package_version(), str(meta.get("package_version", ""))
-    if theirs.split(".")[:2] != mine.split(".")[:2]:
+    # (a source tree that is not installed has no version to compare)
+    if "unknown" not in mine and theirs.split(".")[:2] != mine.split(".")[:2]:
         raise PolicyMismatchError(f"{where}: the policy was trained with psm-grasp {theirs}, "
                                   f"this is {mine}: retrain it (psm-grasp train-policy)")
 

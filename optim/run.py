@@ -45,7 +45,8 @@ from .problem import (
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
 
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
-           "no_grasp_reason", "fem_available", "verify_outputs", "NO_GRASP_EXIT", "DEMO_SCENE"]
+           "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
+           "check_observable", "NO_GRASP_EXIT", "DEMO_SCENE"]
 
 DEMO_BUDGET = 2000
 DEMO_VERIFY_TOP = 3
@@ -149,7 +150,7 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
         print(f"  {name:12s}: {path}")
 
 
-def _problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
+def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
                     spring_rel, spring_nm) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults."""
@@ -175,6 +176,18 @@ def _problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fri
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
     return (obj.disk if obj is not None else scene), kwargs
+
+
+def check_observable(target: Any, settings: dict[str, Any]) -> None:
+    """The design policy answers objects it can observe only: say so before any work."""
+    from envs.design_env import observe
+
+    disk = Scene.preset(target).disk if isinstance(target, str) else target
+    try:
+        observe(disk, settings["strain_limit"], settings["friction_coefficient"])
+    except ValueError as exc:
+        raise ValueError(f"the design policy cannot design for this object: {exc} (the "
+                         "object, --strain-limit or --friction; use another method)") from None
 
 
 def run_optimize(
@@ -237,16 +250,18 @@ def run_optimize(
     check_options(method, options)
     if obj is None and scene is None:
         scene = DEMO_SCENE
-    target, problem_kwargs = _problem_kwargs(scene, obj, strain_limit, friction_coefficient,
-                                             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+    target, settings = problem_kwargs(scene, obj, strain_limit, friction_coefficient,
+                                      torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
     budget, seed = check_budget(budget), check_seed(seed)
+    if method == "policy":
+        check_observable(target, settings)
     model = resolve_model(n_triangles, n_rings, element or DEFAULT_ELEMENT)
     check_executor_options(dask, workers)
     out_dir = check_output_dir("out", out)
     prefix = prefix or f"{method}_seed{seed}"
     bar, hook = _progress_bar(budget, method, progress)
     with make_executor(dask, workers) as executor:
-        common = {"executor": executor, "progress": hook, **problem_kwargs, **model.kwargs()}
+        common = {"executor": executor, "progress": hook, **settings, **model.kwargs()}
         if obj is None:
             problem = DesignProblem.from_scene(target, **common)
         else:

@@ -82,10 +82,10 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     fields, the PSM and FEM metrics of :data:`REPORTED` and both ranks; and a summary (the
     Spearman rank correlation for three designs or more unless they are ``tied`` (rewards within
     :data:`TIE_REWARD` at either fidelity), whether both fidelities pick the same best, the
-    largest reward difference, and ``best_confirmed``: the FEM's reward of the run's reported
-    optimum within 10 % + 0.002 of the reward the run reported for it (``reported_reward``, by
-    ``reward_model``: the finer member after the finish of :mod:`optim.finish`, else the
-    run's own model)).
+    largest reward difference, and ``best_confirmed``: the reward the run reported for its
+    optimum (``reported_reward``, by ``reward_model``: the finer member after the finish of
+    :mod:`optim.finish`, else the run's own model) within 10 % of the FEM's reward of that
+    design, plus 0.002).
     """
     top = check_integer("--top", top, 1, MAX_TOP)
     picks = list(result.top_designs)[:top]

@@ -23,21 +23,46 @@ from envs.solver.reaction import holding_one, max_contacts
 R070 = Scene.preset("paper-r070")
 
 
+def _pressure_shift(normals, points, forces, centre, length) -> tuple[float, float]:
+    """How far the normal forces' moment can move when each face's pressure shifts between its
+    points (faces: one normal, one line), computed again here in numpy."""
+    arms = ((points[:, 0] - centre[0]) * normals[:, 1]
+            - (points[:, 1] - centre[1]) * normals[:, 0])
+    offsets = np.einsum("ij,ij->i", points, normals)
+    low = high = 0.0
+    done = np.zeros(forces.size, dtype=bool)
+    for i in range(forces.size):
+        if done[i]:
+            continue
+        face = (np.abs(normals - normals[i]).max(axis=1) <= 1e-9) & (
+            np.abs(offsets - offsets[i]) <= 1e-9 * length)
+        done |= face
+        total = forces[face].sum()
+        mean = (forces[face] * arms[face]).sum() / total
+        low += total * (arms[face].min() - mean)
+        high += total * (arms[face].max() - mean)
+    return low, high
+
+
 def _lp_friction(normals, points, forces, centre, length, pin, moment) -> float:
-    """The required friction as a plain linear program (scipy): min mu over (t, mu) with
-    sum t_i tau_i = pin, sum t_i m_i = moment, |t_i| <= mu N_i."""
+    """The required friction as a plain linear program (scipy): min mu over (t, mu, delta) with
+    sum t_i tau_i = pin, sum t_i m_i + delta = moment, |t_i| <= mu N_i, delta within the faces'
+    pressure shift."""
     k = forces.size
     tau = np.column_stack([-normals[:, 1], normals[:, 0]])
     arm = (points[:, 0] - centre[0]) * tau[:, 1] - (points[:, 1] - centre[1]) * tau[:, 0]
-    a_eq = np.zeros((3, k + 1))
+    low, high = _pressure_shift(normals, points, forces, centre, length)
+    a_eq = np.zeros((3, k + 2))
     a_eq[0, :k], a_eq[1, :k], a_eq[2, :k] = tau[:, 0], tau[:, 1], arm / length
+    a_eq[2, k + 1] = 1.0 / length
     b_eq = np.array([pin[0], pin[1], moment / length])
-    a_ub = np.zeros((2 * k, k + 1))
+    a_ub = np.zeros((2 * k, k + 2))
     a_ub[:k, :k], a_ub[k:, :k] = np.eye(k), -np.eye(k)
     a_ub[:k, k] = a_ub[k:, k] = -forces
-    res = linprog(np.r_[np.zeros(k), 1.0], A_ub=a_ub, b_ub=np.zeros(2 * k), A_eq=a_eq,
-                  b_eq=b_eq, bounds=[(None, None)] * k + [(0, None)], method="highs")
-    return float(res.x[-1]) if res.status == 0 else math.inf
+    res = linprog(np.r_[np.zeros(k), 1.0, 0.0], A_ub=a_ub, b_ub=np.zeros(2 * k), A_eq=a_eq,
+                  b_eq=b_eq, bounds=[(None, None)] * k + [(0, None), (low, high)],
+                  method="highs")
+    return float(res.x[k]) if res.status == 0 else math.inf
 
 
 @pytest.mark.parametrize("model", [{}, {"element": "spring"}])
@@ -54,6 +79,29 @@ def test_the_symmetric_grasp_on_the_faces_needs_tan_theta(model):
     assert res.pin_force_n[1] < 0 and abs(res.pin_force_n[0]) < 1e-9 * push
     assert abs(res.pin_moment_nm) < 1e-9 * push * R070.disk.radius_m
     assert res.holds(0.8) and not res.holds(0.7)
+
+
+def test_a_grasp_turned_off_its_mirror_symmetry_needs_about_the_same_friction():
+    """The required friction is continuous: an equilibrium a hair off the symmetric one (a hub
+    moment, unequal patches) needs about tan(theta), not infinity, as the pressure on each face
+    shifts a little between its contact points. Torques around a design whose grasp breaks the
+    mirror symmetry, and its mirror-symmetric neighbours."""
+    designs = DesignBounds().sample(np.random.default_rng(0), 2000, R070.disk)
+    out = evaluate_designs(designs, R070.disk)
+    grasp = out["converged"] & out["touching"].all(axis=1) & (out["n_contacts"] > 1).all(axis=1)
+    turned = np.abs(out["jaw_angles_rad"][:, 0] - out["jaw_angles_rad"][:, 1])
+    rows = np.flatnonzero(grasp & (turned > 1e-6) & (turned < math.radians(0.5)))
+    assert rows.size >= 5
+    need = out["required_friction"][rows]
+    theta = out["jaw_angles_rad"][rows].mean(axis=1)
+    assert np.all(np.isfinite(need))
+    # (an asymmetric grasp is not the closed form's symmetric one: close to it, not on it)
+    assert np.median(np.abs(need / np.tan(theta) - 1.0)) < 0.05
+    sweep = np.repeat(designs[rows[:1]], 11, axis=0)
+    sweep[:, 4] *= np.linspace(0.9, 1.1, 11)
+    swept = evaluate_designs(sweep, R070.disk)
+    assert np.all(np.isfinite(swept["required_friction"]))
+    assert np.max(np.abs(np.diff(swept["required_friction"]))) < 0.05
 
 
 def test_closed_forms_of_the_linear_program():
@@ -106,7 +154,7 @@ def test_corner_and_face_contacts_match_a_linear_program():
     np.testing.assert_array_equal(sol.holding[:, H_MU], out["required_friction"][keep])
     prm = pack_params(rows, n, "van_gelder", math.pi / 2, spec.n_rings, spec.element)
     k = max_contacts(n)
-    corners = checked = 0
+    corners = checked = asymmetric = 0
     for b in range(rows.shape[0]):
         force_unit = rows[b, S_SCALE] * rows[b, S_YOUNG] * rows[b, S_THICKNESS] * rows[b, S_RADIUS]
         normals, points, forces, row = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k), np.empty(4)
@@ -124,9 +172,10 @@ def test_corner_and_face_contacts_match_a_linear_program():
         if mu_lp < 1e6:
             assert row[H_MU] == pytest.approx(mu_lp, rel=1e-6, abs=1e-9), b
             checked += 1
-        else:  # an asymmetric equilibrium whose two faces cannot balance the moment too
+        else:  # single points that cannot balance the moment too (no pressure to shift)
             assert row[H_MU] > 1e6, b
-    assert checked >= 60 and corners >= 3
+        asymmetric += abs(sol.jaw_angles_rad[b, 0] - sol.jaw_angles_rad[b, 1]) > 1e-6
+    assert checked >= 60 and corners >= 3 and asymmetric >= 3
 
 
 def test_a_miss_carries_nothing_and_a_hold_is_a_converged_grasp_within_the_coefficient():

@@ -135,3 +135,18 @@ def test_the_build_sheet_places_the_fingers_like_the_model():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert sheet["object_centre_mm"] == [0.0, pytest.approx(30.0)]
+
+
+def test_results_stay_valid_json_and_a_preset_keeps_its_spring(tmp_path):
+    from optim.result import to_jsonable
+
+    assert to_jsonable({"mu": np.float64(np.inf), "nan": np.float64(np.nan)}) == {
+        "mu": "inf", "nan": None}
+    problem = DesignProblem.from_scene("forceps-a", torsion_stiffness_nm_per_rad=None)
+    assert problem.torsion_stiffness_nm_per_rad == 1e-3  # the preset's own gripper spring
+    path = tmp_path / "o.toml"
+    path.write_text("[object]\nradius_m = 0.01\nyoungs_modulus_pa = 1e5\npoisson_ratio = 0.4\n"
+                    "thickness_m = 0.01\nfriction_coefficient = 0.0\n")
+    with pytest.raises(ValueError, match=r"friction_coefficient = 0.0 is outside the allowed "
+                                         r"range \(0, 10\]"):
+        load_object(path)

@@ -136,3 +136,16 @@ def test_a_short_training_run_learns_something():
     obs = np.random.default_rng(1).uniform(-1, 1, (6, 4)).astype(np.float32)
     sb3, _ = policy.agent.predict(obs, deterministic=True)
     np.testing.assert_allclose(policy.actions(obs), sb3, atol=1e-5)
+
+
+def test_the_policy_refuses_what_it_cannot_answer(tmp_path, capsys, monkeypatch):
+    import optim.run
+
+    monkeypatch.setattr(optim.run, "run_optimize", lambda *a, **k: pytest.fail("ran"))
+    assert main(["optimize", "--method", "policy", "--friction", "3", "--budget", "5",
+                 "--out", str(tmp_path)]) == 2
+    assert "cannot design for this object: friction_coefficient = 3.0" in capsys.readouterr().err
+    spec = load_object(OBJECTS / "cherry_tomato.toml")
+    problem = DesignProblem(spec.disk, bounds=DesignBounds(high=(7.0, 1.0, 0.6, 0.4, 0.3, 1.2)))
+    with pytest.raises(ValueError, match="is not the one the policy designs in"):
+        load_policy().run(problem)
