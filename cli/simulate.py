@@ -117,8 +117,8 @@ def _scene_of(args: argparse.Namespace):
     """The scene, torque [N·m], name and friction coefficient of the command's options."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
     from envs.object_file import load_object
-    from envs.scene import Design, Scene, design_from_relative, relative_from_design
-    from optim.problem import check_friction, paper_design
+    from envs.scene import Design, Scene
+    from optim.problem import check_friction, paper_design_for
 
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other")
@@ -142,9 +142,7 @@ def _scene_of(args: argparse.Namespace):
                   if spec.gripper.torque_nm is not None else squeeze)
         return scene, torque, spec.name, friction
     # no [gripper] table: the paper's gripper, scaled to the object like a relative design
-    rel = relative_from_design(paper_design("paper-r070", 0.2),
-                               paper.radius_m, paper.torque_unit_nm)
-    design = Design.from_array(design_from_relative(rel, spec.disk.radius_m, unit))
+    design = Design.from_array(paper_design_for(spec.disk, 0.2)[0])
     torque = design.torque_nm if args.torque is None else args.torque
     return design.to_scene(spec.disk), torque, f"{spec.name} (the paper's gripper)", friction
 
@@ -164,9 +162,8 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
     print(f"  peak compr.    : {res.peak_compression:.4%}")
     print(f"  pin force      : ({res.pin_force_n[0]:.4g}, {res.pin_force_n[1]:.4g}) N, moment "
           f"{res.pin_moment_nm:.3g} N·m (what the fixed centre carries)")
-    touching = all(res.contact_mask[j].any() or res.corner_forces_n[j].sum() > 0.0
-                   for j in range(2))
-    verdict = ("holds" if res.holds(friction) else "would slip" if touching and res.converged
+    verdict = ("holds" if res.holds(friction) else "would slip"
+               if all(res.touching) and res.converged
                else "no grasp: a finger does not touch the object")
     print(f"  friction needed: {res.required_friction:.4g} to hold it without the pin; with "
           f"{friction:g}: {verdict}")

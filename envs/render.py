@@ -28,6 +28,7 @@ __all__ = [
     "grasp_figure",
     "grasp_rgb_array",
     "figure_rgb_array",
+    "finger_polygon",
     "spring_segments",
 ]
 
@@ -41,9 +42,10 @@ CONTACT_STYLE = ({"color": "limegreen", "label": "contact, right"},
                  {"color": "gold", "label": "contact, left"})
 
 
-def _finger_polygon(length: float, angle: float, offset: float, width: float, side: int
+def finger_polygon(length: float, angle: float, offset: float, width: float, side: int
                     ) -> np.ndarray:
-    """Corners of one finger bar [m], side 0 right, 1 left (conventions of scene.finger_frame)."""
+    """Corners of one finger bar [m], side 0 right, 1 left (conventions of scene.finger_frame):
+    joint end back, tip end back, tip end face, joint end face."""
     s, c = math.sin(angle), math.cos(angle)
     joint = np.array([offset, 0.0]) if side == 0 else np.array([-offset, 0.0])
     axis = np.array([s, c]) if side == 0 else np.array([-s, c])
@@ -165,7 +167,7 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None) -> Non
     """
     ln, th0, d3, w, _, d1 = (float(v) for v in np.asarray(design, dtype=float))
     center = np.array([0.0, d1 + radius_m])
-    fingers = [_finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
+    fingers = [finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.8))
     ax.add_patch(Circle(center, radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
@@ -219,10 +221,10 @@ def draw_grasp(
     g: Gripper = scene.gripper
     d: SoftDisk = scene.disk
     center = d.center_m
-    rest_fingers = [_finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+    rest_fingers = [finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
                                     g.finger_width_m, side) for side in (0, 1)]
     angles = (g.rest_angle_rad, g.rest_angle_rad) if result is None else result.jaw_angles_rad
-    fingers = [_finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
+    fingers = [finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
                                g.finger_width_m, side) for side in (0, 1)]
     if show_rest and result is not None:
         for poly in rest_fingers:

@@ -20,6 +20,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Arc, Circle, Polygon
 
+from envs.render import finger_polygon
 from envs.scene import DESIGN_FIELDS
 
 __all__ = ["build_sheet", "write_build_sheet", "drawing_figure"]
@@ -41,20 +42,17 @@ ROWS: tuple[tuple[str, str, str], ...] = (
 )
 
 
+# the sheet lists a finger's corners joint end (back, face), then tip end (face, back): the
+# order of envs.render.finger_polygon's corners 0, 3, 2, 1
+_SHEET_CORNERS = (0, 3, 2, 1)
+
+
 def _finger_outline_mm(length: float, angle: float, offset: float, width: float,
                        side: int) -> list[list[float]]:
     """Corners of a finger bar at rest [mm]: joint end (back, face), tip end (face, back);
-    side 0 right, 1 left (the frame of shared conventions: axis (sin, cos), inward normal
-    (-cos, sin) on the right)."""
-    sign = 1.0 if side == 0 else -1.0
-    s, c = math.sin(angle), math.cos(angle)
-    joint = np.array([sign * offset, 0.0])
-    axis = np.array([sign * s, c])
-    inward = np.array([-sign * c, s])
-    hw = width / 2
-    corners = [joint - hw * inward, joint + hw * inward,
-               joint + length * axis + hw * inward, joint + length * axis - hw * inward]
-    return [[round(float(v) * MM, 4) for v in p] for p in corners]
+    side 0 right, 1 left (the drawings' own finger, :func:`envs.render.finger_polygon`)."""
+    corners = finger_polygon(length, angle, offset, width, side)
+    return [[round(float(v) * MM, 4) for v in corners[k]] for k in _SHEET_CORNERS]
 
 
 def build_sheet(design: dict[str, float], obj: dict[str, Any],

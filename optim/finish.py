@@ -27,7 +27,7 @@ from envs.scene import DESIGN_FIELDS
 
 from .result import OptimResult, to_jsonable
 
-__all__ = ["RANKING_MEMBER", "FINISH_TOP", "finish_result", "member_of"]
+__all__ = ["RANKING_MEMBER", "FINISH_TOP", "finish_result"]
 
 # the finer member whose reward ranks random designs like the FEM's, also at soft strain
 # limits where the default's ranking drops (scripts/fidelity.py, docs/accuracy.md): the
@@ -35,12 +35,6 @@ __all__ = ["RANKING_MEMBER", "FINISH_TOP", "finish_result", "member_of"]
 # optimization's optimum
 RANKING_MEMBER = {"n_triangles": 96, "n_rings": 6, "element": "nhquad", "calibrated": True}
 FINISH_TOP = 10  # distinct designs re-scored (what an OptimResult keeps)
-
-
-def member_of(obj: dict[str, Any]) -> dict[str, Any]:
-    """The member of a result's object info (``n_triangles``, ``n_rings``, ``element``,
-    ``calibrated``)."""
-    return {k: obj[k] for k in ("n_triangles", "n_rings", "element", "calibrated") if k in obj}
 
 
 def _finer(member: dict[str, Any], than: dict[str, Any]) -> bool:

@@ -33,7 +33,15 @@ from envs.model.defaults import (
     MAX_FRICTION_COEFFICIENT,
 )
 from envs.model.family import resolve_model
-from envs.scene import PRESETS, Scene, SoftDisk, joint_spring, joint_spring_kwargs
+from envs.scene import (
+    PRESETS,
+    Scene,
+    SoftDisk,
+    design_from_relative,
+    joint_spring,
+    joint_spring_kwargs,
+    relative_from_design,
+)
 from envs.validation import check_range
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
@@ -46,6 +54,7 @@ __all__ = [
     "check_seed",
     "pareto_mask",
     "paper_design",
+    "paper_design_for",
 ]
 
 DEFAULT_CHUNK_SIZE = 256
@@ -125,6 +134,16 @@ def paper_design(scene: str | Scene = "paper-r070", torque_nm: float = 0.1) -> n
     g, d = sc.gripper, sc.disk
     return np.array([g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
                      float(torque_nm), d.distance_m])
+
+
+def paper_design_for(disk: SoftDisk, torques_nm: Any = 0.2) -> np.ndarray:
+    """The paper's gripper on its r = 0.07 m disk at these torques there [N·m], scaled to
+    another object like every relative design (lengths in radii, the torque in ``s E t r^2``):
+    SI design rows, shape (k, 6)."""
+    paper = Scene.preset("paper-r070").disk
+    rows = np.array([paper_design("paper-r070", t) for t in np.atleast_1d(torques_nm)])
+    rel = relative_from_design(rows, paper.radius_m, paper.torque_unit_nm)
+    return design_from_relative(rel, disk.radius_m, disk.torque_unit_nm)
 
 
 def pareto_mask(objectives: np.ndarray) -> np.ndarray:

@@ -400,8 +400,9 @@ def _make_agent(settings: TrainingSettings, env: Any):
         model = sb3.SAC(
             "MlpPolicy", env, seed=settings.seed, device="cpu", verbose=0, gamma=0.0,
             learning_rate=settings.learning_rate, batch_size=settings.batch_size,
+            # random designs first: 32 steps of every env (a quarter of a short run)
             buffer_size=max(settings.steps, 10_000), learning_starts=min(
-                4 * settings.n_envs * 8, settings.steps // 4),
+                32 * settings.n_envs, settings.steps // 4),
             train_freq=1, gradient_steps=settings.gradient_steps,
             policy_kwargs={"net_arch": net})
         # the squashed Gaussian's log std is a linear output: start its bias low, so the

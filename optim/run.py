@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from envs.object_file import ObjectSpec
-from envs.scene import PRESETS, Scene, design_from_relative, relative_from_design
+from envs.scene import PRESETS, Scene
 
 from .optimize import check_options, get_optimizer
 from .problem import (
@@ -41,6 +41,7 @@ from .problem import (
     check_seed,
     check_strain_limit,
     paper_design,
+    paper_design_for,
 )
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
 
@@ -71,9 +72,7 @@ def paper_reference(problem: DesignProblem, scene: str | None = DEMO_SCENE,
     if scene is not None:
         designs = np.array([paper_design(scene, t * ratio) for t in torques_nm])
     else:
-        rel = relative_from_design(np.array([paper_design(DEMO_SCENE, t) for t in torques_nm]),
-                                   paper.radius_m, paper.torque_unit_nm)
-        designs = design_from_relative(rel, problem.disk.radius_m, problem.disk.torque_unit_nm)
+        designs = paper_design_for(problem.disk, torques_nm)
     reward = problem.evaluate_physical(designs)["reward"]
     i = int(np.argmax(reward))
     return float(reward[i]), float(torques_nm[i] * ratio)

@@ -119,7 +119,7 @@ def test_verify_refuses_a_run_for_another_object(tmp_path, capsys):
 
 
 def test_the_build_sheet_places_the_fingers_like_the_model():
-    from envs.render import _finger_polygon
+    from envs.render import finger_polygon
     from envs.scene import Design
 
     design = {"finger_length_m": 0.05, "rest_angle_rad": 0.3, "joint_offset_m": 0.002,
@@ -129,7 +129,7 @@ def test_the_build_sheet_places_the_fingers_like_the_model():
     row = Design(**design).to_array()
     for side, key in ((0, "right"), (1, "left")):
         corners = np.array(sheet["finger_outline_mm"][key]) / 1e3
-        expected = _finger_polygon(row[0], row[1], row[2], row[3], side)
+        expected = finger_polygon(row[0], row[1], row[2], row[3], side)
         # the same four corners (in its own order), to the sheet's 0.1 um rounding
         assert np.abs(np.sort(corners, axis=0) - np.sort(expected, axis=0)).max() < 1e-7
     with warnings.catch_warnings():

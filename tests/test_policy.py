@@ -122,9 +122,9 @@ def test_train_policy_writes_a_policy_that_design_uses(tmp_path):
     assert data["method"] == "policy" and np.isfinite(data["best_reward"])
 
 
-def test_a_short_training_run_learns_something():
-    """1000 SAC steps: the machinery runs end to end and the policy's actions are the SB3
-    actor's deterministic actions."""
+def test_a_short_training_run_extracts_the_sb3_actor():
+    """1024 SAC steps: training runs end to end, records its learning curve, and the numpy
+    policy's actions are the SB3 actor's deterministic actions."""
     pytest.importorskip("stable_baselines3")
     from optim.rl import train_policy
 

@@ -142,13 +142,17 @@ class GraspResult:
     pin_moment_nm: float = 0.0
     required_friction: float = 0.0
 
+    @property
+    def touching(self) -> tuple[bool, bool]:
+        """Whether each finger touches the disk (with its face or a corner)."""
+        return tuple(bool(self.contact_mask[j].any() or self.corner_forces_n[j].sum() > 0.0)
+                     for j in range(2))
+
     def holds(self, friction_coefficient: float) -> bool:
         """Whether this grasp would hold a free object with this Coulomb coefficient: a
         converged grasp touching with both fingers whose :attr:`required_friction` is at most
         it."""
-        touching = [self.contact_mask[j].any() or self.corner_forces_n[j].sum() > 0.0
-                    for j in range(2)]
-        return bool(self.converged and all(touching)
+        return bool(self.converged and all(self.touching)
                     and self.required_friction <= friction_coefficient)
 
     @property
