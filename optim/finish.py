@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 
-from envs.evaluate import evaluate_designs
 from envs.model.family import resolve_model
 from envs.scene import DESIGN_FIELDS
 
@@ -80,9 +79,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
         return replace(result, extra={**result.extra, "reward_model": to_jsonable(own)})
     t0 = time.perf_counter()
     designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in picks])
-    out = evaluate_designs(designs, problem.disk, strain_limits=problem.strain_limit,
-                           friction_coefficients=problem.friction_coefficient,
-                           weights=problem.weights, **problem.joint_spring_kwargs(), **member)
+    out = problem.evaluate_physical(designs, member)
     order = np.argsort(-out["reward"], kind="stable")
     best = int(order[0])
     ranked = tuple({"design": picks[i]["design"], "reward": float(out["reward"][i]),
@@ -97,6 +94,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     from .result import grasp_found
 
     extra["grasp_found"] = grasp_found(metrics)
+    extra.update(problem.scenario_extra(picks[best]["design"], member))
     return replace(result, best_design=dict(picks[best]["design"]),
                    best_reward=float(out["reward"][best]), best_metrics=metrics,
                    top_designs=ranked, extra=to_jsonable(extra))

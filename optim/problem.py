@@ -33,6 +33,7 @@ from envs.model.defaults import (
     MAX_FRICTION_COEFFICIENT,
 )
 from envs.model.family import resolve_model
+from envs.scenarios import ROBUST_MEASURES, Scenarios, ScenarioTable, evaluate_scenarios
 from envs.scene import (
     PRESETS,
     Scene,
@@ -219,6 +220,17 @@ class DesignProblem:
         Called as ``progress(n_new_evaluations, best_reward)`` after every batch.
     name
         Name of the object (e.g. the scene preset), stored in the result.
+    scenarios
+        What the design must survive (:class:`envs.scenarios.Scenarios`: the object's ranges
+        and a placement tolerance), or ``None``: the one exact object. With scenarios, ``disk``
+        and ``friction_coefficient`` become the ranges' centre (the nominal object, which the
+        relative design space is scaled to), the joint spring is that of the nominal object for
+        every scenario (one physical gripper), and every design is solved under every scenario
+        in one batch (:func:`envs.scenarios.evaluate_scenarios`): its reward is the
+        ``robust`` measure, its metrics the worst case over the scenarios (a design is
+        feasible when it holds within the strain limit in every scenario).
+    robust
+        The robust reward with scenarios: ``"worst"`` (default), ``"mean"`` or ``"cvar"``.
     """
 
     n_var = N_DESIGN
@@ -241,12 +253,23 @@ class DesignProblem:
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
+        scenarios: Scenarios | None = None,
+        robust: str = "worst",
     ) -> None:
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
-        self.disk = disk
+        if scenarios is not None and not isinstance(scenarios, Scenarios):
+            raise ValueError(f"scenarios must be None or a Scenarios, got "
+                             f"{type(scenarios).__name__}")
+        if robust not in ROBUST_MEASURES:
+            raise ValueError(f"robust must be one of {ROBUST_MEASURES}, got {robust!r}")
+        self.scenarios = None if scenarios is None or scenarios.is_trivial else scenarios
+        self.robust = robust
+        self.disk = disk if self.scenarios is None else self.scenarios.nominal_disk(disk)
         self.strain_limit = check_strain_limit(strain_limit)
-        self.friction_coefficient = check_friction(friction_coefficient)
+        self.friction_coefficient = check_friction(
+            friction_coefficient if self.scenarios is None
+            else self.scenarios.nominal_friction(friction_coefficient))
         self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
@@ -349,15 +372,50 @@ class DesignProblem:
         row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(N_DESIGN))
         return dict(zip(DESIGN_FIELDS, row.tolist(), strict=True))
 
-    def evaluate_physical(self, designs: Any) -> dict[str, np.ndarray]:
-        """Evaluate physical designs (B, 6) on this object without counting them."""
+    def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None
+                          ) -> dict[str, np.ndarray]:
+        """Evaluate physical designs (B, 6) on this object without counting them.
+
+        With scenarios, one row per design: the robust reward and the worst case of each metric
+        over the scenarios (:class:`envs.scenarios.ScenarioTable` ``summary``). ``member``: a
+        model member's keyword arguments instead of the problem's own (the finish's finer
+        member).
+        """
         designs = np.asarray(designs, dtype=np.float64)
+        if self.scenarios is not None:
+            return self.evaluate_scenarios(designs, member).summary
         return evaluate_designs(
             designs, self.disk, strain_limits=self.strain_limit,
             friction_coefficients=self.friction_coefficient, **self.joint_spring_kwargs(),
-            weights=self.weights, executor=self.executor, **self.model.kwargs(),
+            weights=self.weights, executor=self.executor,
+            **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
+
+    def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None
+                           ) -> ScenarioTable:
+        """Physical designs (B, 6) under every scenario of the problem (the one nominal
+        scenario without scenarios), one batch, not counted."""
+        designs = np.asarray(designs, dtype=np.float64)
+        scenarios = Scenarios() if self.scenarios is None else self.scenarios
+        rows = designs.shape[0] * len(scenarios.scenarios())
+        return evaluate_scenarios(
+            designs, self.disk, scenarios,
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            friction_coefficient=self.friction_coefficient, robust=self.robust,
+            strain_limits=self.strain_limit, weights=self.weights, executor=self.executor,
+            **(self.model.kwargs() if member is None else member),
+            chunk_size=self._chunk_size_for(rows))
+
+    def scenario_rows(self, design: dict[str, float],
+                      member: dict[str, Any] | None = None) -> list[dict[str, Any]]:
+        """One design (``{field: value}``, SI) under every scenario: a row per scenario with
+        the scenario and its grasp's metrics (what a result JSON records)."""
+        row = np.array([[design[k] for k in DESIGN_FIELDS]])
+        table = self.evaluate_scenarios(row, member)
+        return [{"scenario": sc.as_dict(),
+                 **{k: to_jsonable(table.per_scenario[k][0, j]) for k in BEST_METRIC_KEYS}}
+                for j, sc in enumerate(table.scenarios)]
 
     def evaluate(self, x: Any) -> dict[str, np.ndarray]:
         """Evaluate a population of normalized designs and record it.
@@ -486,6 +544,8 @@ class DesignProblem:
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **self.model.kwargs(),
+            **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict(),
+                                                  "robust": self.robust}),
         }
 
     def result(self, method: str, seed: int, *, options: dict[str, Any] | None = None,
@@ -521,5 +581,14 @@ class DesignProblem:
             top_designs=tuple(self.top_designs()),
             options=to_jsonable(dict(options or {})),
             executor=_describe_executor(self.executor),
-            extra=to_jsonable({**(extra or {}), "grasp_found": found}),
+            extra=to_jsonable({**(extra or {}), "grasp_found": found,
+                               **self.scenario_extra(best_design)}),
         )
+
+    def scenario_extra(self, design: dict[str, float],
+                       member: dict[str, Any] | None = None) -> dict[str, Any]:
+        """``{"scenario_rows": [...]}``: the design under every scenario (a result's extra);
+        empty without scenarios or without a design."""
+        if self.scenarios is None or not design:
+            return {}
+        return {"scenario_rows": self.scenario_rows(design, member)}
