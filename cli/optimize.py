@@ -47,7 +47,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
                                             obj, args.strain_limit, args.friction,
-                                            args.joint_spring, args.joint_spring_nm_per_rad)
+                                            args.joint_spring, args.joint_spring_nm_per_rad,
+                                            args.placement_tolerance, args.robust)
         run.check_observable(target, kwargs)
     if args.verify_top is not None:
         check_integer("--verify-top", args.verify_top, 1, MAX_TOP)
@@ -62,12 +63,34 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  torsion_stiffness_nm_per_rad=args.joint_spring_nm_per_rad,
                                  n_triangles=args.triangles, n_rings=args.rings,
                                  element=args.element, progress=not args.no_progress,
-                                 finish=not args.no_finish)
+                                 finish=not args.no_finish,
+                                 placement_tolerance_m=args.placement_tolerance,
+                                 robust=args.robust)
     if args.verify_top is not None:
         run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
                            args.verify_top)
     # a run that found no grasp is not a success, whatever files it wrote
     return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
+
+
+def placement_tolerance(text: str) -> float | tuple[float, float]:
+    """``--placement-tolerance``: ``M`` or ``ALONG,ACROSS`` [m], each >= 0 and finite."""
+    from envs.validation import check_range
+
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a number or two numbers ALONG,ACROSS [m], got {text!r}") from None
+    if len(values) not in (1, 2):
+        raise argparse.ArgumentTypeError(f"must be one or two numbers [m], got {text!r}")
+    try:
+        for v in values:
+            check_range("--placement-tolerance", v, 0.0, 1.0)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return values[0] if len(values) == 1 else (values[0], values[1])
 
 
 def _verify_command(args: argparse.Namespace) -> int:
@@ -148,6 +171,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
         MAX_TRIANGLES_FAMILY,
     )
     from envs.model.family import ELEMENTS
+    from envs.scenarios import ROBUST_MEASURES
     from envs.scene import PRESETS
     from optim.optimize import METHODS
     from optim.problem import DEFAULT_STRAIN_LIMIT
@@ -208,6 +232,15 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-finish", action="store_true",
                    help="report the optimum by the search model itself, not re-scored by the "
                    "finer member")
+    p.add_argument("--placement-tolerance", default=None, metavar="M[,M]",
+                   type=placement_tolerance,
+                   help="placement error the design must survive, +- metres: one number for "
+                   "both ways, or ALONG,ACROSS the gripper's axis (default: the object file's "
+                   "placement_tolerance_m, else none)")
+    p.add_argument("--robust", default=None, choices=ROBUST_MEASURES,
+                   help="with scenarios (ranges in the object file, a placement tolerance): "
+                   "the reward over them, the worst scenario's (default), the mean or the "
+                   "CVaR (the mean of the worst quarter)")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

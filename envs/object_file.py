@@ -11,6 +11,12 @@ A designer's own object is four numbers and, optionally, what the design must re
     stiffness_scale = 1.0         # optional: calibration scale s of the point-spring model
     strain_limit = 0.08           # optional: admissible peak compression (default 0.10)
     friction_coefficient = 0.5    # optional: Coulomb coefficient of the finger pads on it
+    placement_tolerance_m = 0.0015  # optional: +- placement error, both ways, or
+                                    # [along, across] the gripper's axis
+
+A range instead of a number, e.g. ``radius_m = [0.010, 0.015]``, asks for one design that
+serves every object in it (radius, modulus, Poisson ratio, thickness, friction): the design is
+made for the ranges' centre and judged over the scenarios of :mod:`envs.scenarios`.
 
     [gripper]                     # optional, for one grasp (psm-grasp simulate)
     finger_length_m = 0.05
@@ -34,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from .model.defaults import DEFAULT_STIFFNESS_SCALE, MAX_FRICTION_COEFFICIENT
+from .scenarios import RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
 from .validation import check_range
 
@@ -66,6 +73,9 @@ GRIPPER_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
     "torsion_stiffness_nm_per_rad": (0.0, math.inf, True, False, False),
 }
 TABLES = ("object", "gripper")
+# the placement tolerance: one number (both ways) or [along, across] the gripper's axis [m]
+TOLERANCE_KEY = "placement_tolerance_m"
+TOLERANCE_RULE = (0.0, math.inf, False, False, False)
 
 
 @dataclass(frozen=True)
@@ -103,6 +113,10 @@ class ObjectSpec:
         The ``[gripper]`` table, or ``None``.
     path
         The file read.
+    scenarios
+        The object's ranges and placement tolerance (:class:`envs.scenarios.Scenarios`), or
+        ``None`` when the file gives neither; ``disk`` and ``friction_coefficient`` are then
+        the ranges' centre.
     """
 
     name: str
@@ -111,6 +125,7 @@ class ObjectSpec:
     friction_coefficient: float | None = None
     gripper: GripperSpec | None = None
     path: Path | None = None
+    scenarios: Scenarios | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -141,7 +156,8 @@ class ObjectSpec:
                 "thickness_m": d.thickness_m, "stiffness_scale": d.stiffness_scale,
                 "strain_limit": self.strain_limit,
                 "friction_coefficient": self.friction_coefficient,
-                "file": None if self.path is None else str(self.path)}
+                "file": None if self.path is None else str(self.path),
+                **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()})}
 
     def _where(self) -> str:
         return str(self.path) if self.path is not None else self.name
@@ -200,13 +216,57 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     name = table.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"{where}: [object] name must be a non-empty string, got {name!r}")
-    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name",))
+    table, ranges = _ranges(f"{where}: [object]", table)
+    tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
+    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY))
+    scenarios = None
+    if ranges or tolerance is not None:
+        try:
+            scenarios = Scenarios.of(ranges, tolerance)
+        except ValueError as exc:
+            raise ValueError(f"{where}: [object]: {exc}") from None
     disk = SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
                     values["poisson_ratio"], values["thickness_m"],
                     values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE))
     gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
-                      values.get("friction_coefficient"), gripper, path)
+                      values.get("friction_coefficient"), gripper, path, scenarios)
+
+
+def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str, tuple]]:
+    """The table with each range ``[low, high]`` replaced by its centre, and the ranges (each
+    end checked like the key's single value)."""
+    table = dict(table)
+    ranges: dict[str, tuple[float, float]] = {}
+    for key, value in list(table.items()):
+        if not isinstance(value, list):
+            continue
+        if key not in RANGE_FIELDS or key not in OBJECT_KEYS:
+            allowed = ", ".join(k for k in RANGE_FIELDS if k in OBJECT_KEYS)
+            raise ValueError(f"{where}: {key} must be a number, got {value!r} (ranges are "
+                             f"allowed for {allowed})")
+        if len(value) != 2:
+            raise ValueError(f"{where}: {key} as a range must be [low, high], got {value!r}")
+        low, high = (_number(where, f"{key}[{i}]", v, OBJECT_KEYS[key])
+                     for i, v in enumerate(value))
+        if not low <= high:
+            raise ValueError(f"{where}: {key} = {value!r}: low must not exceed high")
+        ranges[key] = (low, high)
+        table[key] = 0.5 * (low + high)
+    return table, ranges
+
+
+def _tolerance(where: str, value: Any) -> float | tuple[float, float] | None:
+    """``placement_tolerance_m``: one number or [along, across], each >= 0 [m]."""
+    if value is None:
+        return None
+    if isinstance(value, list):
+        if len(value) != 2:
+            raise ValueError(f"{where}: {TOLERANCE_KEY} must be a number or [along, across], "
+                             f"got {value!r}")
+        return tuple(_number(where, f"{TOLERANCE_KEY}[{i}]", v, TOLERANCE_RULE)
+                     for i, v in enumerate(value))
+    return _number(where, TOLERANCE_KEY, value, TOLERANCE_RULE)
 
 
 def load_object(path: str | Path) -> ObjectSpec:

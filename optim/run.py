@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from envs.object_file import ObjectSpec
+from envs.scenarios import ROBUST_MEASURES, Scenarios
 from envs.scene import PRESETS, Scene
 
 from .optimize import check_options, get_optimizer
@@ -139,6 +140,15 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
               f"{m.get('friction_coefficient', float('nan')):.3g}): "
               + ("holds" if m.get("holds") else "would slip without the pin")
               + f"; the pin carries {math.hypot(*m['pin_force_n']):.4g} N")
+    rows = extra.get("scenario_rows")
+    if rows:
+        worst = min(rows, key=lambda r: r["reward"])
+        held = sum(bool(r["holds"]) and r["peak_compression"] <= r["strain_limit"]
+                   for r in rows)
+        print(f"  scenarios: {len(rows)} ({result.object.get('robust', 'worst')} reward "
+              f"reported); nominal {rows[0]['reward']:.4f}, worst {worst['reward']:.4f} at "
+              f"{worst['scenario']['label']}; holds within the strain limit in {held} of "
+              f"{len(rows)} (a displaced object is held where it was placed)")
     if reference is not None:
         print(f"  the paper's gripper (best of 5 torques): {reference[0]:.4f} at "
               f"T_a = {reference[1]:.3g} N·m")
@@ -150,9 +160,13 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 
 
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
-                    spring_rel, spring_nm) -> tuple[Any, dict[str, Any]]:
+                    spring_rel, spring_nm, placement_tolerance_m=None,
+                    robust: str | None = None) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
-    run, validated: explicit values first, then the object file's, then the defaults."""
+    run, validated: explicit values first, then the object file's, then the defaults.
+
+    The scenarios: the object file's ranges, with the placement tolerance given here (one
+    number for both ways, or ``(along, across)`` [m]) or else the file's."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
     from envs.scene import joint_spring_kwargs
 
@@ -174,7 +188,23 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
                               "friction_coefficient": check_friction(mu)}
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
+    scenarios = scenarios_of(own, placement_tolerance_m)
+    if scenarios is not None:
+        kwargs["scenarios"] = scenarios
+    if robust is not None:
+        if robust not in ROBUST_MEASURES:
+            raise ValueError(f"robust must be one of {ROBUST_MEASURES}, got {robust!r}")
+        kwargs["robust"] = robust
     return (obj.disk if obj is not None else scene), kwargs
+
+
+def scenarios_of(obj: ObjectSpec | None, placement_tolerance_m=None) -> Scenarios | None:
+    """The scenarios of a run: the object file's ranges and tolerance, the tolerance replaced
+    by ``placement_tolerance_m`` when given; ``None`` when nothing varies."""
+    base = None if obj is None else obj.scenarios
+    if placement_tolerance_m is not None:
+        base = Scenarios.of({} if base is None else base.ranges, placement_tolerance_m)
+    return None if base is None or base.is_trivial else base
 
 
 def check_observable(target: Any, settings: dict[str, Any]) -> None:
@@ -210,6 +240,8 @@ def run_optimize(
     prefix: str | None = None,
     verbose: bool = True,
     finish: bool = True,
+    placement_tolerance_m: float | tuple[float, float] | None = None,
+    robust: str | None = None,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -221,6 +253,11 @@ def run_optimize(
     ``finish`` (default) the run's best distinct designs are re-scored by a finer member
     (:func:`optim.finish.finish_result`): the reported optimum is the FEM's within a few
     percent; the result JSON says which model reported it (``extra["reward_model"]``).
+
+    Scenarios (:mod:`envs.scenarios`): the object file's ranges and placement tolerance, or
+    ``placement_tolerance_m`` (one number for both ways, or ``(along, across)`` [m]); the
+    reward is then the ``robust`` measure over them (default the worst scenario's), and the
+    result JSON has a row per scenario for the reported design (``extra["scenario_rows"]``).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -250,7 +287,8 @@ def run_optimize(
     if obj is None and scene is None:
         scene = DEMO_SCENE
     target, settings = problem_kwargs(scene, obj, strain_limit, friction_coefficient,
-                                      torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+                                      torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
+                                      placement_tolerance_m, robust)
     budget, seed = check_budget(budget), check_seed(seed)
     if method == "policy":
         check_observable(target, settings)
