@@ -910,7 +910,7 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     # filled as a list (cheaper than numpy item assignment: this runs once per check)
     vals = [0.0] * N_CK
     vals[CK_RADIUS] = r
-    vals[CK_CENTRE_X] = 0.0  # the centre sits on the symmetry axis at (0, d_1 + r)
+    vals[CK_CENTRE_X] = d.offset_x_m  # the centre sits at (x_c, d_1 + r)
     vals[CK_CENTRE_Y] = d.distance_m + r
     vals[CK_JOINT_OFFSET] = g.joint_offset_m
     vals[CK_LENGTH] = g.finger_length_m

@@ -367,14 +367,16 @@ def _design_table(designs) -> np.ndarray:
 
 
 # columns of :func:`_disk_table`
-DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE = range(5)
+(DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE, DISK_RATIO, DISK_AREA,
+ DISK_OFFSET_X) = range(8)
+N_DISK = 8
 # columns of the objects' requirements: strain limit and friction coefficient
 NEED_STRAIN, NEED_FRICTION = range(2)
 
 
 def _disk_table(disks, batch: int) -> np.ndarray:
-    """Columns: radius, Young's modulus, Poisson ratio, thickness, stiffness scale, contour
-    stiffness ratio, area stiffness scale."""
+    """Columns (``DISK_*``): radius, Young's modulus, Poisson ratio, thickness, stiffness scale,
+    contour stiffness ratio, area stiffness scale, the centre's lateral offset."""
     if isinstance(disks, SoftDisk):
         disks = [disks] * batch
     elif not isinstance(disks, Sequence) or len(disks) != batch:
@@ -384,8 +386,9 @@ def _disk_table(disks, batch: int) -> np.ndarray:
         if not isinstance(d, SoftDisk):
             raise ValueError(f"disks[{i}] must be a SoftDisk, got {type(d).__name__}")
         rows.append((d.radius_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
-                     d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale))
-    return np.array(rows, dtype=np.float64).reshape(batch, 7)
+                     d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
+                     d.offset_x_m))
+    return np.array(rows, dtype=np.float64).reshape(batch, N_DISK)
 
 
 def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
@@ -435,11 +438,13 @@ def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
 
 def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
     """Scene columns of design rows (the one Design -> Scene mapping, see
-    :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's."""
+    :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's; the disk keeps
+    its lateral offset (a placement of the object, not part of the design)."""
     ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des.T)
-    radius, young, nu, thick, scale, ratio, area = (np.ascontiguousarray(c) for c in disk.T)
+    radius, young, nu, thick, scale, ratio, area, offset = (np.ascontiguousarray(c)
+                                                            for c in disk.T)
     return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, area,
-                        torque)
+                        torque, offset)
 
 
 def _empty_output(batch: int) -> dict[str, np.ndarray]:
@@ -522,30 +527,32 @@ def rest_violation(cols: SceneColumns) -> np.ndarray:
     return np.where(np.isfinite(total), total, math.inf)
 
 
-def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndarray
-                  ) -> np.ndarray:
+def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndarray,
+                  offset_x_m=0.0) -> np.ndarray:
     """Distance from each finger bar to the undeformed disk at given jaw angles [m], (B, 2).
 
     0 where a bar reaches into the disk. Used for the fingers that do not touch the disk in a
     grasp: how far they are from closing on it (the disk centre is fixed, so the undeformed
-    circle is where the fingers would meet it).
+    circle is where the fingers would meet it). ``offset_x_m``: the centre's lateral offset
+    ``x_c`` [m], scalar or (B,); the centre is at ``(x_c, d_1 + r)``.
     """
     ln, _, d3, w, _, d1 = (des[:, k] for k in range(N_DESIGN))
     centre_y = d1 + radius_m
     out = np.empty((des.shape[0], 2))
-    for side in (0, 1):
-        # frame of the right finger; the left one mirrors it about the axis, where the centre is
+    for side, centre_x in enumerate((offset_x_m, -np.asarray(offset_x_m))):
+        # frame of the right finger; the left one is its mirror image about the axis, which
+        # sees the centre mirrored too
         s, c = np.sin(jaw_angles_rad[:, side]), np.cos(jaw_angles_rad[:, side])
-        along = -s * d3 + c * centre_y
-        across = c * d3 + s * centre_y
+        along = s * (centre_x - d3) + c * centre_y
+        across = -c * (centre_x - d3) + s * centre_y
         out[:, side] = np.maximum(0.0, bar_distance(along, across, ln, w) - radius_m)
     return out
 
 
 def _soft_disk(row: np.ndarray) -> SoftDisk:
-    """The disk of a row of :func:`_disk_table` (its placement comes from the design)."""
-    radius, young, nu, thick, scale, ratio, area = row.tolist()
-    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area)
+    """The disk of a row of :func:`_disk_table` (its distance ``d_1`` comes from the design)."""
+    radius, young, nu, thick, scale, ratio, area, offset = row.tolist()
+    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset)
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
@@ -558,7 +565,8 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
               for i in rows.tolist()]
     fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings),
-                      disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS])
+                      disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
+                      disk[rows, DISK_OFFSET_X])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
     # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
     # with the physical E the FEM solves with); NaN (not converged) stays NaN
@@ -642,7 +650,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
     if rows.size:
-        gaps = finger_gaps_m(des[rows], disk[rows, DISK_RADIUS], out["jaw_angles_rad"][rows])
+        gaps = finger_gaps_m(des[rows], disk[rows, DISK_RADIUS], out["jaw_angles_rad"][rows],
+                             disk[rows, DISK_OFFSET_X])
         out["finger_gap_m"][rows] = np.where(missing[rows], gaps, 0.0)
     out["holds"][:] = (out["converged"] & out["touching"].all(axis=1)
                        & (out["required_friction"] <= out["friction_coefficient"]))
@@ -684,6 +693,7 @@ def evaluate_designs(
     weights: RewardWeights | None = None,
     strain_limits=None,
     friction_coefficients=None,
+    offsets_x_m=None,
     executor=None,
     chunk_size: int | None = None,
     n_rings: int | None = None,
@@ -701,8 +711,8 @@ def evaluate_designs(
         of :class:`Design`, or one :class:`Design`.
     disks
         One :class:`~envs.scene.SoftDisk` for all rows or a sequence of B disks. Their radius,
-        material and thickness are used; their ``distance_m`` is replaced by the design's
-        ``distance_m`` column.
+        material, thickness and lateral offset ``offset_x_m`` are used; their ``distance_m`` is
+        replaced by the design's ``distance_m`` column.
     torsion_stiffness_rel
         Joint torsion spring ``k_f`` relative to each row's object: in its torque unit
         ``s E t r^2`` per radian [1/rad] (:attr:`~envs.scene.SoftDisk.torque_unit_nm`, with the
@@ -736,6 +746,15 @@ def evaluate_designs(
         (:class:`RewardWeights`). Default
         :data:`~envs.model.defaults.DEFAULT_FRICTION_COEFFICIENT` (0.5, a rubber or silicone
         pad on skin, fruit or tissue).
+    offsets_x_m
+        Placement of each object's centre across the gripper's axis, ``x_c`` [m] (the centre
+        at ``(x_c, d_1 + r)``), any finite number; scalar or shape (B,). Replaces the disks'
+        ``offset_x_m`` (default ``None``: theirs, 0 unless set). The displaced object is held
+        where it was placed (its centre stays fixed while the jaws close): conservative across
+        the axis, where a free object on a slippery surface would be pushed towards the
+        middle. A displacement that brings the disk onto a finger at rest makes the row
+        invalid at rest (:data:`~envs.model.problem.REST_OFFSET`); a displacement along the
+        axis is a change of the design's ``distance_m``.
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
@@ -839,8 +858,8 @@ def evaluate_designs(
     Raises
     ------
     ValueError
-        For malformed inputs (shapes, disks, N, strain limits, ``k_f``). Physically invalid
-        designs do not raise.
+        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets). Physically
+        invalid designs do not raise.
     """
     weights = RewardWeights() if weights is None else weights
     if not isinstance(weights, RewardWeights):
@@ -876,6 +895,9 @@ def evaluate_designs(
         "friction_coefficients", DEFAULT_FRICTION_COEFFICIENT if friction_coefficients is None
         else friction_coefficients, batch, 0.0, MAX_FRICTION_COEFFICIENT, low_open=True)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
+    if offsets_x_m is not None:
+        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
+                                          math.inf, low_open=False)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:

@@ -27,6 +27,7 @@ from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
 from .model.problem import (
     REST_MESSAGES,
+    REST_OFFSET,
     REST_OK,
     REST_OVERLAP,
     REST_WIDTH,
@@ -124,7 +125,7 @@ class Gripper:
 
 @dataclass(frozen=True)
 class SoftDisk:
-    """Soft 2-D disk (extruded by a thickness) whose centre is pinned.
+    """Soft 2-D disk (extruded by a thickness) whose centre is pinned where it was placed.
 
     Parameters
     ----------
@@ -132,7 +133,7 @@ class SoftDisk:
         Disk radius ``r`` [m].
     distance_m
         Distance ``d_1`` from the joints' line (y = 0) to the nearest point of the undeformed disk
-        [m]; the centre sits at ``(0, d_1 + r)``.
+        [m]; the centre sits at ``(x_c, d_1 + r)``.
     youngs_modulus_pa
         Young's modulus ``E`` [Pa].
     poisson_ratio
@@ -151,6 +152,13 @@ class SoftDisk:
         c_A K`` and ``K`` the plane-strain bulk modulus ``lambda + mu`` of E and nu
         (:attr:`bulk_modulus_pa`). Any ``c_A > 0`` keeps every triangle's area positive: the fan
         cannot fold. Default 0: springs only, the paper's model.
+    offset_x_m
+        Lateral placement ``x_c`` of the centre across the gripper's axis [m], any finite
+        number: the centre sits at ``(x_c, d_1 + r)``. Default 0, on the axis. A displaced
+        object is held where it was placed (its centre stays fixed while the jaws close): a
+        conservative bench, where a free object on a slippery surface would be pushed towards
+        the middle. A displacement that brings the disk onto a finger at rest makes the scene
+        invalid (:data:`~envs.model.problem.REST_OFFSET`).
     """
 
     radius_m: float
@@ -161,6 +169,7 @@ class SoftDisk:
     stiffness_scale: float = DEFAULT_STIFFNESS_SCALE
     contour_stiffness_ratio: float = DEFAULT_CONTOUR_STIFFNESS_RATIO
     area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
+    offset_x_m: float = 0.0
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -173,6 +182,7 @@ class SoftDisk:
             "contour_stiffness_ratio", self.contour_stiffness_ratio, 0.0, 1e3, low_open=True
         )
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
+        check_range("offset_x_m", self.offset_x_m)
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
 
@@ -192,8 +202,8 @@ class SoftDisk:
 
     @property
     def center_m(self) -> np.ndarray:
-        """Position of the pinned centre ``(0, d_1 + r)`` [m]."""
-        return np.array([0.0, self.distance_m + self.radius_m])
+        """Position of the pinned centre ``(x_c, d_1 + r)`` [m]."""
+        return np.array([self.offset_x_m, self.distance_m + self.radius_m])
 
 
 @dataclass(frozen=True)
@@ -221,6 +231,14 @@ class Scene:
             raise ValueError(
                 f"the fingers overlap the disk at rest (clearance {float(clearance[0]):.3g} m): "
                 "increase rest_angle_rad or distance_m (allowed: clearance > 0)")
+        if code == REST_OFFSET:
+            front, clearance = _clearance(self.columns(0.0))
+            raise ValueError(
+                f"the disk displaced by offset_x_m = {d.offset_x_m!r} m "
+                + (f"overlaps a finger at rest (clearance {float(clearance[0]):.3g} m)"
+                   if front[0] > 0 else "lies behind a gripping face at rest")
+                + ", where the centred disk would be clear: decrease |offset_x_m| (allowed: "
+                "clearance > 0 to both fingers)")
         if code == REST_WIDTH:
             raise ValueError(
                 f"finger_width_m = {g.finger_width_m!r} must be smaller than the disk diameter "
@@ -231,10 +249,12 @@ class Scene:
 
     def _reach_warnings(self) -> tuple[str, ...]:
         g, d = self.gripper, self.disk
-        # right finger over 64 angles from closed to rest (the left one mirrors it), in one
-        # vectorized call: this runs for every Scene an optimizer builds
+        # each finger over 64 angles from closed to rest, in one vectorized call per finger:
+        # this runs for every Scene an optimizer builds; the farther finger decides (a displaced
+        # disk may be in reach of one finger only)
         angles = np.linspace(closed_angle_rad(g), g.rest_angle_rad, 64)
-        reach = float(np.min(distance_to_finger_bar(g, 0, angles, d.center_m)))
+        reach = max(float(np.min(distance_to_finger_bar(g, side, angles, d.center_m)))
+                    for side in (0, 1))
         if reach > d.radius_m:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "
@@ -254,7 +274,7 @@ class Scene:
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                           d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
-                          float(torque_nm)]])
+                          float(torque_nm), d.offset_x_m]])
 
     @property
     def reachable(self) -> bool:

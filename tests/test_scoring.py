@@ -110,7 +110,7 @@ def test_contact_score_is_grip_share_times_contact_fraction(batch):
     # the share from its definition: (T - k_f (theta_0 - theta) - M_stop) / T, clipped, min
     cols = SceneColumns(*(np.full(3, v) for v in (0.1, 0.6, 0.01, 0.01, 0.07, 0.07, 0.0,
                                                   1e5, 0.45, 0.01, 1.0, 1.0, 1.0)),
-                        torque_nm=np.array([0.2, 0.2, 0.0]))
+                        torque_nm=np.array([0.2, 0.2, 0.0]), offset_x_m=np.zeros(3))
     jaw = np.array([[0.5, 0.4], [0.6, 0.6], [0.5, 0.5]])
     stop = np.array([[0.0, 0.01], [0.0, 0.0], [0.0, 0.0]])
     ref = np.clip((0.2 - 0.07 * (0.6 - jaw[:2]) - stop[:2]) / 0.2, 0, 1).min(axis=1)

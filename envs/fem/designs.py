@@ -35,7 +35,7 @@ def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], ring
 
 
 def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
-                centre_y_m: np.ndarray) -> dict[str, np.ndarray]:
+                centre_y_m: np.ndarray, centre_x_m=0.0) -> dict[str, np.ndarray]:
     """Arrays of the FEM grasps' metrics, in the evaluator's keys (see
     :func:`envs.evaluate.evaluate_designs`); rows that did not converge hold NaN and
     ``converged`` False.
@@ -44,18 +44,20 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
     (each rim node with its share of the rim), ``contact_fraction`` (B,) their sum,
     ``n_contacts`` (B, 2) the rim nodes in contact, ``face_force_n`` (B, 2) the force each face
     carries (the total without the tip corner's), ``peak_compression`` (B,) the largest
-    shortening of a radius ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C = (0,
-    centre_y_m)``, the disk centre), the point-spring model's same measure.
+    shortening of a radius ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C =
+    (centre_x_m, centre_y_m)``, the disk centre; ``centre_x_m`` 0 unless the disk was displaced
+    across the axis), the point-spring model's same measure.
     """
     b = len(results)
     radius_m = np.broadcast_to(np.asarray(radius_m, dtype=float), (b,))
     centre_y_m = np.broadcast_to(np.asarray(centre_y_m, dtype=float), (b,))
+    centre_x_m = np.broadcast_to(np.asarray(centre_x_m, dtype=float), (b,))
 
     compression = np.full(b, math.nan)
     for i, r in enumerate(results):
         if r.converged:
             rim = np.asarray(r.contour_m, dtype=float)
-            dist = np.hypot(rim[:, 0], rim[:, 1] - centre_y_m[i])
+            dist = np.hypot(rim[:, 0] - centre_x_m[i], rim[:, 1] - centre_y_m[i])
             compression[i] = max(0.0, float(np.max(radius_m[i] - dist))) / radius_m[i]
     ok = np.array([r.converged for r in results], dtype=bool)
 

@@ -64,10 +64,12 @@ GAUGE_AT_REST = 0.0  # holds point 0 at rest; tested for holding up a saddle (fa
 GAUGE_PROXIMAL = 1.0  # re-anchored at each iterate, its stiffness adapted to the step length
 GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 
-# scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns)
+# scene row: one scene and its torque, SI units (the fields of envs.model.problem.SceneColumns);
+# S_OFFSET_X: the disk centre's x, across the gripper's axis (0: on the axis)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
  S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_AREA_SCALE, S_TORQUE) = range(14)
-N_SCENE = 14
+S_OFFSET_X = 14
+N_SCENE = 15
 
 # solver options
 O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)

@@ -52,6 +52,7 @@ from .layout import (
     S_DISTANCE,
     S_JOINT_OFFSET,
     S_LENGTH,
+    S_OFFSET_X,
     S_POISSON,
     S_RADIUS,
     S_REST_ANGLE,
@@ -84,6 +85,7 @@ __all__ = [
     "REST_WIDTH",
     "REST_BEHIND_FACE",
     "REST_OVERLAP",
+    "REST_OFFSET",
     "REST_MESSAGES",
     "rest_codes",
     "pack_params",
@@ -93,8 +95,10 @@ __all__ = [
     "scaled_params",
 ]
 
-# why a scene is invalid at rest (0: valid)
+# why a scene is invalid at rest (0: valid); REST_OFFSET: the disk's lateral displacement alone
+# (the centred disk would be clear)
 REST_OK, REST_NOT_FINITE, REST_GRIPPER, REST_WIDTH, REST_BEHIND_FACE, REST_OVERLAP = range(6)
+REST_OFFSET = 6
 REST_MESSAGES = {
     REST_OK: "valid",
     REST_NOT_FINITE: "a design value is not a finite number",
@@ -105,6 +109,9 @@ REST_MESSAGES = {
                       "decrease joint_offset_m or increase rest_angle_rad/distance_m",
     REST_OVERLAP: "the fingers overlap the disk at rest: increase rest_angle_rad or distance_m "
                   "(allowed: clearance > 0)",
+    REST_OFFSET: "the disk, displaced across the gripper's axis by offset_x_m, overlaps a finger "
+                 "or lies behind its gripping face at rest (the centred disk would be clear): "
+                 "decrease |offset_x_m| (allowed: clearance > 0 to both fingers)",
 }
 
 
@@ -125,6 +132,7 @@ class SceneColumns(NamedTuple):
     contour_stiffness_ratio: np.ndarray
     area_stiffness_scale: np.ndarray
     torque_nm: np.ndarray
+    offset_x_m: np.ndarray
 
     def take(self, rows) -> SceneColumns:
         """The scenes of some rows."""
@@ -147,22 +155,28 @@ class SceneColumns(NamedTuple):
         return cls(*np.asarray(rows, dtype=np.float64).T)
 
 
-@vectorize(["float64(float64, float64, float64, float64, float64)"], cache=True)
-def _front_m(rest_angle_rad, joint_offset_m, finger_width_m, radius_m, distance_m):
-    """Signed distance of the disk centre in front of the right gripping face [m] (a ufunc)."""
+@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
+def _front_m(rest_angle_rad, joint_offset_m, finger_width_m, radius_m, distance_m, centre_x_m):
+    """Signed distance of the disk centre in front of the right gripping face [m] (a ufunc).
+
+    The left face's is this at ``-centre_x_m``: the left finger is the right one's mirror image
+    about the axis, so a centre displaced by ``x_c`` sits before it as before the right one
+    displaced by ``-x_c``.
+    """
     s, c = math.sin(rest_angle_rad), math.cos(rest_angle_rad)
-    # centre (0, d_1 + r) relative to the right joint (d_3, 0); right finger n = (-c, s)
-    across = c * joint_offset_m + s * (distance_m + radius_m)
+    # centre (x_c, d_1 + r) relative to the right joint (d_3, 0); right finger n = (-c, s)
+    across = c * (joint_offset_m - centre_x_m) + s * (distance_m + radius_m)
     return across - finger_width_m / 2
 
 
-@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
+@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64)"],
+           cache=True)
 def _clearance_m(finger_length_m, rest_angle_rad, joint_offset_m, finger_width_m, radius_m,
-                 distance_m):
-    """Rest clearance between the disk and the right finger bar [m] (the left mirrors it; a
-    ufunc)."""
+                 distance_m, centre_x_m):
+    """Rest clearance between the disk and the right finger bar [m] (a ufunc); the left
+    finger's is this at ``-centre_x_m`` (see :func:`_front_m`)."""
     s, c = math.sin(rest_angle_rad), math.cos(rest_angle_rad)
-    rel_x = -joint_offset_m
+    rel_x = centre_x_m - joint_offset_m
     rel_y = distance_m + radius_m
     along = s * rel_x + c * rel_y  # right finger: e = (s, c), n = (-c, s)
     across = -c * rel_x + s * rel_y
@@ -170,12 +184,21 @@ def _clearance_m(finger_length_m, rest_angle_rad, joint_offset_m, finger_width_m
 
 
 def _clearance(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
-    """Signed distance of the disk centre in front of the right gripping face, and the rest
-    clearance between the disk and the right finger bar [m] (the left finger mirrors it)."""
-    return (_front_m(cols.rest_angle_rad, cols.joint_offset_m, cols.finger_width_m,
-                     cols.radius_m, cols.distance_m),
-            _clearance_m(cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
-                         cols.finger_width_m, cols.radius_m, cols.distance_m))
+    """Signed distance of the disk centre in front of the gripping faces, and the rest
+    clearance between the disk and the finger bars [m]: each the smaller of the two fingers'
+    (the finger the displaced disk is nearer to; both alike for a centred disk)."""
+    front = [_front_m(cols.rest_angle_rad, cols.joint_offset_m, cols.finger_width_m,
+                      cols.radius_m, cols.distance_m, x) for x in _mirrored(cols.offset_x_m)]
+    clear = [_clearance_m(cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
+                          cols.finger_width_m, cols.radius_m, cols.distance_m, x)
+             for x in _mirrored(cols.offset_x_m)]
+    return np.minimum(*front), np.minimum(*clear)
+
+
+def _mirrored(centre_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The centre's x as the right finger sees it, for the right finger and for the left one
+    (its mirror image)."""
+    return centre_x_m, -centre_x_m
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -189,6 +212,7 @@ def _rest_codes_into(table, codes):
             finite = finite and math.isfinite(table[i, k])
         ln, th0, d3 = table[i, S_LENGTH], table[i, S_REST_ANGLE], table[i, S_JOINT_OFFSET]
         w, r, d1 = table[i, S_WIDTH], table[i, S_RADIUS], table[i, S_DISTANCE]
+        xc = table[i, S_OFFSET_X]
         if not finite:
             codes[i] = REST_NOT_FINITE
         elif not (ln > 0 and 0 < th0 < math.pi / 2 and d3 >= 0 and 0 < w < ln
@@ -196,12 +220,23 @@ def _rest_codes_into(table, codes):
             codes[i] = REST_GRIPPER
         elif not w < 2 * r:
             codes[i] = REST_WIDTH
-        elif not _front_m(th0, d3, w, r, d1) > 0:
-            codes[i] = REST_BEHIND_FACE
-        elif not _clearance_m(ln, th0, d3, w, r, d1) > 0:
-            codes[i] = REST_OVERLAP
         else:
-            codes[i] = REST_OK
+            codes[i] = _placement_code(ln, th0, d3, w, r, d1, xc)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _placement_code(ln, th0, d3, w, r, d1, xc):
+    """The rest code of a disk placed at ``(xc, d1 + r)`` before a valid gripper: the centre
+    behind a gripping face, then a finger overlapping the disk (the worse finger); where the
+    centred disk would be clear, :data:`REST_OFFSET` instead (the displacement is to blame)."""
+    front = min(_front_m(th0, d3, w, r, d1, xc), _front_m(th0, d3, w, r, d1, -xc))
+    clear = min(_clearance_m(ln, th0, d3, w, r, d1, xc), _clearance_m(ln, th0, d3, w, r, d1, -xc))
+    if front > 0 and clear > 0:
+        return REST_OK
+    if xc != 0.0 and _front_m(th0, d3, w, r, d1, 0.0) > 0 and (
+            _clearance_m(ln, th0, d3, w, r, d1, 0.0) > 0):
+        return REST_OFFSET
+    return REST_BEHIND_FACE if not front > 0 else REST_OVERLAP
 
 
 def rest_codes(cols) -> np.ndarray:
@@ -334,8 +369,9 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_KC] = k_ext * s[S_CONTOUR_RATIO]
     p[P_H] = 2 * math.sin(math.pi / n)
     yc = (s[S_DISTANCE] + r) / r
-    p[P_C0X], p[P_C0Y] = (0.0 - s[S_JOINT_OFFSET]) / r, yc
-    p[P_C1X], p[P_C1Y] = (0.0 + s[S_JOINT_OFFSET]) / r, yc
+    # the centre (x_c, d_1 + r) relative to each joint (+-d_3, 0)
+    p[P_C0X], p[P_C0Y] = (s[S_OFFSET_X] - s[S_JOINT_OFFSET]) / r, yc
+    p[P_C1X], p[P_C1Y] = (s[S_OFFSET_X] + s[S_JOINT_OFFSET]) / r, yc
     p[P_HW] = s[S_WIDTH] / (2 * r)
     p[P_LMAX] = s[S_LENGTH] / r
     p[P_TAU] = s[S_TORQUE] / torque_unit

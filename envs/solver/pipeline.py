@@ -47,6 +47,7 @@ from envs.model.layout import (
     S_DISTANCE,
     S_JOINT_OFFSET,
     S_LENGTH,
+    S_OFFSET_X,
     S_RADIUS,
     S_REST_ANGLE,
     S_TORQUE,
@@ -146,7 +147,7 @@ def _check_row(s, prm, n, ck):
     r = s[S_RADIUS]
     k_unit = stiffness_unit(s)
     ck[check.CK_RADIUS] = r
-    ck[check.CK_CENTRE_X] = 0.0
+    ck[check.CK_CENTRE_X] = s[S_OFFSET_X]
     ck[check.CK_CENTRE_Y] = s[S_DISTANCE] + r
     ck[check.CK_JOINT_OFFSET] = s[S_JOINT_OFFSET]
     ck[check.CK_LENGTH] = s[S_LENGTH]
@@ -180,12 +181,12 @@ def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, interior, face, corn
     state) and forces [N, N·m] of one scaled answer."""
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
-    yc = s[S_DISTANCE] + r
+    xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
     for i in range(n):
-        points[i, 0] = x[2 * i] * r
+        points[i, 0] = x[2 * i] * r + xc
         points[i, 1] = x[2 * i + 1] * r + yc
     for p in range(interior.shape[0]):
-        interior[p, 0] = x[2 * n + 2 + 2 * p] * r
+        interior[p, 0] = x[2 * n + 2 + 2 * p] * r + xc
         interior[p, 1] = x[2 * n + 3 + 2 * p] * r + yc
     for j in range(2):
         stop[j] = lam_stop[j] * force_unit * r

@@ -15,7 +15,7 @@ import math
 from numba import njit
 
 from ..model.holding import holding_of_contacts
-from ..model.layout import N_CORNERS, S_DISTANCE, S_RADIUS
+from ..model.layout import N_CORNERS, S_DISTANCE, S_OFFSET_X, S_RADIUS
 from ..model.problem import stiffness_unit
 from .contact import _corner_eval, _face_eval, _sel, _trig
 
@@ -53,7 +53,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, point
     """
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
-    yc = s[S_DISTANCE] + r
+    xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
     count = 0
@@ -69,7 +69,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, point
             nx, ny = grad5[0], grad5[1]
             px, py = q[i, 0] * r, q[i, 1] * r
             normals[count, 0], normals[count, 1] = nx, ny
-            points[count, 0], points[count, 1] = px, py + yc
+            points[count, 0], points[count, 1] = px + xc, py + yc
             forces[count] = f
             fx += f * nx
             fy += f * ny
@@ -100,10 +100,10 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, point
                 px = (wa * q[k, 0] + wb * q[k1, 0]) / (wa + wb) * r
                 py = (wa * q[k, 1] + wb * q[k1, 1]) / (wa + wb) * r
                 normals[count, 0], normals[count, 1] = tx / size, ty / size
-                points[count, 0], points[count, 1] = px, py + yc
+                points[count, 0], points[count, 1] = px + xc, py + yc
                 forces[count] = f * size
                 count += 1
     # the centre carries what the contacts leave unbalanced
-    holding_of_contacts(normals, points, forces, count, 0.0, yc, r, -fx, -fy, -moment, gens,
+    holding_of_contacts(normals, points, forces, count, xc, yc, r, -fx, -fy, -moment, gens,
                         out)
     return count
