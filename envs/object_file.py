@@ -216,8 +216,9 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     name = table.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"{where}: [object] name must be a non-empty string, got {name!r}")
-    table, ranges = _ranges(f"{where}: [object]", table)
+    table = dict(table)
     tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
+    table, ranges = _ranges(f"{where}: [object]", table)
     values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY))
     scenarios = None
     if ranges or tolerance is not None:

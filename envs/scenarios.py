@@ -230,7 +230,9 @@ class Scenarios:
                     dy = u * self.placement_along_m
                 else:
                     lo, hi = self.ranges[name]
-                    values[name] = 0.5 * (lo + hi) + 0.5 * u * (hi - lo)
+                    # the ends exactly as given
+                    values[name] = lo if u == -1.0 else hi if u == 1.0 else (
+                        lo + 0.5 * (u + 1.0) * (hi - lo))
                 if u != 0.0:
                     marks.append(f"{name}{'+' if u > 0 else '-'}")
             out.append(Scenario(values, dx, dy, " ".join(marks) or "nominal"))

@@ -1,0 +1,216 @@
+"""Scenarios: the deterministic set, the design x scenario batch, the robust reward, and designs
+that survive their bench (object ranges, placement tolerance)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from envs.evaluate import DesignBounds, evaluate_designs
+from envs.object_file import parse_object
+from envs.scenarios import Scenarios, evaluate_scenarios, robust_reward
+from envs.scene import DESIGN_FIELDS, Scene, SoftDisk
+from optim.problem import DesignProblem
+
+KF = 0.073  # the paper gripper's spring [N·m/rad]
+D1 = DESIGN_FIELDS.index("distance_m")
+
+
+@pytest.fixture(scope="module")
+def paper_disk() -> SoftDisk:
+    return Scene.preset("paper-r070").disk
+
+
+@pytest.fixture(scope="module")
+def designs(paper_disk) -> np.ndarray:
+    return DesignBounds().sample(np.random.default_rng(3), 24, paper_disk)
+
+
+def test_the_set_is_corners_face_centres_and_centre():
+    assert len(Scenarios().scenarios()) == 1
+    one = Scenarios.of({"radius_m": (0.01, 0.02)})
+    assert [s.values["radius_m"] for s in one.scenarios()] == [0.015, 0.01, 0.02]
+    two = Scenarios.of(placement_tolerance_m=0.002)
+    pts = {(s.dx_m, s.dy_m) for s in two.scenarios()}
+    assert pts == {(a, b) for a in (-0.002, 0.0, 0.002) for b in (-0.002, 0.0, 0.002)}
+    assert two.scenarios()[0].label == "nominal"
+    three = Scenarios.of({"radius_m": (0.01, 0.02), "youngs_modulus_pa": (1e5, 3e5)}, (0.001, 0))
+    assert len(three.scenarios()) == 2**3 + 2 * 3 + 1
+    assert three.varied == ("radius_m", "youngs_modulus_pa", "dy_m")
+
+
+def test_bad_scenarios_are_named():
+    with pytest.raises(ValueError, match="unknown field 'strain_limit'"):
+        Scenarios.of({"strain_limit": (0.1, 0.2)})
+    with pytest.raises(ValueError, match="low = 0.02 must not exceed"):
+        Scenarios.of({"radius_m": (0.02, 0.01)})
+    with pytest.raises(ValueError, match="placement_tolerance_m"):
+        Scenarios.of(placement_tolerance_m="1 mm")
+    with pytest.raises(ValueError, match="placement_across_m"):
+        Scenarios.of(placement_tolerance_m=(0.001, -0.001))
+
+
+def test_no_variation_is_the_plain_evaluation(paper_disk, designs):
+    table = evaluate_scenarios(designs, paper_disk, Scenarios(), torsion_stiffness_nm_per_rad=KF,
+                               friction_coefficient=0.5)
+    plain = evaluate_designs(designs, paper_disk, torsion_stiffness_nm_per_rad=KF)
+    for key in ("reward", "peak_compression", "jaw_angles_rad", "holds"):
+        np.testing.assert_array_equal(table.per_scenario[key][:, 0], plain[key])
+        np.testing.assert_array_equal(table.summary[key], plain[key])
+
+
+def test_each_scenario_is_its_own_grasp(paper_disk, designs):
+    """Every (design, scenario) answer equals an independent evaluate_designs of that object
+    placed there: the centre fixed where placed, a scenario's radius moving its nearest point."""
+    sc = Scenarios.of({"radius_m": (0.06, 0.08), "friction_coefficient": (0.3, 0.7)},
+                      (0.003, 0.002))
+    table = evaluate_scenarios(designs, paper_disk, sc, torsion_stiffness_nm_per_rad=KF,
+                               friction_coefficient=0.5)
+    for j, s in enumerate(table.scenarios):
+        radius = s.values.get("radius_m", paper_disk.radius_m)
+        rows = designs.copy()
+        rows[:, D1] += paper_disk.radius_m + s.dy_m - radius
+        disk = SoftDisk(radius, 0.0, paper_disk.youngs_modulus_pa, paper_disk.poisson_ratio,
+                        paper_disk.thickness_m)
+        alone = evaluate_designs(rows, disk, torsion_stiffness_nm_per_rad=KF,
+                                 friction_coefficients=s.values.get("friction_coefficient",
+                                                                    0.5),
+                                 offsets_x_m=s.dx_m)
+        np.testing.assert_array_equal(table.per_scenario["reward"][:, j], alone["reward"])
+    r = table.per_scenario["reward"]
+    np.testing.assert_array_equal(table.summary["reward"], r.min(axis=1))
+    np.testing.assert_array_equal(table.summary["reward_nominal"], r[:, 0])
+    np.testing.assert_array_equal(table.summary["holds"],
+                                  table.per_scenario["holds"].all(axis=1))
+    np.testing.assert_array_equal(table.summary["peak_compression"],
+                                  table.per_scenario["peak_compression"].max(axis=1))
+    worst = table.summary["worst_scenario"]
+    np.testing.assert_array_equal(r[np.arange(r.shape[0]), worst], r.min(axis=1))
+
+
+def test_a_displacement_across_is_mirror_symmetric(paper_disk, designs):
+    """dx and -dx give the mirrored grasp of a symmetric gripper: the same reward."""
+    sc = Scenarios(placement_across_m=0.004)
+    table = evaluate_scenarios(designs, paper_disk, sc, torsion_stiffness_nm_per_rad=KF,
+                               friction_coefficient=0.5)
+    labels = [s.label for s in table.scenarios]
+    minus, plus = labels.index("dx_m-"), labels.index("dx_m+")
+    solved = table.per_scenario["converged"][:, minus] & table.per_scenario["converged"][:, plus]
+    assert solved.sum() >= 10
+    np.testing.assert_allclose(table.per_scenario["reward"][solved, minus],
+                               table.per_scenario["reward"][solved, plus], atol=1e-6)
+    np.testing.assert_allclose(table.per_scenario["jaw_angles_rad"][solved, minus],
+                               table.per_scenario["jaw_angles_rad"][solved, plus][:, ::-1],
+                               atol=1e-7)
+
+
+def test_robust_measures():
+    r = np.array([[0.1, -0.2, 0.3, 0.0], [1.0, 1.0, 1.0, 1.0]])
+    np.testing.assert_allclose(robust_reward(r, "worst"), [-0.2, 1.0])
+    np.testing.assert_allclose(robust_reward(r, "mean"), [0.05, 1.0])
+    np.testing.assert_allclose(robust_reward(r, "cvar"), [-0.2, 1.0])  # ceil(0.25 * 4) = 1
+    with pytest.raises(ValueError, match="robust must be one of"):
+        robust_reward(r, "median")
+
+
+def test_object_file_ranges_and_tolerance():
+    spec = parse_object({"object": {"radius_m": [0.010, 0.015], "youngs_modulus_pa": [1e5, 3e5],
+                                    "poisson_ratio": 0.45, "thickness_m": 0.02,
+                                    "placement_tolerance_m": [0.002, 0.001]}}, "tomato.toml")
+    assert spec.disk.radius_m == pytest.approx(0.0125)
+    assert spec.disk.youngs_modulus_pa == pytest.approx(2e5)
+    assert spec.scenarios.ranges["radius_m"] == (0.010, 0.015)
+    assert (spec.scenarios.placement_along_m, spec.scenarios.placement_across_m) == (0.002, 0.001)
+    base = {"radius_m": 0.01, "youngs_modulus_pa": 1e5, "poisson_ratio": 0.45,
+            "thickness_m": 0.02}
+    with pytest.raises(ValueError, match=r"tomato.toml: \[object\]: strain_limit must be a "
+                                         "number"):
+        parse_object({"object": {**base, "strain_limit": [0.1, 0.2]}}, "tomato.toml")
+    with pytest.raises(ValueError, match="low must not exceed high"):
+        parse_object({"object": {**base, "radius_m": [0.02, 0.01]}}, "tomato.toml")
+    with pytest.raises(ValueError, match=r"radius_m\[1\]"):
+        parse_object({"object": {**base, "radius_m": [0.01, -1]}}, "tomato.toml")
+    with pytest.raises(ValueError, match="placement_tolerance_m"):
+        parse_object({"object": {**base, "placement_tolerance_m": -0.001}}, "tomato.toml")
+
+
+def test_problem_with_scenarios_is_one_gripper_for_all(paper_disk):
+    sc = Scenarios.of({"radius_m": (0.06, 0.08)}, 0.002)
+    problem = DesignProblem(paper_disk, scenarios=sc, torsion_stiffness_rel=0.0149)
+    assert problem.disk.radius_m == pytest.approx(0.07)
+    x = np.zeros((3, 6))
+    out = problem.evaluate(x)
+    table = problem.evaluate_scenarios(problem.to_physical(x))
+    np.testing.assert_array_equal(out["reward"], table.per_scenario["reward"].min(axis=1))
+    assert problem.object_info()["scenarios"]["ranges"]["radius_m"] == [0.06, 0.08]
+    with pytest.raises(ValueError, match="robust must be one of"):
+        DesignProblem(paper_disk, scenarios=sc, robust="best")
+
+
+def _grid_check(design: dict, disk: SoftDisk, kf: float, mu: float, limit: float,
+                offsets: list[tuple[float, float]], disks: list[SoftDisk]):
+    """Independent check through the API: the design on every (disk, offset) of a grid."""
+    rows, ds, dx = [], [], []
+    base = np.array([design[k] for k in DESIGN_FIELDS])
+    centre_y = base[D1] + disk.radius_m
+    for d in disks:
+        for ox, oy in offsets:
+            row = base.copy()
+            row[D1] = centre_y + oy - d.radius_m
+            rows.append(row)
+            ds.append(d)
+            dx.append(ox)
+    return evaluate_designs(np.array(rows), ds, offsets_x_m=np.array(dx),
+                            torsion_stiffness_nm_per_rad=kf, friction_coefficients=mu,
+                            strain_limits=limit)
+
+
+def _optimize(problem: DesignProblem, budget: int):
+    from optim.cmaes import run_cmaes
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return run_cmaes(problem, budget=budget, seed=0)
+
+
+def test_a_strawberry_design_survives_its_placement_tolerance():
+    """+-1.5 mm both ways: the robust optimum holds within the strain limit at every
+    displacement of a 3 x 3 grid inside the box (checked independently, at half and full
+    tolerance), and its worst case beats the nominal optimum's worst case."""
+    disk = SoftDisk(0.015, 0.0, 2e5, 0.45, 0.03)
+    mu, limit, tol = 0.6, 0.06, 0.0015
+    sc = Scenarios.of(placement_tolerance_m=tol)
+    robust = DesignProblem(disk, limit, mu, scenarios=sc)
+    nominal = DesignProblem(disk, limit, mu)
+    best_robust = _optimize(robust, 600).best_design
+    best_nominal = _optimize(nominal, 600).best_design
+    kf = robust.torsion_stiffness_nm_per_rad
+    for frac in (0.5, 1.0):
+        grid = [(a * frac * tol, b * frac * tol) for a in (-1, 0, 1) for b in (-1, 0, 1)]
+        out = _grid_check(best_robust, disk, kf, mu, limit, grid, [disk])
+        assert out["holds"].all(), out["required_friction"]
+        assert (out["peak_compression"] <= limit).all()
+    worst = {name: robust.evaluate_physical(
+        np.array([[d[k] for k in DESIGN_FIELDS]]))["reward"][0]
+        for name, d in (("robust", best_robust), ("nominal", best_nominal))}
+    assert worst["robust"] > worst["nominal"]
+
+
+def test_one_design_serves_tomatoes_of_a_range():
+    """Tomatoes of 10-15 mm and 100-300 kPa: one design holds within the strain limit on a
+    3 x 3 grid of the ranges."""
+    spec = parse_object({"object": {"radius_m": [0.010, 0.015], "youngs_modulus_pa": [1e5, 3e5],
+                                    "poisson_ratio": 0.45, "thickness_m": 0.02,
+                                    "strain_limit": 0.08}}, "tomatoes.toml")
+    problem = DesignProblem(spec.disk, 0.08, 0.5, scenarios=spec.scenarios)
+    best = _optimize(problem, 600).best_design
+    disks = [SoftDisk(r, 0.0, e, 0.45, 0.02) for r in (0.010, 0.0125, 0.015)
+             for e in (1e5, 2e5, 3e5)]
+    out = _grid_check(best, problem.disk, problem.torsion_stiffness_nm_per_rad, 0.5, 0.08,
+                      [(0.0, 0.0)], disks)
+    assert out["holds"].all()
+    assert (out["peak_compression"] <= 0.08).all()
+    assert math.isfinite(problem.best_reward)
