@@ -25,8 +25,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
     from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
+    from optim.executors import check_executor_options
     from optim.problem import check_budget, check_friction, check_seed, check_strain_limit
-    from optim.verify import MAX_TOP
+    from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
     if args.object is not None and args.scene is not None:
@@ -43,6 +44,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
         cli_option("--friction", check_friction, args.friction)
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
+    cli_option("--workers", check_executor_options, None, args.workers)
+    cli_option("--dask", check_executor_options, args.dask, None)
     check_output_dir("--out", args.out)
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
@@ -63,17 +66,21 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  n_triangles=args.triangles, n_rings=args.rings,
                                  element=args.element, progress=not args.no_progress,
                                  finish=not args.no_finish)
+    report = None
     if args.verify_top is not None:
-        run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
-                           args.verify_top)
-    # a run that found no grasp is not a success, whatever files it wrote
-    return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
+        report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
+                                    args.verify_top)
+    # a run that found no grasp is not a success, whatever files it wrote; nor one whose
+    # optimum the FEM does not confirm
+    if not result.extra["grasp_found"]:
+        return run.NO_GRASP_EXIT
+    return 0 if report is None else verify_exit_code(report)
 
 
 def _verify_command(args: argparse.Namespace) -> int:
     from envs.validation import check_output_dir
     from optim.result import OptimResult
-    from optim.verify import find_result
+    from optim.verify import find_result, verify_exit_code
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
     path = find_result(args.out_dir, args.result)
@@ -81,7 +88,7 @@ def _verify_command(args: argparse.Namespace) -> int:
     if args.object is not None:
         _check_same_object(args.object, OptimResult.from_json(path).object, path)
     report = run.verify_outputs(args.out_dir, args.result, args.top)
-    return 0 if report["summary"]["all_fem_converged"] else 1
+    return verify_exit_code(report)
 
 
 def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
