@@ -134,7 +134,8 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "*_result.json in OUT_DIR) with the model the run used and with the "
                     "finite-element reference (same metrics and reward), and write verify.json "
                     "and verify.png (both rewards and rankings) to OUT_DIR. Each FEM grasp "
-                    "is cached (out/cache/fem).")
+                    "is cached in the user cache folder (~/.cache/psm-grasp/fem, or "
+                    "$PSM_GRASP_CACHE/fem).")
     p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the run (psm-grasp optimize "
                    "--out, or the demo's out)")
     p.add_argument("--top", type=int, default=DEFAULT_TOP,
