@@ -195,3 +195,29 @@ def test_no_docstring_on_an_api_page_has_a_restructuredtext_table():
         for member in members:
             doc = inspect.getdoc(member) or ""
             assert not RST_TABLE_RULE.search(doc), (target, getattr(member, "__name__", member))
+
+
+# --- how to read a reward (docs/own-object.md) --------------------------------------------------
+
+
+def test_the_reading_of_a_reward_in_own_object_md_is_the_evaluator_s():
+    import numpy as np
+
+    from envs import DesignBounds, evaluate_designs
+    from envs.object_file import load_object
+
+    page = (ROOT / "docs" / "own-object.md").read_text()
+    assert "reward = min(c, 0.5) - 0.25 min(eps / eps_max, 4)" in page
+    obj = load_object(ROOT / "examples" / "objects" / "cherry_tomato.toml")
+    designs = DesignBounds().sample(np.random.default_rng(0), 64, obj.disk)
+    out = evaluate_designs(designs, obj.disk, strain_limits=obj.strain_limit,
+                           friction_coefficients=obj.friction_coefficient,
+                           element="spring", n_triangles=20)
+    holds = out["holds"] & out["converged"] & out["valid_at_rest"]
+    assert 5 <= holds.sum() < 64  # both kinds among random designs
+    c, eps = out["contact_score"][holds], out["peak_compression"][holds]
+    np.testing.assert_allclose(out["reward"][holds],
+                               np.minimum(c, 0.5) - 0.25 * np.minimum(eps / obj.strain_limit, 4),
+                               rtol=0, atol=1e-12)
+    # the page's bands: a hold scores at least -1, anything else below -1
+    assert np.all(out["reward"][holds] >= -1.0) and np.all(out["reward"][~holds] < -1.0)
