@@ -366,28 +366,40 @@ def test_the_verify_exit_code_says_whether_the_optimum_is_confirmed():
     assert verify_exit_code(unconverged) == NOT_CONFIRMED_EXIT
 
 
-def _write_run(folder: Path) -> Path:
+def _write_run(folder: Path, grasp_found: bool = True):
     from optim import OptimResult
 
     design = dict(zip(envs.scene.DESIGN_FIELDS, Design.from_scene(SCENE, 0.2).to_array(),
                       strict=True))
     result = OptimResult("cmaes", 0, 10, design, 0.0466, {}, (10,), (0.0466,), (1.0,), 10, 1.0,
                          object={"name": "puck"}, top_designs=({"design": design,
-                                                                "reward": 0.0466},))
-    return result.to_json(folder / "cmaes_seed0_result.json")
+                                                                "reward": 0.0466},),
+                         extra={"grasp_found": grasp_found})
+    result.to_json(folder / "cmaes_seed0_result.json")
+    return result
 
 
-@pytest.mark.parametrize("confirmed, code", [(True, 0), (False, 4)])
+@pytest.mark.parametrize("command, confirmed, grasp_found, code", [
+    ("verify", True, True, 0), ("verify", False, True, 4),
+    ("optimize --verify-top", True, True, 0), ("optimize --verify-top", False, True, 4),
+    ("optimize --verify-top", False, False, 3),  # no grasp at all comes first
+])
 def test_verify_exits_4_when_the_fem_does_not_confirm_the_optimum(tmp_path, capsys, monkeypatch,
-                                                                 confirmed, code):
+                                                                 command, confirmed,
+                                                                 grasp_found, code):
     import optim.run
     import optim.verify
-
-    _write_run(tmp_path)
-    # the verdict is the report's (its physics: tests/test_verify.py); here the command's code
+    # the run and the verdict are stand-ins (the physics: tests/test_verify.py); here the codes
     monkeypatch.setattr(optim.run, "fem_available", lambda: True)
+    monkeypatch.setattr(optim.run, "run_optimize",
+                        lambda *a, **k: (_write_run(tmp_path, grasp_found), {}))
     monkeypatch.setattr(optim.verify, "verify_result", lambda *a, **k: _report(confirmed))
-    assert main(["verify", str(tmp_path), "--top", "2"]) == code
+    if command == "verify":
+        _write_run(tmp_path)
+        argv = ["verify", str(tmp_path), "--top", "2"]
+    else:
+        argv = ["optimize", "--out", str(tmp_path), "--verify-top", "2", "--no-progress"]
+    assert main(argv) == code
     err = capsys.readouterr().err
     assert ("the FEM does not confirm" in err) == (not confirmed)
     assert json.loads((tmp_path / "verify.json").read_text())["summary"]["best_confirmed"] == (
