@@ -39,8 +39,8 @@ DEFAULT_TOP = 3
 # the FEM confirms the reported optimum when the reported reward lies within this share of the
 # FEM's reward of that design, plus an absolute floor for optima near zero: beyond it the
 # verification warns and ``psm-grasp verify`` exits with NOT_CONFIRMED_EXIT. The floor is small
-# against the rewards it judges (a grasp's reward is about 0.01 to 0.05), so a share it lets
-# through at a reward of 0.01 is at most 11 % rather than 10 %, not 30 %
+# against the rewards it judges (a good grasp's reward is 0.01 to 0.05): at a reward of 0.01
+# the verdict allows a gap of 11 %
 CONFIRM_RELATIVE = 0.10
 CONFIRM_ABSOLUTE = 1e-4
 # exit code of `psm-grasp verify` (and `optimize --verify-top`, `demo`) when the FEM does not
