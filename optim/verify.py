@@ -243,6 +243,28 @@ def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
     return path
 
 
+OBJECT_FIELDS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
+                 "stiffness_scale", "strain_limit")
+
+
+def _check_verifiable(result: OptimResult, path: Path) -> None:
+    """What :func:`verify_result` reads of a result file is there: the object's fields and
+    each kept design's six fields and reward; ``ValueError`` naming the file and the first
+    missing field otherwise (a hand-edited or truncated result)."""
+    where = f"{str(path)!r}: not a result written by psm-grasp optimize"
+    missing = [k for k in OBJECT_FIELDS if k not in result.object]
+    if missing:
+        raise ValueError(f"{where} (its object has no {missing[0]!r})")
+    for i, pick in enumerate(result.top_designs or [{"design": result.best_design,
+                                                     "reward": result.best_reward}]):
+        design = pick.get("design") if isinstance(pick, dict) else None
+        absent = ([k for k in DESIGN_FIELDS if k not in design] if isinstance(design, dict)
+                  else ["design"])
+        if absent or "reward" not in pick:
+            raise ValueError(f"{where} (top_designs[{i}] has no "
+                             f"{(absent or ['reward'])[0]!r})")
+
+
 def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | None = None,
                fem_rings: int = FEM_DESIGN_RINGS, executor=None) -> tuple[dict, dict]:
     """Verify the run in ``out_dir``; write ``verify.json`` and ``verify.png`` there.
@@ -250,7 +272,9 @@ def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | Non
     Returns the report and the written paths.
     """
     path = find_result(out_dir, result)
-    report = verify_result(OptimResult.from_json(path), top, fem_rings, executor)
+    run = OptimResult.from_json(path)
+    _check_verifiable(run, path)
+    report = verify_result(run, top, fem_rings, executor)
     report["run"]["result_file"] = path.name
     folder = Path(out_dir)
     paths = {"verify": folder / "verify.json", "chart": folder / "verify.png"}

@@ -366,13 +366,18 @@ def test_the_verify_exit_code_says_whether_the_optimum_is_confirmed():
     assert verify_exit_code(unconverged) == NOT_CONFIRMED_EXIT
 
 
+DISK_FIELDS = {"radius_m": 0.005, "youngs_modulus_pa": 1.2e6, "poisson_ratio": 0.49,
+               "thickness_m": 0.004, "stiffness_scale": 1.0, "strain_limit": 0.15}
+
+
 def _write_run(folder: Path, grasp_found: bool = True):
     from optim import OptimResult
 
     design = dict(zip(envs.scene.DESIGN_FIELDS, Design.from_scene(SCENE, 0.2).to_array(),
                       strict=True))
     result = OptimResult("cmaes", 0, 10, design, 0.0466, {}, (10,), (0.0466,), (1.0,), 10, 1.0,
-                         object={"name": "puck"}, top_designs=({"design": design,
+                         object={"name": "puck", **DISK_FIELDS},
+                         top_designs=({"design": design,
                                                                 "reward": 0.0466},),
                          extra={"grasp_found": grasp_found})
     result.to_json(folder / "cmaes_seed0_result.json")
@@ -477,6 +482,24 @@ def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what
                   str(ROOT / "examples/objects/foam_disk.toml")]):
         assert main(argv) == 2
         _one_error_line(capsys.readouterr().err, str(path), what)
+
+
+@pytest.mark.parametrize("edit, what", [
+    (lambda d: d["object"].pop("radius_m"), "its object has no 'radius_m'"),
+    (lambda d: d["top_designs"][0]["design"].pop("torque_nm"),
+     "top_designs[0] has no 'torque_nm'"),
+    (lambda d: d["top_designs"][0].pop("reward"), "top_designs[0] has no 'reward'"),
+], ids=["object", "design", "reward"])
+def test_a_hand_edited_result_is_one_line_naming_what_is_missing(tmp_path, capsys, edit, what):
+    pytest.importorskip("skfem")  # (verify refuses to start without it)
+    path = tmp_path / "cmaes_seed0_result.json"
+    _write_run(tmp_path)
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    assert main(["verify", str(tmp_path)]) == 2
+    _one_error_line(capsys.readouterr().err, str(path), "not a result written by psm-grasp "
+                    f"optimize ({what})")
 
 
 def test_an_object_file_with_a_byte_order_mark_is_read(tmp_path):
