@@ -25,8 +25,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
     from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
+    from optim.executors import check_executor_options
     from optim.problem import check_budget, check_friction, check_seed, check_strain_limit
-    from optim.verify import MAX_TOP
+    from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
     if args.object is not None and args.scene is not None:
@@ -43,6 +44,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
         cli_option("--friction", check_friction, args.friction)
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
+    cli_option("--workers", check_executor_options, None, args.workers)
+    cli_option("--dask", check_executor_options, args.dask, None)
     check_output_dir("--out", args.out)
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
@@ -66,11 +69,15 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust)
+    report = None
     if args.verify_top is not None:
-        run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
-                           args.verify_top)
-    # a run that found no grasp is not a success, whatever files it wrote
-    return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
+        report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
+                                    args.verify_top)
+    # a run that found no grasp is not a success, whatever files it wrote; nor one whose
+    # optimum the FEM does not confirm
+    if not result.extra["grasp_found"]:
+        return run.NO_GRASP_EXIT
+    return 0 if report is None else verify_exit_code(report)
 
 
 def placement_tolerance(text: str) -> float | tuple[float, float]:
@@ -96,7 +103,7 @@ def placement_tolerance(text: str) -> float | tuple[float, float]:
 def _verify_command(args: argparse.Namespace) -> int:
     from envs.validation import check_output_dir
     from optim.result import OptimResult
-    from optim.verify import find_result
+    from optim.verify import find_result, verify_exit_code
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
     path = find_result(args.out_dir, args.result)
@@ -104,7 +111,7 @@ def _verify_command(args: argparse.Namespace) -> int:
     if args.object is not None:
         _check_same_object(args.object, OptimResult.from_json(path).object, path)
     report = run.verify_outputs(args.out_dir, args.result, args.top)
-    return 0 if report["summary"]["all_fem_converged"] else 1
+    return verify_exit_code(report)
 
 
 def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
@@ -150,7 +157,8 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "*_result.json in OUT_DIR) with the model the run used and with the "
                     "finite-element reference (same metrics and reward), and write verify.json "
                     "and verify.png (both rewards and rankings) to OUT_DIR. Each FEM grasp "
-                    "is cached (out/cache/fem).")
+                    "is cached in the user cache folder (~/.cache/psm-grasp/fem, or "
+                    "$PSM_GRASP_CACHE/fem).")
     p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the run (psm-grasp optimize "
                    "--out, or the demo's out)")
     p.add_argument("--top", type=int, default=DEFAULT_TOP,

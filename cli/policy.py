@@ -51,7 +51,9 @@ def _design_command(args: argparse.Namespace) -> int:
     from optim.rl import load_policy
 
     obj = load_object(args.object)
-    policy = load_policy(args.policy)  # a bad or mismatched policy before any work
+    # a bad or mismatched policy before any work, named as typed
+    policy = load_policy() if args.policy is None else cli_option("--policy", load_policy,
+                                                                   args.policy)
     refine = check_integer("--refine", args.refine, 0, 100_000)
     cli_option("--seed", check_seed, args.seed)
     check_output_dir("--out", args.out)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import operator
 import textwrap
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -243,10 +244,21 @@ def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndar
 RESET_OPTIONS = ("disk", "strain_limit", "friction_coefficient")
 
 
+def _options_dict(options: Any) -> dict[str, Any]:
+    """A copy of the ``options`` of a reset: ``None`` or a mapping, by option name."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"options must be None or a dict of reset options (allowed keys: "
+                         f"{', '.join(RESET_OPTIONS)}), got {type(options).__name__} "
+                         f"{options!r:.60}")
+    return dict(options)
+
+
 def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
     """The reset options, every one validated (numbers as floats) before a reset changes
     anything: a refused reset leaves the env, its random stream included, as it was."""
-    options = dict(options or {})
+    options = _options_dict(options)
     unknown = set(options) - set(RESET_OPTIONS)
     if unknown:
         raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: "
@@ -782,7 +794,7 @@ class GripperDesignVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != n:
                 raise ValueError(f"seed list must have length num_envs={n}, got {len(seeds)}")
-        options = dict(options or {})
+        options = _options_dict(options)
         mask = options.pop("reset_mask", None)
         if mask is None:
             mask = np.ones(n, dtype=np.bool_)

@@ -9,16 +9,14 @@ process is injected through ``executor`` (anything with ``.map``), never hard-co
 
 A design is six numbers in SI units, in the column order of :data:`DESIGN_FIELDS`:
 
-====  ====================  ===============================================  =======
-col   field                 meaning                                          unit
-====  ====================  ===============================================  =======
-0     ``finger_length_m``   finger length ``l`` (joint to tip)               m
-1     ``rest_angle_rad``    rest angle ``theta_a0`` of both fingers from +y  rad
-2     ``joint_offset_m``    joint distance ``d_3`` from the symmetry axis    m
-3     ``finger_width_m``    finger width ``w``                               m
-4     ``torque_nm``         actuation torque ``T_a`` on each finger          N·m
-5     ``distance_m``        object placement ``d_1`` (joints' line to disk)  m
-====  ====================  ===============================================  =======
+| col | field | meaning | unit |
+|---|---|---|---|
+| 0 | ``finger_length_m`` | finger length ``l`` (joint to tip) | m |
+| 1 | ``rest_angle_rad`` | rest angle ``theta_a0`` of both fingers from +y | rad |
+| 2 | ``joint_offset_m`` | joint distance ``d_3`` from the symmetry axis | m |
+| 3 | ``finger_width_m`` | finger width ``w`` | m |
+| 4 | ``torque_nm`` | actuation torque ``T_a`` on each finger | N·m |
+| 5 | ``distance_m`` | object placement ``d_1`` (joints' line to disk) | m |
 """
 
 from __future__ import annotations
@@ -159,16 +157,14 @@ class DesignBounds:
     beads alike. Every design of the default box is valid at rest (its clearance is positive),
     and most of its random designs grasp with both fingers, on every preset.
 
-    ==  ====================  ==========================  =======  =======
-    #   field                 meaning                     low      high
-    ==  ====================  ==========================  =======  =======
-    0   ``finger_length_r``   finger length ``l / r``     1.5      8
-    1   ``rest_angle_rad``    rest angle ``theta_a0``     10 deg   60 deg
-    2   ``joint_offset_r``    joint offset ``d_3 / r``    0        0.6
-    3   ``finger_width_r``    finger width ``w / r``      0.05     0.4
-    4   ``torque_rel``        ``T_a / (s E t r^2)``       0        0.3
-    5   ``rest_clearance_r``  rest clearance / ``r``      0.005    1.2
-    ==  ====================  ==========================  =======  =======
+    | # | field | meaning | low | high |
+    |---|---|---|---|---|
+    | 0 | ``finger_length_r`` | finger length ``l / r`` | 1.5 | 8 |
+    | 1 | ``rest_angle_rad`` | rest angle ``theta_a0`` | 10 deg | 60 deg |
+    | 2 | ``joint_offset_r`` | joint offset ``d_3 / r`` | 0 | 0.6 |
+    | 3 | ``finger_width_r`` | finger width ``w / r`` | 0.05 | 0.4 |
+    | 4 | ``torque_rel`` | ``T_a / (s E t r^2)`` | 0 | 0.3 |
+    | 5 | ``rest_clearance_r`` | rest clearance / ``r`` | 0.005 | 1.2 |
 
     The box holds the paper's grippers (``l / r`` = 2 to 4, 45 deg, clearance 0.01 to 0.02, the
     paper's torques 0.05 to 0.5 N·m at 0.005 to 0.2 units) and the forceps (``l / r`` = 5.3 to 8,
@@ -776,7 +772,8 @@ def evaluate_designs(
         quadratic triangles, ~3,500 unknowns, within ~0.5 % of the mesh-converged closing
         angle), ramped from the open gripper to the design's torque. It costs about 10^4
         times the point-spring model (docs/performance.md) and is cached on disk per
-        design (``$PSM_GRASP_CACHE/fem``, default ``out/cache/fem``), so a design is solved
+        design (:func:`envs.fem.fem_cache_dir`: ``$PSM_GRASP_CACHE/fem``, default
+        ``~/.cache/psm-grasp/fem``), so a design is solved
         once; with an executor the designs run in parallel (one per task by default). The
         keys, their meaning and the reward are the same at both fidelities (see below);
         ``n_triangles``, ``n_rings``, ``element`` and ``calibrated`` must be left ``None``.

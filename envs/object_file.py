@@ -140,10 +140,10 @@ class ObjectSpec:
         g = self.gripper
         disk = SoftDisk(self.disk.radius_m, g.distance_m, self.disk.youngs_modulus_pa,
                         self.disk.poisson_ratio, self.disk.thickness_m, self.disk.stiffness_scale)
-        kf = joint_spring_nm_per_rad(disk, None, g.torsion_stiffness_nm_per_rad)
-        gripper = Gripper(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
-                          g.finger_width_m, kf)
-        try:
+        try:  # the table's keys, named with the file (finger_length_m > finger_width_m)
+            kf = joint_spring_nm_per_rad(disk, None, g.torsion_stiffness_nm_per_rad)
+            gripper = Gripper(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+                              g.finger_width_m, kf)
             return Scene(gripper, disk)
         except ValueError as exc:
             raise ValueError(f"{self._where()}: [gripper]: {exc}") from None
@@ -286,7 +286,8 @@ def load_object(path: str | Path) -> ObjectSpec:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        # "utf-8-sig": a byte-order mark, which some editors write first, is not TOML
+        text = p.read_text(encoding="utf-8-sig")
     except OSError as exc:
         raise ValueError(f"{str(p)!r}: cannot read the object file ({exc.strerror or exc})"
                          ) from None

@@ -111,10 +111,13 @@ class Gripper:
             "rest_angle_rad", self.rest_angle_rad, 0.0, math.pi / 2, low_open=True, high_open=True
         )
         check_range("joint_offset_m", self.joint_offset_m, 0.0, math.inf)
-        check_range(
-            "finger_width_m", self.finger_width_m, 0.0, self.finger_length_m, low_open=True,
-            high_open=True,
-        )
+        check_range("finger_width_m", self.finger_width_m, 0.0, math.inf, low_open=True)
+        if not self.finger_width_m < self.finger_length_m:
+            # a relation of two given values: name both, not a range derived from one
+            raise ValueError(
+                f"finger_length_m = {self.finger_length_m!r} must be larger than "
+                f"finger_width_m = {self.finger_width_m!r} (a finger is longer than it is "
+                "wide)")
         check_range(
             "torsion_stiffness_nm_per_rad", self.torsion_stiffness_nm_per_rad, 0.0, math.inf,
             low_open=True,

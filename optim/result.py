@@ -187,8 +187,34 @@ class OptimResult:
 
     @classmethod
     def from_json(cls, path: str | Path) -> OptimResult:
-        """Read a result written by :meth:`to_json`."""
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """Read a result written by :meth:`to_json`.
+
+        Raises
+        ------
+        ValueError
+            One line naming the file and what is wrong with it: unreadable, not JSON (with the
+            line and column), or not a result (a missing or unknown field, a bad value).
+        """
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ValueError(f"{str(path)!r}: cannot read the result file "
+                             f"({exc.strerror or exc})") from None
+        except UnicodeDecodeError:
+            raise ValueError(f"{str(path)!r}: not a text (JSON) file") from None
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{str(path)!r}: not valid JSON: {exc}") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{str(path)!r}: not a result written by psm-grasp optimize (a "
+                             f"JSON {type(data).__name__}, not an object)")
+        try:
+            return cls.from_dict(data)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"{str(path)!r}: not a result written by psm-grasp optimize "
+                             f"({exc})") from None
 
     # --- convenience -------------------------------------------------------------------------
 

@@ -322,26 +322,62 @@ def load_policy(path: str | Path | None = None) -> DesignPolicy:
     Raises
     ------
     ValueError
-        A folder without the policy's files, or unreadable ones;
+        One line naming the folder or the file: a folder without the policy's files, or a file
+        that cannot be read (not JSON, not a numpy archive, a missing layer);
         :class:`PolicyMismatchError` (a ``ValueError``) for a policy that does not fit this
         package (observation, action box, model member, reward weights, version).
     """
     folder = SHIPPED_POLICY if path is None else Path(path)
-    where = "the shipped policy" if path is None else f"--policy {str(folder)!r}"
+    where = "the shipped policy" if path is None else f"policy folder {str(folder)!r}"
     missing = [name for name in POLICY_FILES if not (folder / name).is_file()]
     if missing:
-        raise ValueError(f"{where}: no {missing[0]} in {str(folder)!r} (a folder written by "
-                         "psm-grasp train-policy --out)")
-    try:
-        meta = json.loads((folder / "policy.json").read_text())
-        with np.load(folder / "policy.npz") as data:
-            n = int(meta["n_layers"])
-            layers = [(data[f"w{k}"].astype(np.float64), data[f"b{k}"].astype(np.float64))
-                      for k in range(n)]
-    except (OSError, KeyError, ValueError, TypeError) as exc:
-        raise ValueError(f"{where}: cannot read the policy ({exc})") from None
+        raise ValueError(f"{where}: no {missing[0]} in it (a folder written by psm-grasp "
+                         "train-policy --out)")
+    meta = _read_meta(folder / "policy.json")
     _check_meta(meta, where)
+    layers = _read_layers(folder / "policy.npz", meta["n_layers"])
     return DesignPolicy(layers, meta.pop("activation"), meta.pop("squash"), meta)
+
+
+def _read_meta(path: Path) -> dict[str, Any]:
+    """A policy's ``policy.json``; ``ValueError`` naming the file otherwise."""
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{str(path)!r}: cannot read it ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{str(path)!r}: not the JSON a policy is saved as ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{str(path)!r}: not a policy's metadata (a JSON "
+                         f"{type(meta).__name__}, not an object)")
+    missing = [k for k in ("n_layers", "activation", "squash") if k not in meta]
+    n = meta.get("n_layers")
+    if missing or isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"{str(path)!r}: not a policy's metadata (" + (
+            f"no {missing[0]!r}" if missing else f"n_layers = {n!r}, not an integer >= 1")
+            + ")")
+    return meta
+
+
+def _read_layers(path: Path, n_layers: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The ``n_layers`` (weights, biases) of a policy's ``policy.npz``; ``ValueError`` naming
+    the file otherwise (not a numpy archive, a truncated one, a missing layer)."""
+    import zipfile
+    import zlib
+
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            names = [name for k in range(n_layers) for name in (f"w{k}", f"b{k}")]
+            absent = [name for name in names if name not in data.files]
+            if absent:
+                raise ValueError(f"no array {absent[0]!r} of its {n_layers} layers")
+            arrays = [data[name].astype(np.float64) for name in names]
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile, zlib.error) as exc:
+        # np.load of a file that is no archive reads it as a pickle, which it refuses
+        what = "not a numpy archive" if "pickle" in str(exc) else exc
+        raise ValueError(f"{str(path)!r}: not a policy archive written by psm-grasp "
+                         f"train-policy ({what})") from None
+    return list(zip(arrays[::2], arrays[1::2], strict=True))
 
 
 def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,

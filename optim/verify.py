@@ -31,14 +31,22 @@ from .charts import disk_of, model_of
 from .finish import RANKING_MEMBER
 from .result import OptimResult
 
-__all__ = ["DEFAULT_TOP", "RANKING_MEMBER", "find_result", "verify_result", "verify_run",
-           "verify_figure"]
+__all__ = ["DEFAULT_TOP", "RANKING_MEMBER", "CONFIRM_RELATIVE", "CONFIRM_ABSOLUTE",
+           "NOT_CONFIRMED_EXIT", "confirm_margin", "confirmed", "find_result", "verify_result",
+           "verify_run", "verify_figure", "verify_exit_code"]
 
 DEFAULT_TOP = 3
-# the FEM confirms the reported optimum when its reward is within this share of the reported
-# one (plus the absolute margin, for optima near zero): beyond it the verification warns
+# the FEM confirms the reported optimum when the reported reward lies within this share of the
+# FEM's reward of that design, plus an absolute floor for optima near zero: beyond it the
+# verification warns and ``psm-grasp verify`` exits with NOT_CONFIRMED_EXIT. The floor is small
+# against the rewards it judges (a good grasp's reward is 0.01 to 0.05): at a reward of 0.01
+# the verdict allows a gap of 11 %
 CONFIRM_RELATIVE = 0.10
-CONFIRM_ABSOLUTE = 0.002
+CONFIRM_ABSOLUTE = 1e-4
+# exit code of `psm-grasp verify` (and `optimize --verify-top`, `demo`) when the FEM does not
+# confirm the run's reported optimum (3 is NO_GRASP_EXIT, 2 a refused input, 1 a FEM grasp
+# that did not converge)
+NOT_CONFIRMED_EXIT = 4
 MAX_TOP = 10  # what an OptimResult keeps
 # designs whose rewards all lie this close at a fidelity are a tie there: their order is not a
 # finding (a converged optimizer's best designs often differ only in fields the grasp ignores)
@@ -66,6 +74,29 @@ def find_result(out_dir: str | Path, result: str | None = None) -> Path:
     return found[0]
 
 
+def confirm_margin(fem_reward: float) -> float:
+    """The largest distance between a reported reward and the FEM's reward ``fem_reward`` of
+    the same design that still confirms it: :data:`CONFIRM_RELATIVE` of ``|fem_reward|`` plus
+    :data:`CONFIRM_ABSOLUTE` [reward units]."""
+    return CONFIRM_RELATIVE * abs(float(fem_reward)) + CONFIRM_ABSOLUTE
+
+
+def confirmed(reported_reward: float, fem_reward: float) -> bool:
+    """Whether the FEM's reward of a design confirms the reward reported for it (within
+    :func:`confirm_margin`); a NaN on either side does not confirm."""
+    gap = abs(float(reported_reward) - float(fem_reward))
+    return bool(gap <= confirm_margin(fem_reward))
+
+
+def verify_exit_code(report: dict[str, Any]) -> int:
+    """The exit code of a verification: :data:`NOT_CONFIRMED_EXIT` when the FEM does not
+    confirm the reported optimum, else 1 when a FEM grasp did not converge, else 0."""
+    s = report["summary"]
+    if not s.get("best_confirmed", True):  # reports written before the finish lack it
+        return NOT_CONFIRMED_EXIT
+    return 0 if s["all_fem_converged"] else 1
+
+
 def _ranks(values: np.ndarray) -> list[int]:
     """1 = best (largest); ties keep the earlier design first."""
     order = np.argsort(-values, kind="stable")
@@ -84,8 +115,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     :data:`TIE_REWARD` at either fidelity), whether both fidelities pick the same best, the
     largest reward difference, and ``best_confirmed``: the reward the run reported for its
     optimum (``reported_reward``, by ``reward_model``: the finer member after the finish of
-    :mod:`optim.finish`, else the run's own model) within 10 % of the FEM's reward of that
-    design, plus 0.002).
+    :mod:`optim.finish`, else the run's own model) within :func:`confirm_margin` of the
+    FEM's reward of that design (10 % of it plus 1e-4), and ``reported_row``, the index of
+    that design in ``designs``).
     """
     top = check_integer("--top", top, 1, MAX_TOP)
     picks = list(result.top_designs)[:top]
@@ -123,13 +155,14 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     # the run's reported optimum: its best design (the first pick unless it is not among them)
     best = next((i for i, p in enumerate(picks) if p["design"] == result.best_design), 0)
     reported = float(picks[best]["reward"])  # the best design's is the run's best reward
-    margin = CONFIRM_RELATIVE * abs(fem["reward"][best]) + CONFIRM_ABSOLUTE
     summary: dict[str, Any] = {
         "designs": len(rows),
+        "reported_row": best,
         "reported_reward": float(reported),
         "reward_model": result.extra.get("reward_model", model),
         "fem_reward_of_reported": float(fem["reward"][best]),
-        "best_confirmed": bool(abs(reported - fem["reward"][best]) <= margin),
+        "confirm_margin": confirm_margin(fem["reward"][best]),
+        "best_confirmed": confirmed(reported, fem["reward"][best]),
         "same_best": psm_rank.index(1) == fem_rank.index(1),
         "fem_rank_of_psm_best": fem_rank[psm_rank.index(1)],
         "max_reward_difference": float(np.max(np.abs(psm["reward"] - fem["reward"]))),
@@ -210,6 +243,28 @@ def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
     return path
 
 
+OBJECT_FIELDS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
+                 "stiffness_scale", "strain_limit")
+
+
+def _check_verifiable(result: OptimResult, path: Path) -> None:
+    """What :func:`verify_result` reads of a result file is there: the object's fields and
+    each kept design's six fields and reward; ``ValueError`` naming the file and the first
+    missing field otherwise (a hand-edited or truncated result)."""
+    where = f"{str(path)!r}: not a result written by psm-grasp optimize"
+    missing = [k for k in OBJECT_FIELDS if k not in result.object]
+    if missing:
+        raise ValueError(f"{where} (its object has no {missing[0]!r})")
+    for i, pick in enumerate(result.top_designs or [{"design": result.best_design,
+                                                     "reward": result.best_reward}]):
+        design = pick.get("design") if isinstance(pick, dict) else None
+        absent = ([k for k in DESIGN_FIELDS if k not in design] if isinstance(design, dict)
+                  else ["design"])
+        if absent or "reward" not in pick:
+            raise ValueError(f"{where} (top_designs[{i}] has no "
+                             f"{(absent or ['reward'])[0]!r})")
+
+
 def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | None = None,
                fem_rings: int = FEM_DESIGN_RINGS, executor=None) -> tuple[dict, dict]:
     """Verify the run in ``out_dir``; write ``verify.json`` and ``verify.png`` there.
@@ -217,7 +272,9 @@ def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | Non
     Returns the report and the written paths.
     """
     path = find_result(out_dir, result)
-    report = verify_result(OptimResult.from_json(path), top, fem_rings, executor)
+    run = OptimResult.from_json(path)
+    _check_verifiable(run, path)
+    report = verify_result(run, top, fem_rings, executor)
     report["run"]["result_file"] = path.name
     folder = Path(out_dir)
     paths = {"verify": folder / "verify.json", "chart": folder / "verify.png"}
@@ -258,22 +315,44 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
              "a tie, their order is not a finding" if s.get("tied") else ""))
     if "reported_reward" in s:  # reports written before the finish lack it
         m = s["reward_model"]
-        print(f"  reported optimum: {s['reported_reward']:.4f} (by {m.get('element')} N = "
-              f"{m.get('n_triangles')}, M = {m.get('n_rings')}), FEM "
-              f"{s['fem_reward_of_reported']:.4f}: "
+        print(f"  reported optimum (#{_reported_row(report) + 1}): {s['reported_reward']:.4f} "
+              f"(by {m.get('element')} N = {m.get('n_triangles')}, M = {m.get('n_rings')}), "
+              f"FEM {s['fem_reward_of_reported']:.4f}: "
               + ("confirmed" if s["best_confirmed"] else "NOT confirmed")
-              + f" (within {CONFIRM_RELATIVE:.0%} + {CONFIRM_ABSOLUTE:g})")
+              + f" (within {CONFIRM_RELATIVE:.0%} of the FEM's + {CONFIRM_ABSOLUTE:g})")
     for name, p in paths.items():
         print(f"  {name:12s}: {p}")
     if not s["best_confirmed"]:
-        best = next((r for r in report["designs"] if r["psm_rank"] == 1), report["designs"][0])
-        psm, fem = best["psm"], best["fem"]
-        # the terms, so that a designer sees which one the models disagree on (the demo's
-        # light-touch optimum: the contact, a facet of the point model's contour flat on a face)
-        print(f"psm-grasp: warning: the FEM does not confirm the run's reported optimum (reward "
-              f"{s.get('fem_reward_of_reported', fem['reward']):.4f} against the reported "
-              f"{s.get('reported_reward', psm['reward']):.4f}, more than "
-              f"{CONFIRM_RELATIVE:.0%} + {CONFIRM_ABSOLUTE:g} apart; contact score "
-              f"{psm['contact_score']:.3f} against the FEM's {fem['contact_score']:.3f}, peak "
-              f"compression {psm['peak_compression']:.4f} against "
-              f"{fem['peak_compression']:.4f}): check it before building it", file=sys.stderr)
+        _warn_not_confirmed(report)
+
+
+def _reported_row(report: dict[str, Any]) -> int:
+    """Index in ``report["designs"]`` of the run's reported optimum (the first design in
+    reports written before the summary named it: the run's best comes first)."""
+    return int(report["summary"].get("reported_row", 0))
+
+
+def _reported_metrics(report: dict[str, Any], row: dict[str, Any]) -> dict[str, Any]:
+    """The metrics of ``row`` by the model that reported the run's optimum: the ranking
+    member's column when it is that model (the finish), else the run's own model's."""
+    member, model = report.get("ranking_member"), report["summary"].get("reward_model")
+    same = member and model and all(model.get(k) == member.get(k)
+                                    for k in ("element", "n_triangles", "n_rings"))
+    return row["ranking_member"] if same else row["psm"]
+
+
+def _warn_not_confirmed(report: dict[str, Any]) -> None:
+    """One warning on stderr quoting the reported design's own terms, so that a designer sees
+    which one the models disagree on (the demo's light-touch optimum: the contact, a facet of
+    the point model's contour flat on a face)."""
+    s = report["summary"]
+    k = _reported_row(report)
+    row = report["designs"][k]
+    model, fem = _reported_metrics(report, row), row["fem"]
+    print(f"psm-grasp: warning: the FEM does not confirm the run's reported optimum, design "
+          f"#{k + 1} (reward {s.get('fem_reward_of_reported', fem['reward']):.4f} against the "
+          f"reported {s.get('reported_reward', model['reward']):.4f}, more than "
+          f"{CONFIRM_RELATIVE:.0%} + {CONFIRM_ABSOLUTE:g} apart; contact score "
+          f"{model['contact_score']:.3f} against the FEM's {fem['contact_score']:.3f}, peak "
+          f"compression {model['peak_compression']:.4f} against "
+          f"{fem['peak_compression']:.4f}): check it before building it", file=sys.stderr)

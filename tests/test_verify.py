@@ -20,7 +20,14 @@ def run_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("run")
     code = main(["optimize", "--method", "random", "--budget", "60", "--seed", "4", "--out",
                  str(out), "--no-progress", "--verify-top", "3"])
-    assert code in (0, 3)
+    result = OptimResult.from_json(out / "random_seed4_result.json")
+    report = json.loads((out / "verify.json").read_text())
+    # the code says what the files say: no grasp, else the FEM's verdict on the optimum
+    expected = (3 if not result.extra["grasp_found"] else
+                0 if report["summary"]["best_confirmed"] and report["summary"][
+                    "all_fem_converged"] else
+                4 if not report["summary"]["best_confirmed"] else 1)
+    assert code == expected
     return out
 
 
@@ -63,7 +70,9 @@ def test_verify_rescores_the_run_and_writes_its_files(run_dir):
     assert s["reward_model"] == result.extra["reward_model"]
     fem = rows[0]["fem"]["reward"]
     assert s["fem_reward_of_reported"] == fem
-    assert s["best_confirmed"] == (abs(result.best_reward - fem) <= 0.10 * abs(fem) + 0.002)
+    assert s["reported_row"] == 0
+    assert s["confirm_margin"] == pytest.approx(0.10 * abs(fem) + 1e-4, rel=1e-12)
+    assert s["best_confirmed"] == (abs(result.best_reward - fem) <= 0.10 * abs(fem) + 1e-4)
 
 
 def test_designs_whose_rewards_tie_get_no_rank_correlation(run_dir, tmp_path, monkeypatch,
@@ -81,7 +90,8 @@ def test_designs_whose_rewards_tie_get_no_rank_correlation(run_dir, tmp_path, mo
     assert "ranking_member_spearman" not in report["summary"]
     copy = tmp_path / "run"  # the other tests read the run's own verify.json
     shutil.copytree(run_dir, copy)
-    assert main(["verify", str(copy), "--top", "3"]) == 0
+    code = main(["verify", str(copy), "--top", "3"])
+    assert code == verify.verify_exit_code(json.loads((copy / "verify.json").read_text()))
     assert "a tie, their order is not a finding" in capsys.readouterr().out
 
 
@@ -116,19 +126,29 @@ def test_verify_warns_when_the_fem_does_not_confirm_the_best(run_dir, capsys, mo
 
     monkeypatch.setattr(verify, "CONFIRM_RELATIVE", 0.0)
     monkeypatch.setattr(verify, "CONFIRM_ABSOLUTE", 0.0)  # no two fidelities agree exactly
-    assert main(["verify", str(run_dir), "--top", "1"]) == 0
+    # a script sees it: the exit code of an unconfirmed optimum
+    assert main(["verify", str(run_dir), "--top", "3"]) == verify.NOT_CONFIRMED_EXIT == 4
     err = capsys.readouterr().err
-    assert "the FEM does not confirm the run's reported optimum" in err
-    # with the terms the models disagree on, from the report
+    assert "the FEM does not confirm the run's reported optimum, design #1" in err
+    # with the terms the models disagree on: the reported design's own, by the model that
+    # reported it (the ranking member, after the finish), from the report
     report = json.loads((run_dir / "verify.json").read_text())
-    best = next(r for r in report["designs"] if r["psm_rank"] == 1)
-    assert (f"contact score {best['psm']['contact_score']:.3f} against the FEM's "
-            f"{best['fem']['contact_score']:.3f}") in err
+    s = report["summary"]
+    reported = report["designs"][s["reported_row"]]
+    assert reported["design"] == OptimResult.from_json(
+        run_dir / "random_seed4_result.json").best_design
+    assert s["reward_model"] == report["ranking_member"]
+    assert (f"contact score {reported['ranking_member']['contact_score']:.3f} against the "
+            f"FEM's {reported['fem']['contact_score']:.3f}") in err
+    assert f"the reported {s['reported_reward']:.4f}" in err
 
 
 def test_verify_command_on_the_run_folder(run_dir, capsys):
-    assert main(["verify", str(run_dir), "--top", "2"]) == 0
+    from optim.verify import verify_exit_code
+
+    code = main(["verify", str(run_dir), "--top", "2"])
     printed = capsys.readouterr().out
+    assert code == verify_exit_code(json.loads((run_dir / "verify.json").read_text()))
     assert "FEM verification of random on paper-r070" in printed
     report = json.loads((run_dir / "verify.json").read_text())
     assert len(report["designs"]) == 2

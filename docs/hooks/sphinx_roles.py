@@ -4,7 +4,8 @@ The package's numpy-style docstrings name objects with Sphinx roles (``:func:`en
 ``:class:`~envs.evaluate.DesignBounds```). mkdocstrings renders the role's name as plain text in
 front of the code span; this hook turns each role into an optional mkdocs-autorefs reference:
 a link where the object has an API page, the code span alone where it has none. A leading
-``~`` shows the last component only, as in Sphinx.
+``~`` shows the last component only, as in Sphinx. A paragraph ending in reStructuredText's
+``::`` (a literal block follows, which Markdown already shows as code) ends in one colon.
 """
 
 from __future__ import annotations
@@ -24,4 +25,4 @@ def _reference(match: re.Match) -> str:
 
 
 def on_page_content(html: str, **kwargs) -> str:
-    return _ROLE.sub(_reference, html)
+    return _ROLE.sub(_reference, html).replace("::</p>", ":</p>")

@@ -66,7 +66,7 @@ total potential of the coupled unknowns), :mod:`.newton` (Newton, line search, l
 from __future__ import annotations
 
 from .body import _Body as _Body
-from .cache import FEM_VERSION
+from .cache import FEM_VERSION, fem_cache_dir
 from .grasp import fem_grasp
 from .hertz import fem_plate_compression, hertz_line_compression
 from .material import _lame as _lame
@@ -84,4 +84,5 @@ __all__ = [
     "hertz_line_compression",
     "default_mesh_size_m",
     "FEM_VERSION",
+    "fem_cache_dir",
 ]

@@ -1,7 +1,9 @@
 """Disk cache of :func:`~envs.fem.fem_grasp` results, keyed by a hash of all inputs.
 
-Entries are JSON files under ``$PSM_GRASP_CACHE/fem`` (default ``out/cache/fem`` relative to
-the working directory); :data:`FEM_VERSION` is part of every key.
+Entries are JSON files in :func:`fem_cache_dir`: ``$PSM_GRASP_CACHE/fem`` when that variable is
+set, else the user's cache folder, ``$XDG_CACHE_HOME/psm-grasp/fem`` (default
+``~/.cache/psm-grasp/fem``), never the working directory; :data:`FEM_VERSION` is part of every
+key.
 """
 
 from __future__ import annotations
@@ -19,8 +21,19 @@ from .result import FemResult
 FEM_VERSION = "fem-5"
 
 
-def _cache_dir() -> Path:
-    return Path(os.environ.get("PSM_GRASP_CACHE", os.path.join("out", "cache"))) / "fem"
+def fem_cache_dir() -> Path:
+    """The folder of the FEM's cache entries: ``$PSM_GRASP_CACHE/fem`` when that variable is
+    set (and not empty), else ``$XDG_CACHE_HOME/psm-grasp/fem`` when that is an absolute path
+    (the XDG rule), else ``~/.cache/psm-grasp/fem``."""
+    override = os.environ.get("PSM_GRASP_CACHE")
+    if override:
+        return Path(override).expanduser() / "fem"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
+    return base / "psm-grasp" / "fem"
+
+
+_cache_dir = fem_cache_dir  # the name the grasp's solver imports
 
 
 def _cache_key(inputs: dict) -> str:

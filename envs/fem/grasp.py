@@ -75,8 +75,8 @@ def fem_grasp(
         all nodes on or inside it are fixed, so the hub is the same circle on every mesh. The
         peak strain is measured outside the hub (see :class:`FemResult`).
     cache
-        Read/write results under ``$PSM_GRASP_CACHE/fem`` (default ``out/cache/fem`` relative to
-        the working directory), keyed by a hash of all inputs.
+        Read/write results in :func:`~envs.fem.cache.fem_cache_dir` (``$PSM_GRASP_CACHE/fem``,
+        default ``~/.cache/psm-grasp/fem``), keyed by a hash of all inputs.
     penalty_pa_per_m
         Contact penalty ``eps`` [Pa/m]; default ``100 E / h``.
     al_iterations
