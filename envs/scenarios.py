@@ -47,6 +47,7 @@ __all__ = [
     "SUMMARY_KEYS",
     "evaluate_scenarios",
     "robust_reward",
+    "place",
 ]
 
 # object quantities that may vary (the disk's own fields, and the friction of the pads on it)
@@ -238,6 +239,16 @@ class Scenarios:
             out.append(Scenario(values, dx, dy, " ".join(marks) or "nominal"))
         return tuple(out)
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Scenarios:
+        """The inverse of :meth:`as_dict` (a result JSON's ``object["scenarios"]``)."""
+        try:
+            return cls({k: tuple(v) for k, v in data.get("ranges", {}).items()},
+                       data.get("placement_along_m", 0.0), data.get("placement_across_m", 0.0))
+        except (AttributeError, TypeError) as exc:
+            raise ValueError(f"scenarios must be a table of ranges and tolerances: {exc}"
+                             ) from None
+
     def as_dict(self) -> dict[str, Any]:
         """Plain data (what a result JSON records)."""
         return {"ranges": {k: list(v) for k, v in self.ranges.items()},
@@ -282,22 +293,23 @@ def robust_reward(rewards: np.ndarray, measure: str = "worst") -> np.ndarray:
     return np.sort(r, axis=1)[:, :tail].mean(axis=1)
 
 
-def _flatten(designs: np.ndarray, nominal: SoftDisk, friction: float,
-             scenarios: tuple[Scenario, ...]):
-    """The ``B x K`` rows (design-major): designs with each scenario's placement, the
-    scenarios' disks, friction coefficients and lateral offsets."""
-    b, k = designs.shape[0], len(scenarios)
-    rows = np.repeat(designs, k, axis=0)
-    disks = [s.disk(nominal) for s in scenarios]
-    # the placed centre is fixed: d_1 + r of the design, moved by dy; a scenario's own radius
-    # puts its nearest point at the rest
-    centre_y = rows[:, DISTANCE_COLUMN] + nominal.radius_m
-    dy = np.tile([s.dy_m for s in scenarios], b)
-    radius = np.tile([d.radius_m for d in disks], b)
-    rows[:, DISTANCE_COLUMN] = centre_y + dy - radius
-    frictions = np.tile([s.friction(friction) for s in scenarios], b)
-    offsets = np.tile([s.dx_m for s in scenarios], b)
-    return rows, disks * b, frictions, offsets
+def place(designs: np.ndarray, nominal: SoftDisk, friction: float,
+          cases: list[Scenario] | tuple[Scenario, ...]):
+    """Design rows, each in its own scenario: the rows with the scenario's placement, and the
+    scenarios' disks, friction coefficients and lateral offsets [m] (the per-row inputs of
+    :func:`~envs.evaluate.evaluate_designs`).
+
+    The placed centre is fixed: ``d_1 + r`` of the design against the nominal disk, moved by
+    ``dy``; a scenario's own radius puts its nearest point at the rest.
+    """
+    rows = np.array(designs, dtype=np.float64, copy=True)
+    disks = [s.disk(nominal) for s in cases]
+    dy = np.array([s.dy_m for s in cases])
+    radius = np.array([d.radius_m for d in disks])
+    rows[:, DISTANCE_COLUMN] += nominal.radius_m + dy - radius
+    frictions = np.array([s.friction(friction) for s in cases])
+    offsets = np.array([s.dx_m for s in cases])
+    return rows, disks, frictions, offsets
 
 
 def _summary(table: dict[str, np.ndarray], robust: str) -> dict[str, np.ndarray]:
@@ -364,7 +376,9 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
         raise ValueError(f"designs must have shape (B, {len(DESIGN_FIELDS)}), got "
                          f"{designs.shape}")
     cases = scenarios.scenarios()
-    rows, disks, frictions, offsets = _flatten(designs, disk, friction_coefficient, cases)
+    # design-major: row b K + k is design b in scenario k
+    rows, disks, frictions, offsets = place(np.repeat(designs, len(cases), axis=0), disk,
+                                            friction_coefficient, cases * designs.shape[0])
     extra = {"offsets_x_m": offsets} if np.any(offsets) else {}
     flat = evaluate_designs(rows, disks, friction_coefficients=frictions,
                             torsion_stiffness_nm_per_rad=torsion_stiffness_nm_per_rad,

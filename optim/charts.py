@@ -25,7 +25,8 @@ from envs.scene import Design, Scene, SoftDisk
 
 from .result import OptimResult
 
-__all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure"]
+__all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure",
+           "scenario_figure"]
 
 METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
                   "random": "tab:gray", "policy": "tab:purple"}
@@ -214,4 +215,43 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
                            f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
                            f"compression {p['peak_compression']:.3f}", legend=k == 0)
     fig.tight_layout()
+    return _save(fig, path)
+
+
+def scenario_figure(result: OptimResult, path: str | Path | None = None) -> Figure:
+    """The reported design under each scenario of its run: the reward per scenario (the
+    nominal first), marked where the grasp does not hold or exceeds the strain limit, and the
+    peak compression against the strain limit.
+
+    Raises
+    ------
+    ValueError
+        If the result has no scenario rows (a run without scenarios).
+    """
+    rows = result.extra.get("scenario_rows")
+    if not rows:
+        raise ValueError("the result has no scenario rows (a run without scenarios)")
+    labels = [r["scenario"]["label"].replace(" ", "\n") for r in rows]
+    reward = np.array([r["reward"] for r in rows])
+    compression = np.array([r["peak_compression"] for r in rows])
+    limit = float(rows[0]["strain_limit"])
+    ok = np.array([bool(r["holds"]) and r["peak_compression"] <= r["strain_limit"]
+                   for r in rows])
+    fig = Figure(figsize=(max(6.0, 0.55 * len(rows) + 2.0), 5.2), layout="constrained")
+    ax, ax2 = fig.subplots(2, 1, sharex=True)
+    x = np.arange(len(rows))
+    ax.bar(x, reward, color=np.where(ok, "tab:blue", "tab:red"))
+    ax.axhline(float(reward.min()), color="k", lw=0.8, ls="--",
+               label=f"worst {reward.min():.4f}")
+    ax.set_ylabel("reward")
+    ax.legend(fontsize=8, loc="lower right")
+    name = result.object.get("name") or "object"
+    ax.set_title(f"{result.method} design for {name} under {len(rows)} scenarios "
+                 "\n(red: does not hold within the strain limit; a displaced object is "
+                 "held where it was placed)", fontsize=8)
+    ax2.bar(x, compression, color="tab:orange")
+    ax2.axhline(limit, color="tab:red", lw=1.0, label=f"strain limit {limit:g}")
+    ax2.set_ylabel("peak compression")
+    ax2.legend(fontsize=8)
+    ax2.set_xticks(x, labels, fontsize=6)
     return _save(fig, path)

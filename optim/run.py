@@ -98,7 +98,7 @@ def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
     """Write the result JSON, the convergence chart, the best grasp, the build sheet (and the
     Pareto chart)."""
     from .build_sheet import write_build_sheet
-    from .charts import best_grasp_figure, convergence_figure, pareto_figure
+    from .charts import best_grasp_figure, convergence_figure, pareto_figure, scenario_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {"result": result.to_json(out_dir / f"{prefix}_result.json")}
@@ -112,6 +112,9 @@ def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
         best_grasp_figure(result, paths["best_grasp"])
         paths.update(write_build_sheet(result.best_design, result.object, out_dir, prefix,
                                        result.best_metrics))
+    if result.extra.get("scenario_rows"):
+        paths["scenarios"] = out_dir / f"{prefix}_scenarios.png"
+        scenario_figure(result, paths["scenarios"])
     if result.method == "nsga2":
         paths["pareto"] = out_dir / f"{prefix}_pareto.png"
         pareto_figure(result, paths["pareto"],

@@ -24,6 +24,7 @@ from envs.model.defaults import (
     FEM_DESIGN_RINGS,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from envs.scenarios import Scenarios, evaluate_scenarios, place
 from envs.scene import DESIGN_FIELDS
 from envs.validation import check_integer
 
@@ -134,10 +135,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
                                                       PAPER_TORSION_STIFFNESS_NM_PER_RAD)}
     disk = disk_of(obj)
     model = model_of(obj)
-    psm = evaluate_designs(designs, disk, **common, **model)
-    fine = evaluate_designs(designs, disk, **common, **RANKING_MEMBER)
-    fem = evaluate_designs(designs, disk, **common, fidelity="fem", fem_rings=fem_rings,
-                           executor=executor)
+    reward_model = result.extra.get("reward_model", model)
+    scores = _scores(designs, disk, obj, common, model, reward_model, fem_rings, executor)
+    psm, fine, fem = scores["psm"], scores["ranking_member"], scores["fem"]
     psm_rank, fem_rank = _ranks(psm["reward"]), _ranks(fem["reward"])
     fine_rank = _ranks(fine["reward"])
     rows = []
@@ -148,6 +148,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
             "psm": {k: psm[k][i].item() for k in REPORTED},
             "ranking_member": {k: fine[k][i].item() for k in REPORTED},
             "fem": {k: fem[k][i].item() for k in REPORTED},
+            **({"fem_scenario": scores["fem_scenario"][i],
+                "reward_model_at_fem_scenario": float(scores["model_at_fem"][i])}
+               if "fem_scenario" in scores else {}),
             "psm_rank": psm_rank[i],
             "ranking_member_rank": fine_rank[i],
             "fem_rank": fem_rank[i],
@@ -155,14 +158,17 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     # the run's reported optimum: its best design (the first pick unless it is not among them)
     best = next((i for i, p in enumerate(picks) if p["design"] == result.best_design), 0)
     reported = float(picks[best]["reward"])  # the best design's is the run's best reward
+    # with scenarios the FEM solves each design in its worst scenario: it confirms the model's
+    # reward there (the robust reward itself when it is the worst scenario's)
+    compared = float(scores["model_at_fem"][best]) if "model_at_fem" in scores else reported
     summary: dict[str, Any] = {
         "designs": len(rows),
         "reported_row": best,
         "reported_reward": float(reported),
-        "reward_model": result.extra.get("reward_model", model),
+        "reward_model": reward_model,
         "fem_reward_of_reported": float(fem["reward"][best]),
         "confirm_margin": confirm_margin(fem["reward"][best]),
-        "best_confirmed": confirmed(reported, fem["reward"][best]),
+        "best_confirmed": confirmed(compared, fem["reward"][best]),
         "same_best": psm_rank.index(1) == fem_rank.index(1),
         "fem_rank_of_psm_best": fem_rank[psm_rank.index(1)],
         "max_reward_difference": float(np.max(np.abs(psm["reward"] - fem["reward"]))),
@@ -183,6 +189,42 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
             "ranking_member": dict(RANKING_MEMBER),
             "fem": {"rings": fem_rings, "elements": int(6 * fem_rings**2)},
             "summary": summary, "designs": rows}
+
+
+def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, Any],
+            model: dict[str, Any], reward_model: dict[str, Any], fem_rings: int, executor
+            ) -> dict[str, Any]:
+    """The designs' metrics by the run's model, the ranking member and the FEM.
+
+    Without scenarios each is one grasp a design. With scenarios (``obj["scenarios"]``) the
+    point-spring rows are the robust summary (:func:`envs.scenarios.evaluate_scenarios`) and
+    the FEM solves each design in its worst scenario by the ranking member
+    (``fem_scenario``), where ``model_at_fem`` is the reward model's reward to compare.
+    """
+    if not obj.get("scenarios"):
+        return {"psm": evaluate_designs(designs, disk, **common, **model),
+                "ranking_member": evaluate_designs(designs, disk, **common, **RANKING_MEMBER),
+                "fem": evaluate_designs(designs, disk, **common, fidelity="fem",
+                                        fem_rings=fem_rings, executor=executor)}
+    scenarios = Scenarios.from_dict(obj["scenarios"])
+    mu = common["friction_coefficients"]
+    kw = {"torsion_stiffness_nm_per_rad": common["torsion_stiffness_nm_per_rad"],
+          "friction_coefficient": mu, "strain_limits": common["strain_limits"],
+          "robust": obj.get("robust", "worst")}
+    psm = evaluate_scenarios(designs, disk, scenarios, **kw, **model)
+    fine = evaluate_scenarios(designs, disk, scenarios, **kw, **RANKING_MEMBER)
+    worst = fine.summary["worst_scenario"]
+    cases = [fine.scenarios[w] for w in worst.tolist()]
+    rows, disks, frictions, offsets = place(designs, disk, mu, cases)
+    fem = evaluate_designs(rows, disks, strain_limits=common["strain_limits"],
+                           friction_coefficients=frictions, offsets_x_m=offsets,
+                           torsion_stiffness_nm_per_rad=common["torsion_stiffness_nm_per_rad"],
+                           fidelity="fem", fem_rings=fem_rings, executor=executor)
+    table = fine if dict(reward_model) == dict(RANKING_MEMBER) else psm
+    pick = np.arange(designs.shape[0])
+    return {"psm": psm.summary, "ranking_member": fine.summary, "fem": fem,
+            "fem_scenario": [c.label for c in cases],
+            "model_at_fem": table.per_scenario["reward"][pick, worst]}
 
 
 def verify_figure(report: dict[str, Any], path: str | Path) -> Path:
