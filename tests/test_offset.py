@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from matplotlib.patches import Circle
 
-from envs import DesignBounds, Scene, evaluate_designs, simulate
+from envs import DesignBounds, Scene, evaluate_designs, simulate, simulate_ramp
 from envs.check import check_grasp
 from envs.evaluate import finger_gaps_m
 from envs.model.geometry import distance_to_finger_bar
@@ -171,6 +171,23 @@ def test_the_finger_the_disk_was_moved_towards_closes_less(model):
     th_r, th_l = shifted.jaw_angles_rad
     assert th_r > centred.jaw_angles_rad[0] > th_l
     assert abs((th_r + th_l) / 2 - centred.jaw_angles_rad[0]) < 0.1 * (th_r - th_l)
+
+
+def test_warm_starts_and_finer_meshes_start_from_the_displaced_centre():
+    """A torque ramp (each step from the previous equilibrium) ends where a solve from rest
+    does, and a fine mesh started from a coarse solution (N = 200, M = 10) where the default
+    model is: the starts are taken about the displaced centre."""
+    scene = R070.with_changes(offset_x_m=1e-3)
+    direct = simulate(scene, 0.2)
+    ramp = simulate_ramp(scene, [0.05, 0.1, 0.2])
+    assert direct.converged and all(r.converged for r in ramp)
+    np.testing.assert_allclose(ramp[-1].jaw_angles_rad, direct.jaw_angles_rad, rtol=0,
+                               atol=1e-9)
+    fine = simulate(scene, 0.2, n_triangles=200, n_rings=10)
+    assert fine.converged
+    np.testing.assert_allclose(fine.jaw_angles_rad, direct.jaw_angles_rad, rtol=0.01)
+    assert fine.jaw_angles_rad[0] - fine.jaw_angles_rad[1] == pytest.approx(
+        direct.jaw_angles_rad[0] - direct.jaw_angles_rad[1], rel=0.1)
 
 
 def test_a_displaced_grasp_passes_the_independent_check_and_fails_it_centred():
