@@ -10,11 +10,15 @@ Reports, per model (the default model and the paper's fan): how many designs sta
 once displaced, the convergence rate of the valid ones, the solver's Newton iterations and the
 wall time displaced vs. centred (on the designs valid both ways), and how closely the mirrored
 placement mirrors the grasp (jaw angles swapped, same peak compression and reward). Numba is
-warmed up before any timing. Writes ``out/offset_placement.json``.
+warmed up before any timing. With ``--fem K``, the first K designs valid both ways are also
+solved with the FEM reference (``fem_rings`` 12, the evaluator's default mesh), centred and
+displaced, and the default model's closing angles (rest angle minus jaw angle) compared with
+the FEM's. Writes ``out/offset_placement.json``.
 
 Usage::
 
-    python scripts/offset_placement.py [--designs 200] [--fraction 0.15] [--seed 0] [--out out]
+    python scripts/offset_placement.py [--designs 200] [--fraction 0.15] [--seed 0] [--fem 0]
+                                       [--out out]
 """
 
 from __future__ import annotations
@@ -81,12 +85,40 @@ def run_model(designs: np.ndarray, disk, offsets: np.ndarray, model: dict) -> di
     }
 
 
+def closing_errors(designs: np.ndarray, disk, offsets) -> dict:
+    """Relative difference of the default model's closing angles from the FEM's, over the
+    fingers of the rows where both converged and the FEM closes by more than 1e-3 rad."""
+    psm = evaluate_designs(designs, disk, offsets_x_m=offsets)
+    fem = evaluate_designs(designs, disk, offsets_x_m=offsets, fidelity="fem")
+    both = psm["converged"] & fem["converged"]
+    rest = designs[both, 1, None]
+    closing_fem = rest - fem["jaw_angles_rad"][both]
+    closing_psm = rest - psm["jaw_angles_rad"][both]
+    moved = closing_fem > 1e-3
+    err = np.abs(closing_psm[moved] / closing_fem[moved] - 1.0)
+    return {"rows_converged_both": int(both.sum()), "fingers_compared": int(moved.sum()),
+            "closing_rel_err_median": float(np.median(err)) if err.size else None,
+            "closing_rel_err_max": float(np.max(err)) if err.size else None}
+
+
+def fem_comparison(designs: np.ndarray, disk, offsets: np.ndarray, count: int) -> dict:
+    """The default model against the FEM on ``count`` designs valid at rest when displaced,
+    centred and displaced."""
+    valid = evaluate_designs(designs, disk, offsets_x_m=offsets)["valid_at_rest"]
+    rows = np.flatnonzero(valid)[:count]
+    return {"designs": int(rows.size), "fem_rings": 12,
+            "centred": closing_errors(designs[rows], disk, 0.0),
+            "displaced": closing_errors(designs[rows], disk, offsets[rows])}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--designs", type=int, default=200)
     parser.add_argument("--fraction", type=float, default=0.15,
                         help="largest |x_c| in disk radii")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--fem", type=int, default=0,
+                        help="designs also compared with the FEM reference (slow: ~1 s each)")
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
     _, disk = PRESETS["paper-r070"]
@@ -95,13 +127,15 @@ def main() -> None:
     offsets = rng.uniform(-args.fraction, args.fraction, args.designs) * disk.radius_m
     report = {
         "command": (f"python scripts/offset_placement.py --designs {args.designs} "
-                    f"--fraction {args.fraction} --seed {args.seed}"),
+                    f"--fraction {args.fraction} --seed {args.seed} --fem {args.fem}"),
         "machine": platform.platform(),
         "object": "paper-r070",
         "offset_fraction_of_radius": args.fraction,
         "models": {name: run_model(designs, disk, offsets, model)
                    for name, model in MODELS.items()},
     }
+    if args.fem > 0:
+        report["fem"] = fem_comparison(designs, disk, offsets, args.fem)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "offset_placement.json"
     path.write_text(json.dumps(report, indent=2))
