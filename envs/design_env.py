@@ -388,7 +388,8 @@ class GripperDesignEnv(gym.Env):
     function evaluates populations for optimizers).
 
     Frame: x to the right, y up, the gripper's symmetry axis is the y axis, the finger joints are
-    at ``(+-d_3, 0)``, the disk centre at ``(0, d_1 + r)``.
+    at ``(+-d_3, 0)``, the disk centre at ``(x_c, d_1 + r)``: ``x_c = 0`` unless a disk given at
+    reset is placed off the axis (``SoftDisk.offset_x_m``; held where it was placed).
 
     ## Action Space
 

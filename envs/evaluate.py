@@ -548,7 +548,7 @@ def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndar
 def _soft_disk(row: np.ndarray) -> SoftDisk:
     """The disk of a row of :func:`_disk_table` (its distance ``d_1`` comes from the design)."""
     radius, young, nu, thick, scale, ratio, area, offset = row.tolist()
-    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset)
+    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,

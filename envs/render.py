@@ -237,6 +237,10 @@ def draw_grasp(
     ax.plot(joints[:, 0], joints[:, 1], "o", color="k", markersize=4, zorder=4,
             label="joints")
     ax.plot(*center, "+", color="k", markersize=8, zorder=4, label="centre (pinned)")
+    if d.offset_x_m != 0.0:
+        # a displaced object is held where it was placed: show how far off the axis that is
+        ax.axvline(0.0, color="0.55", linestyle=":", linewidth=0.8, zorder=0,
+                   label=f"gripper axis (object held {d.offset_x_m * 1e3:+.3g} mm off it)")
     lines = None
     if result is None:
         ax.add_patch(Circle(center, d.radius_m, facecolor="tab:orange", alpha=0.3,

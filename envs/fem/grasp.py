@@ -60,6 +60,8 @@ def fem_grasp(
     ----------
     scene
         Gripper and disk. ``disk.stiffness_scale`` is ignored (the FEM uses the physical ``E``).
+        The hub holds the disk where it was placed, at ``disk.center_m`` (off the axis when
+        ``disk.offset_x_m`` is not 0).
     torques_nm
         Actuation torques ``T_a >= 0`` [N·m], finite.
     mesh_size_m
