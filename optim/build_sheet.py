@@ -279,7 +279,7 @@ def _dimension(ax, p: np.ndarray, q: np.ndarray, offset: np.ndarray, text: str) 
             bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none"})
 
 
-def _draw_fingers(ax, sheet: dict[str, Any], w: float) -> None:
+def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> None:
     """The two fingers at rest [mm]; stacked ones with the left finger behind the right one
     (hatched, its hidden edges dashed) and the circles their joint ends sweep."""
     outline = sheet["finger_outline_mm"]
@@ -297,7 +297,8 @@ def _draw_fingers(ax, sheet: dict[str, Any], w: float) -> None:
     for x, y in sheet["joints_mm"]:
         ax.add_patch(Circle((x, y), w / 2, fill=False, edgecolor="tab:red", lw=0.8,
                             linestyle=":", zorder=3))
-    ax.legend(loc="upper right", fontsize=7, framealpha=0.9)
+    if legend:
+        ax.legend(loc="upper right", fontsize=7, framealpha=0.9)
 
 
 def _condition_lines(sheet: dict[str, Any]) -> list[str]:
@@ -338,7 +339,10 @@ def _scenario_cells(sheet: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
         header += ["payload [N]", "grip [N]"]
     cells = []
     for row in sheet["scenarios"]:
-        line = [row["label"], f"{row.get('dx_mm', 0.0):+.3g}", f"{row.get('dy_mm', 0.0):+.3g}",
+        # the result's labels name quantities in SI ("dx_m+"); the sheet's table is in mm
+        label = " ".join(part.replace("_m", "", 1) if part[:-1].endswith("_m") else part
+                         for part in row["label"].split())
+        line = [label, f"{row.get('dx_mm', 0.0):+.3g}", f"{row.get('dy_mm', 0.0):+.3g}",
                 f"{row.get('reward', math.nan):.4f}", "yes" if row.get("holds") else "no",
                 f"{row.get('peak_compression', math.nan):.3f}",
                 _text(row.get("required_friction"), ".3g")]
@@ -355,11 +359,26 @@ def _text(value: Any, fmt: str) -> str:
     return value if isinstance(value, str) else format(float(value), fmt)
 
 
-def _note_text(sheet: dict[str, Any]) -> str:
-    """The drawing's notes, wrapped to its width."""
+def _note_text(sheet: dict[str, Any], width: int) -> str:
+    """The drawing's notes, wrapped to ``width`` characters."""
     import textwrap
 
-    return "\n".join(textwrap.fill(line, 115) for line in _condition_lines(sheet))
+    return "\n".join(textwrap.fill(line, width) for line in _condition_lines(sheet))
+
+
+def _draw_joint_detail(ax, sheet: dict[str, Any], w: float) -> None:
+    """Detail of the joints of stacked fingers, magnified: the overlap, the hidden edges and
+    the circles of radius w/2 the joint ends sweep."""
+    _draw_fingers(ax, sheet, w, legend=False)
+    for x, y in sheet["joints_mm"]:
+        ax.plot([x], [y], "o", color="k", ms=3, zorder=4)
+    ax.set_xlim(-1.6 * w, 1.6 * w)
+    ax.set_ylim(-0.9 * w, 2.0 * w)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=6)
+    ax.set_title(f"detail at the joints [mm]\noverlap w - 2 d3 = "
+                 f"{w - 2 * sheet['joints_mm'][0][0]:.3g} mm\n(dotted: joint ends' sweep)",
+                 fontsize=7)
 
 
 def _draw_table(ax, sheet: dict[str, Any]) -> None:
@@ -383,8 +402,9 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     th0 = math.radians(rows["rest_angle_deg"])
     r = rows["object_diameter_mm"] / 2
     centre = np.array(sheet["object_centre_mm"])
-    notes = _note_text(sheet)
-    heights = [6.4, 0.12 * (notes.count("\n") + 1) + 0.1]
+    stacked = sheet["assembly"] == ASSEMBLY_STACKED
+    notes = _note_text(sheet, 80 if stacked else 115)
+    heights = [6.4, max(2.2 if stacked else 0.0, 0.12 * (notes.count("\n") + 1) + 0.1)]
     if sheet.get("scenarios"):
         heights.append(0.17 * (len(sheet["scenarios"]) + 1) + 0.3)
     fig = Figure(figsize=(7.2, sum(heights)), dpi=110)
@@ -430,7 +450,12 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     name = (sheet.get("object") or {}).get("name") or "the object"
     ax.set_title(title or f"gripper for {name}, at rest (millimetres), fingers "
                  f"{sheet['assembly']}", fontsize=10)
-    note_ax = fig.add_subplot(grid[1])
+    if stacked:
+        cells = grid[1].subgridspec(1, 2, width_ratios=[2.6, 1.0])
+        note_ax = fig.add_subplot(cells[0])
+        _draw_joint_detail(fig.add_subplot(cells[1]), sheet, w)
+    else:
+        note_ax = fig.add_subplot(grid[1])
     note_ax.axis("off")
     note_ax.text(0.0, 1.0, notes, fontsize=7, va="top", ha="left", transform=note_ax.transAxes)
     if sheet.get("scenarios"):

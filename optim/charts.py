@@ -132,12 +132,12 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     title = (f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
              f"contact {m.get('contact_score', math.nan):.2f}, "
-             f"compression {m.get('peak_compression', math.nan):.3f}; "
+             f"compression {m.get('peak_compression', math.nan):.3f}; fingers "
+             f"{assembly_of(d['joint_offset_m'], d['finger_width_m'])[0]}\n"
              f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
-             f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°\n"
-             f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm, "
-             f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m, fingers "
-             f"{assembly_of(d['joint_offset_m'], d['finger_width_m'])[0]}")
+             f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
+             f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm\n"
+             f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m")
     try:
         scene = scene_of(result.best_design, obj)
     except ValueError:
