@@ -32,6 +32,14 @@ OBJ = {"name": "test disk", "radius_m": 0.012, "thickness_m": 0.024, "youngs_mod
 STACKED = {"finger_length_m": 0.05, "rest_angle_rad": 0.4, "joint_offset_m": 0.0005,
            "finger_width_m": 0.002, "torque_nm": 0.01, "distance_m": 0.02}
 APART = {**STACKED, "joint_offset_m": 0.001}  # d3 = w/2 exactly: the joint ends just meet
+# the left finger's corners at rest [mm] from the model's frame (J_L = (-d3, 0), axis
+# (-sin, cos), inward normal (cos, sin)): joint end back, joint end face, tip face, tip back
+OUTLINE_LEFT_MM = 1e3 * np.array([
+    [-0.0005 - 0.001 * np.cos(0.4), -0.001 * np.sin(0.4)],
+    [-0.0005 + 0.001 * np.cos(0.4), 0.001 * np.sin(0.4)],
+    [-0.0005 + 0.001 * np.cos(0.4) - 0.05 * np.sin(0.4), 0.001 * np.sin(0.4) + 0.05 * np.cos(0.4)],
+    [-0.0005 - 0.001 * np.cos(0.4) - 0.05 * np.sin(0.4), -0.001 * np.sin(0.4) + 0.05 * np.cos(0.4)],
+])
 
 
 def _offsets_and_widths(designs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -138,12 +146,15 @@ def test_the_drawing_shows_stacked_fingers_one_behind_the_other():
         return " ".join(t.get_text() for ax in fig.axes for t in ax.texts)
 
     fig = drawing_figure(build_sheet(STACKED, OBJ))
-    behind = hatched(fig)
-    assert len(behind) == 1 and behind[0].get_label() == "left finger (behind)"
+    behind = hatched(fig)  # in the drawing and in the detail of the joints
+    assert len(behind) == 2 and behind[0].get_label() == "left finger (behind)"
+    np.testing.assert_allclose(behind[0].get_xy()[:4], OUTLINE_LEFT_MM, atol=1e-4)  # 0.1 um
     assert "STACKED" in text(fig) and "forceps" in text(fig)
     assert "stacked" in fig.axes[0].get_title()
+    assert any("overlap w - 2 d3 = 1 mm" in ax.get_title() for ax in fig.axes)
     fig = drawing_figure(build_sheet(APART, OBJ))
     assert not hatched(fig) and "SIDE BY SIDE" in text(fig)
+    assert not any("detail" in ax.get_title() for ax in fig.axes)
 
 
 # --- what the design depends on, in millimetres ----------------------------------------------
@@ -236,3 +247,23 @@ def test_drawings_in_millimetres_are_the_metre_drawings_scaled():
     with pytest.raises(ValueError, match=r"length_unit must be one of \['m', 'mm'\]"):
         draw_design(Figure().add_subplot(), [0.2, 0.7, 0.02, 0.01, 0.1, 0.01], 0.07,
                     length_unit="cm")
+
+
+def test_the_optimize_command_writes_the_sheet_of_a_run_with_scenarios(tmp_path):
+    tomato = "examples/objects/cherry_tomato.toml"
+    code = main(["optimize", "--object", tomato, "--budget", "40", "--placement-tolerance",
+                 "0.0015", "--joints-apart", "--no-finish", "--no-progress", "--out",
+                 str(tmp_path)])
+    assert code in (0, 3)  # a short run need not find a grasp; its sheet is written either way
+    result = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    sheet = json.loads((tmp_path / "cmaes_seed0_design.json").read_text())
+    assert result["extra"]["joints_apart"] is True and sheet["assembly"] == "side by side"
+    rows = result["extra"]["scenario_rows"]
+    assert len(sheet["scenarios"]) == len(rows) == 9
+    for entry, row in zip(sheet["scenarios"], rows, strict=True):
+        assert entry["label"] == row["scenario"]["label"]
+        assert entry["dx_mm"] == pytest.approx(row["scenario"]["dx_m"] * 1e3)
+        assert entry["reward"] == pytest.approx(row["reward"])
+    assert sorted({round(abs(r["dx_mm"]), 9) for r in sheet["scenarios"]}) == [0.0, 1.5]
+    assert sheet["tolerances"]["placement_across_mm"] == pytest.approx(1.5)
+    assert (tmp_path / "cmaes_seed0_scenarios.csv").read_text().count("\n") == 10
