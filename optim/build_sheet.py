@@ -33,10 +33,15 @@ from matplotlib.patches import Arc, Circle, Polygon
 from envs.render import finger_polygon
 from envs.scene import DESIGN_FIELDS
 
-__all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of",
+__all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of", "write_dxf",
+           "dxf_available", "DXF_LAYERS",
            "ASSEMBLY_STACKED", "ASSEMBLY_SIDE_BY_SIDE", "FIXED_CENTRE_NOTE"]
 
 MM = 1e3
+# layers of the DXF: each finger's outline, the joint centres, the object (for reference)
+DXF_LAYERS = {"right": "FINGER_RIGHT", "left": "FINGER_LEFT", "joints": "JOINT_CENTRES",
+              "object": "OBJECT_REFERENCE"}
+DXF_MILLIMETRES = 4  # the DXF header's $INSUNITS code for millimetres
 ASSEMBLY_STACKED = "stacked"
 ASSEMBLY_SIDE_BY_SIDE = "side by side"
 NOT_MODELLED = "not modelled"
@@ -511,14 +516,59 @@ def _write_scenarios_csv(path: Path, sheet: dict[str, Any]) -> None:
                              *(_csv_value(row["object"].get(k), ".6g") for k in varied)])
 
 
+def dxf_available() -> bool:
+    """Whether the DXF can be written (the optional extra ``dxf``: ezdxf)."""
+    import importlib.util
+
+    return importlib.util.find_spec("ezdxf") is not None
+
+
+def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
+    """The fingers' outlines at rest as a DXF in millimetres, the format a laser cutter or a CNC
+    shop takes: a closed polyline per finger on its own layer (:data:`DXF_LAYERS`), the joint
+    centres as points with a cross, and the object's outline for reference, in the sheet's
+    frame (origin midway between the joints, y up the symmetry axis).
+
+    Raises
+    ------
+    ValueError
+        Without ezdxf (the extra ``dxf``), with the install hint.
+    """
+    if not dxf_available():
+        raise ValueError("the DXF needs ezdxf: pip install -e '.[dxf]'")
+    import ezdxf
+
+    doc = ezdxf.new("R2010", setup=True)
+    doc.header["$INSUNITS"] = DXF_MILLIMETRES
+    doc.header["$MEASUREMENT"] = 1  # metric
+    space = doc.modelspace()
+    for key, name in DXF_LAYERS.items():
+        doc.layers.add(name, color={"right": 1, "left": 5, "joints": 7, "object": 8}[key])
+    for side in ("right", "left"):
+        space.add_lwpolyline(sheet["finger_outline_mm"][side], close=True,
+                             dxfattribs={"layer": DXF_LAYERS[side]})
+    rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
+    mark = 0.25 * rows["finger_width_mm"]
+    for x, y in sheet["joints_mm"]:
+        attribs = {"layer": DXF_LAYERS["joints"]}
+        space.add_point((x, y), dxfattribs=attribs)
+        space.add_line((x - mark, y), (x + mark, y), dxfattribs=attribs)
+        space.add_line((x, y - mark), (x, y + mark), dxfattribs=attribs)
+    space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
+                     dxfattribs={"layer": DXF_LAYERS["object"]})
+    doc.saveas(Path(path))
+    return Path(path)
+
+
 def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: str | Path,
                       prefix: str, metrics: dict[str, Any] | None = None,
                       scenario_rows: list[dict[str, Any]] | None = None) -> dict[str, Path]:
     """Write ``{prefix}_design.json``, ``{prefix}_design.csv`` and ``{prefix}_drawing.png``,
-    and with scenarios ``{prefix}_scenarios.csv``.
+    with scenarios ``{prefix}_scenarios.csv``, and with ezdxf the outlines
+    ``{prefix}_fingers.dxf`` (:func:`write_dxf`).
 
     Returns the written paths by kind (``design_json``, ``design_csv``, ``drawing``,
-    ``scenarios_csv``).
+    ``scenarios_csv``, ``dxf``).
     """
     from .result import to_jsonable
 
@@ -534,4 +584,6 @@ def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: st
     _write_design_csv(paths["design_csv"], sheet, f"{prefix}_scenarios.csv")
     fig = drawing_figure(sheet)
     fig.savefig(paths["drawing"])
+    if dxf_available():
+        paths["dxf"] = write_dxf(sheet, folder / f"{prefix}_fingers.dxf")
     return paths

@@ -267,3 +267,27 @@ def test_the_optimize_command_writes_the_sheet_of_a_run_with_scenarios(tmp_path)
     assert sorted({round(abs(r["dx_mm"]), 9) for r in sheet["scenarios"]}) == [0.0, 1.5]
     assert sheet["tolerances"]["placement_across_mm"] == pytest.approx(1.5)
     assert (tmp_path / "cmaes_seed0_scenarios.csv").read_text().count("\n") == 10
+    from optim.build_sheet import dxf_available
+
+    assert (tmp_path / "cmaes_seed0_fingers.dxf").exists() == dxf_available()
+
+
+def test_the_dxf_holds_each_finger_outline_in_millimetres(tmp_path):
+    ezdxf = pytest.importorskip("ezdxf")
+    from optim.build_sheet import DXF_LAYERS, write_dxf
+
+    sheet = build_sheet(STACKED, OBJ)
+    doc = ezdxf.readfile(write_dxf(sheet, tmp_path / "f.dxf"))
+    assert doc.header["$INSUNITS"] == 4  # millimetres
+    space = doc.modelspace()
+    for side in ("right", "left"):
+        (outline,) = space.query(f'LWPOLYLINE[layer=="{DXF_LAYERS[side]}"]')
+        assert outline.closed
+        np.testing.assert_allclose([p[:2] for p in outline.get_points()],
+                                   sheet["finger_outline_mm"][side])
+    np.testing.assert_allclose(sheet["finger_outline_mm"]["left"], OUTLINE_LEFT_MM, atol=1e-4)
+    points = [tuple(p.dxf.location)[:2] for p in space.query("POINT")]
+    np.testing.assert_allclose(sorted(points), [(-0.5, 0.0), (0.5, 0.0)])
+    (circle,) = space.query("CIRCLE")
+    assert circle.dxf.radius == pytest.approx(12.0)
+    assert tuple(circle.dxf.center)[:2] == pytest.approx((0.0, 32.0))
