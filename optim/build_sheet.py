@@ -309,6 +309,7 @@ def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> N
 def _condition_lines(sheet: dict[str, Any]) -> list[str]:
     """What the design depends on, a line each, for the drawing's notes."""
     cond = {row["quantity"]: row["value"] for row in sheet["conditions"]}
+    rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
 
     def number(key: str, fmt: str) -> str:
         value = cond.get(key)
@@ -322,15 +323,20 @@ def _condition_lines(sheet: dict[str, Any]) -> list[str]:
                     f"payload W = {payload:.4g} N (density {number('density_kg_m3', '.4g')} "
                     f"kg/m^3, factor {number('payload_factor', '.3g')}); grip force "
                     f"{number('grip_force_n', '.4g')} N")
+    along, across = tol["placement_along_mm"], tol["placement_across_mm"]
+    placement = (f"placement tolerance: +-{along:.3g} mm along the axis, +-{across:.3g} mm "
+                 "across" if along or across else
+                 "placement tolerance: none (the object at its nominal place only)")
     return [
+        f"actuation torque T_a = {rows['torque_nm']:.4g} N·m on each finger; joint spring k_f = "
+        f"{rows['torsion_stiffness_nm_per_rad']:.4g} N·m/rad "
+        f"({rows['torsion_stiffness_nmm_per_deg']:.4g} N·mm/deg), opening",
         f"assembly: {sheet['assembly'].upper()}. {sheet['assembly_note']}",
         f"friction coefficient mu = {number('friction_coefficient', '.3g')} (fingers on the "
         f"object); strain limit {number('strain_limit', '.3g')}",
         payload_line,
-        f"placement tolerance: +-{tol['placement_along_mm']:.3g} mm along the axis, "
-        f"+-{tol['placement_across_mm']:.3g} mm across"
-        + (f"; object ranges: {ranges}" if ranges else ""),
-        f"fixed centre: {sheet['fixed_centre']}",
+        placement + (f"; object ranges: {ranges}" if ranges else ""),
+        f"fixed centre (+ in the drawing): {sheet['fixed_centre']}",
         tol["dimensions"],
     ]
 
@@ -441,11 +447,6 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
                      color="0.2", lw=0.8))
     ax.text(d3 - 0.02 * ln, 1.1 * arc_r, f"θ0 = {rows['rest_angle_deg']:.1f}°", fontsize=8,
             ha="right", va="center")
-    ax.text(0.02, 0.02, f"T_a = {rows['torque_nm']:.4g} N·m per finger\n"
-            f"k_f = {rows['torsion_stiffness_nm_per_rad']:.4g} N·m/rad "
-            f"({rows['torsion_stiffness_nmm_per_deg']:.4g} N·mm/deg)\n"
-            f"fingers {sheet['assembly']}; object centre held fixed (+)",
-            transform=ax.transAxes, fontsize=8, va="bottom")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.12)
