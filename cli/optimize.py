@@ -47,6 +47,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
     cli_option("--workers", check_executor_options, None, args.workers)
     cli_option("--dask", check_executor_options, args.dask, None)
     check_output_dir("--out", args.out)
+    if args.joints_apart and args.method == "policy":
+        raise ValueError("--joints-apart: the design policy designs in the default design "
+                         "space and cannot keep the joints apart; use another --method")
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
                                             obj, args.strain_limit, args.friction,
@@ -68,7 +71,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  element=args.element, progress=not args.no_progress,
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
-                                 robust=args.robust)
+                                 robust=args.robust, joints_apart=args.joints_apart)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -249,6 +252,11 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="with scenarios (ranges in the object file, a placement tolerance): "
                    "the reward over them, the worst scenario's (default), the mean or the "
                    "CVaR (the mean of the worst quarter)")
+    p.add_argument("--joints-apart", action="store_true",
+                   help="keep the joints at least half a finger width from the axis (d3 >= "
+                   "w/2), for a gripper whose fingers cannot be stacked at the joints like "
+                   "forceps jaws (default: any d3 in the box; the build sheet says when the "
+                   "fingers must be stacked)")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

@@ -144,6 +144,11 @@ def _scales(disks, batch: int | None) -> tuple[np.ndarray, np.ndarray]:
             np.array([d.torque_unit_nm for d in disks], dtype=np.float64))
 
 
+# the relative columns the joints-apart option couples (DesignBounds.joints_apart)
+_OFFSET_R = RELATIVE_FIELDS.index("joint_offset_r")
+_WIDTH_R = RELATIVE_FIELDS.index("finger_width_r")
+
+
 @dataclass(frozen=True)
 class DesignBounds:
     """Box of the design space relative to the object; maps actions in [-1, 1] to designs.
@@ -170,14 +175,27 @@ class DesignBounds:
     paper's torques 0.05 to 0.5 N·m at 0.005 to 0.2 units) and the forceps (``l / r`` = 5.3 to 8,
     15 deg, clearance 0.6 to 1.2).
 
+    With ``joints_apart`` the joint offset's coordinate spans ``[max(low, w / 2), high]``
+    instead of ``[low, high]`` (``w`` the row's own finger width), so every design keeps
+    ``d_3 >= w / 2``: each finger's joint end, a square end of half-width ``w / 2``, sweeps a
+    circle of radius ``w / 2`` about its joint as the finger turns, and with ``d_3 >= w / 2`` the
+    two circles do not overlap, so the fingers can be built side by side in one plane. Without
+    it (the default) a design may have ``d_3 < w / 2``, fingers that overlap at the joints and
+    must be built stacked, one above the other, like forceps jaws. The box stays ``[-1, 1]^6``
+    either way: only the map from it changes.
+
     Parameters
     ----------
     low, high
         Lower and upper bound of each relative column, ``low < high``.
+    joints_apart
+        Keep the joints at least half a finger width from the axis (``d_3 >= w / 2``); needs
+        ``high`` of ``joint_offset_r`` at least half ``high`` of ``finger_width_r``.
     """
 
     low: tuple[float, ...] = (1.5, math.radians(10.0), 0.0, 0.05, 0.0, 0.005)
     high: tuple[float, ...] = (8.0, math.radians(60.0), 0.6, 0.4, 0.3, 1.2)
+    joints_apart: bool = False
 
     def __post_init__(self) -> None:
         for name in ("low", "high"):
@@ -194,6 +212,14 @@ class DesignBounds:
                     f"DesignBounds for {field_name}: low = {lo!r} must be smaller than "
                     f"high = {hi!r}"
                 )
+        if not isinstance(self.joints_apart, bool):
+            raise ValueError(f"DesignBounds.joints_apart must be True or False, got "
+                             f"{self.joints_apart!r}")
+        if self.joints_apart and self.high[_OFFSET_R] < self.high[_WIDTH_R] / 2:
+            raise ValueError(
+                f"DesignBounds with joints_apart: high joint_offset_r = {self.high[_OFFSET_R]!r}"
+                f" must be at least half of high finger_width_r = {self.high[_WIDTH_R]!r}, so "
+                f"that d_3 >= w / 2 has room")
 
     @property
     def low_array(self) -> np.ndarray:
@@ -205,11 +231,21 @@ class DesignBounds:
         """Upper bounds (relative units) as a float64 array (6,)."""
         return np.array(self.high, dtype=np.float64)
 
+    def _offset_floor(self, width_r: np.ndarray) -> np.ndarray:
+        """Lowest relative joint offset of rows of relative finger width ``width_r``: the
+        box's, or with :attr:`joints_apart` at least half the width."""
+        return np.maximum(self.low[_OFFSET_R], 0.5 * width_r)
+
     def relative(self, action) -> np.ndarray:
         """Map normalized actions in [-1, 1] (shape (..., 6)) to relative designs."""
         a = np.asarray(action, dtype=np.float64)
         lo, hi = self.low_array, self.high_array
-        return lo + 0.5 * (a + 1.0) * (hi - lo)
+        rel = lo + 0.5 * (a + 1.0) * (hi - lo)
+        if self.joints_apart:
+            floor = self._offset_floor(rel[..., _WIDTH_R])
+            rel[..., _OFFSET_R] = floor + 0.5 * (a[..., _OFFSET_R] + 1.0) * (
+                hi[_OFFSET_R] - floor)
+        return rel
 
     def scale(self, action, disks) -> np.ndarray:
         """Map normalized actions (shape (B, 6) or (6,)) to SI designs for their objects.
@@ -233,7 +269,15 @@ class DesignBounds:
         radius, unit = _scales(disks, d.shape[0] if d.ndim == 2 else None)
         rel = relative_from_design(d, radius, unit)
         lo, hi = self.low_array, self.high_array
-        return 2.0 * (rel - lo) / (hi - lo) - 1.0
+        action = 2.0 * (rel - lo) / (hi - lo) - 1.0
+        if self.joints_apart:
+            floor = self._offset_floor(rel[..., _WIDTH_R])
+            span = hi[_OFFSET_R] - floor
+            # a finger as wide as the box allows leaves one joint offset: its middle coordinate
+            share = np.divide(rel[..., _OFFSET_R] - floor, span, out=np.full_like(span, 0.5),
+                              where=span > 0)
+            action[..., _OFFSET_R] = 2.0 * share - 1.0
+        return action
 
     def sample(self, rng: np.random.Generator, size: int, disks) -> np.ndarray:
         """Draw ``size`` SI designs uniformly in the box for the object(s), shape (size, 6)."""

@@ -30,6 +30,8 @@ __all__ = [
     "figure_rgb_array",
     "finger_polygon",
     "spring_segments",
+    "unit_scale",
+    "LENGTH_UNITS",
 ]
 
 # Strain colours: blue compressed, white unstrained, red stretched, always with a labelled
@@ -40,6 +42,22 @@ STRAIN_LABEL = "spring strain [-] (blue: compressed, red: stretched)"
 REST_STYLE = {"fill": False, "linestyle": "--", "linewidth": 0.8, "edgecolor": "0.55"}
 CONTACT_STYLE = ({"color": "limegreen", "label": "contact, right"},
                  {"color": "gold", "label": "contact, left"})
+# the length units a drawing may use, and metres in each
+LENGTH_UNITS = {"m": 1.0, "mm": 1e3}
+
+
+def unit_scale(length_unit: str) -> float:
+    """Drawn units per metre of ``length_unit`` (:data:`LENGTH_UNITS`).
+
+    Raises
+    ------
+    ValueError
+        For a unit not in :data:`LENGTH_UNITS`.
+    """
+    if length_unit not in LENGTH_UNITS:
+        raise ValueError(f"length_unit must be one of {sorted(LENGTH_UNITS)}, got "
+                         f"{length_unit!r}")
+    return LENGTH_UNITS[length_unit]
 
 
 def finger_polygon(length: float, angle: float, offset: float, width: float, side: int
@@ -140,18 +158,21 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
     return np.array(segs), np.array(strains)
 
 
-def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float) -> None:
+def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float,
+           length_unit: str = "m") -> None:
+    """Limits around the fingers and the disk, equal axes, labelled in ``length_unit``."""
     pts = np.concatenate([*fingers, center + radius * np.array([[-1, -1], [1, 1]])])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     pad = 0.08 * float(np.max(hi - lo))
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(min(lo[1], 0.0) - pad, hi[1] + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.set_xlabel(f"x [{length_unit}]")
+    ax.set_ylabel(f"y [{length_unit}]")
 
 
-def draw_design(ax, design, radius_m: float, *, title: str | None = None) -> None:
+def draw_design(ax, design, radius_m: float, *, title: str | None = None,
+                length_unit: str = "m") -> None:
     """Draw a design at rest from raw numbers, without validating it (for invalid designs).
 
     Parameters
@@ -164,14 +185,17 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None) -> Non
         Disk radius [m].
     title
         Axes title.
+    length_unit
+        Units of the drawing's axes, ``"m"`` (default) or ``"mm"``.
     """
+    k = unit_scale(length_unit)
     ln, th0, d3, w, _, d1 = (float(v) for v in np.asarray(design, dtype=float))
-    center = np.array([0.0, d1 + radius_m])
-    fingers = [finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
+    center = k * np.array([0.0, d1 + radius_m])
+    fingers = [k * finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.8))
-    ax.add_patch(Circle(center, radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
-    _frame(ax, fingers, center, radius_m)
+    ax.add_patch(Circle(center, k * radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    _frame(ax, fingers, center, k * radius_m, length_unit)
     if title:
         ax.set_title(title, fontsize=9)
 
@@ -187,6 +211,7 @@ def draw_grasp(
     cmap: str = STRAIN_CMAP,
     title: str | None = None,
     legend: bool = True,
+    length_unit: str = "m",
 ):
     """Draw a grasp: fingers, rest and deformed disk, springs coloured by strain, contacts.
 
@@ -212,6 +237,9 @@ def draw_grasp(
     legend
         Add a legend naming the contact points of each finger, the rest outlines, the deformed
         disk, the pinned centre and the joints.
+    length_unit
+        Units of the drawing's axes, ``"m"`` (default) or ``"mm"`` (the strains are ratios
+        and do not change).
 
     Returns
     -------
@@ -220,20 +248,21 @@ def draw_grasp(
     """
     g: Gripper = scene.gripper
     d: SoftDisk = scene.disk
-    center = d.center_m
-    rest_fingers = [finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
-                                    g.finger_width_m, side) for side in (0, 1)]
+    k = unit_scale(length_unit)  # every position is drawn k times its value in metres
+    center, radius = k * np.asarray(d.center_m, dtype=float), k * d.radius_m
+    rest_fingers = [k * finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
+                                        g.finger_width_m, side) for side in (0, 1)]
     angles = (g.rest_angle_rad, g.rest_angle_rad) if result is None else result.jaw_angles_rad
-    fingers = [finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
-                               g.finger_width_m, side) for side in (0, 1)]
+    fingers = [k * finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
+                                   g.finger_width_m, side) for side in (0, 1)]
     if show_rest and result is not None:
         for poly in rest_fingers:
             ax.add_patch(Polygon(poly, closed=True, **REST_STYLE))
-        ax.add_patch(Circle(center, d.radius_m, **REST_STYLE, label="rest (dashed)"))
+        ax.add_patch(Circle(center, radius, **REST_STYLE, label="rest (dashed)"))
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.9,
                              zorder=3))
-    joints = np.array([[g.joint_offset_m, 0.0], [-g.joint_offset_m, 0.0]])
+    joints = k * np.array([[g.joint_offset_m, 0.0], [-g.joint_offset_m, 0.0]])
     ax.plot(joints[:, 0], joints[:, 1], "o", color="k", markersize=4, zorder=4,
             label="joints")
     ax.plot(*center, "+", color="k", markersize=8, zorder=4, label="centre (pinned)")
@@ -243,10 +272,11 @@ def draw_grasp(
                    label=f"gripper axis (object held {d.offset_x_m * 1e3:+.3g} mm off it)")
     lines = None
     if result is None:
-        ax.add_patch(Circle(center, d.radius_m, facecolor="tab:orange", alpha=0.3,
+        ax.add_patch(Circle(center, radius, facecolor="tab:orange", alpha=0.3,
                             edgecolor="k"))
     else:
-        pts = np.asarray(result.points_m, dtype=float)
+        pts_m = np.asarray(result.points_m, dtype=float)
+        pts = k * pts_m
         ax.add_patch(Polygon(pts, closed=True, facecolor="tab:orange", alpha=0.15,
                              edgecolor="0.2", linewidth=2.4, zorder=1, label="deformed disk"))
         if show_springs:
@@ -254,15 +284,15 @@ def draw_grasp(
             if rings > 1:
                 # a ring mesh: every edge (for the constant-strain element, the triangles'
                 # edge strains), the hub's ring drawn at rest
-                segs, strains = mesh_segments(pts, result.interior_points_m, center,
+                segs, strains = mesh_segments(pts_m, result.interior_points_m, d.center_m,
                                               d.radius_m, rings,
                                               element=getattr(result, "element", "spring"))
                 widths = np.full(len(segs), 0.8)
             else:
-                segs, strains = spring_segments(pts, center, d.radius_m)
+                segs, strains = spring_segments(pts_m, d.center_m, d.radius_m)
                 widths = np.r_[np.full(len(pts), 1.0), np.full(len(pts), 1.8)]
             lim = strain_limit if strain_limit else max(float(np.max(np.abs(strains))), 1e-6)
-            lines = LineCollection(segs, cmap=cmap, norm=Normalize(-lim, lim),
+            lines = LineCollection(k * segs, cmap=cmap, norm=Normalize(-lim, lim),
                                    linewidths=widths, zorder=2)
             lines.set_array(strains)
             ax.add_collection(lines)
@@ -272,7 +302,7 @@ def draw_grasp(
             ax.plot(hit[:, 0], hit[:, 1], "o", markersize=6, markeredgecolor="k",
                     markeredgewidth=0.8, zorder=5, linestyle="none",
                     **{"markerfacecolor": style["color"], "label": style["label"]})
-    _frame(ax, rest_fingers + fingers, center, d.radius_m)
+    _frame(ax, rest_fingers + fingers, center, radius, length_unit)
     if legend:
         # below the axes: inside, it would hide the grasp it explains
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7,
@@ -298,6 +328,7 @@ def grasp_figure(
     title: str | None = None,
     figsize: tuple[float, float] = (5.0, 5.0),
     dpi: int = 100,
+    length_unit: str = "m",
 ) -> Figure:
     """A stand-alone figure of a grasp with a strain colour bar, saved as PNG if ``path``.
 
@@ -314,12 +345,15 @@ def grasp_figure(
         See :func:`draw_grasp`; the default title summarizes the result.
     figsize, dpi
         Figure size [in] and resolution.
+    length_unit
+        Units of the axes, ``"m"`` (default) or ``"mm"``.
     """
     fig = Figure(figsize=figsize, dpi=dpi)
     ax = fig.add_subplot()
     if title is None and result is not None and hasattr(result, "torque_nm"):
         title = _summary(result)
-    lines = draw_grasp(ax, scene, result, strain_limit=strain_limit, title=title)
+    lines = draw_grasp(ax, scene, result, strain_limit=strain_limit, title=title,
+                       length_unit=length_unit)
     if lines is not None:
         fig.colorbar(lines, ax=ax, shrink=0.7, label=STRAIN_LABEL)
     fig.tight_layout()

@@ -4,8 +4,18 @@
 :data:`envs.scene.DESIGN_FIELDS`) and its object into a table a workshop reads: the finger
 outline and the placement of joints and object in millimetres in the gripper frame (origin
 midway between the joints, x to the right, y up along the symmetry axis, as in the model), the
-rest angle in degrees, the joint spring in N·m/rad and the actuation torque in N·m.
-:func:`write_build_sheet` writes it as JSON and CSV with a dimensioned drawing.
+rest angle in degrees, the joint spring in N·m/rad and the actuation torque in N·m; and what the
+design depends on: the friction coefficient it was designed for, the payload (where the result
+has one), the placement tolerance and object ranges it was checked under with every scenario's
+grasp, the fixed-centre assumption of the model, and how the fingers are assembled.
+
+Assembly: each finger's joint end, a square end of half-width ``w / 2``, sweeps a circle of
+radius ``w / 2`` about its joint as the finger turns. When the joints are closer than half a
+finger width to the axis (``d_3 < w / 2``) the two circles overlap, and so do the fingers at
+the joints: they can only be built **stacked**, one above the other at the joints, like the
+jaws of forceps. Otherwise they can be built **side by side** in one plane.
+:func:`write_build_sheet` writes the sheet as JSON and CSV (the scenarios in a CSV of their own)
+with a dimensioned drawing.
 """
 
 from __future__ import annotations
@@ -23,16 +33,35 @@ from matplotlib.patches import Arc, Circle, Polygon
 from envs.render import finger_polygon
 from envs.scene import DESIGN_FIELDS
 
-__all__ = ["build_sheet", "write_build_sheet", "drawing_figure"]
+__all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of", "write_dxf",
+           "dxf_available", "DXF_LAYERS",
+           "ASSEMBLY_STACKED", "ASSEMBLY_SIDE_BY_SIDE", "FIXED_CENTRE_NOTE"]
 
 MM = 1e3
-# (key, unit, description) of the sheet's scalar rows, in this order
+# layers of the DXF: each finger's outline, the joint centres, the object (for reference)
+DXF_LAYERS = {"right": "FINGER_RIGHT", "left": "FINGER_LEFT", "joints": "JOINT_CENTRES",
+              "object": "OBJECT_REFERENCE"}
+DXF_MILLIMETRES = 4  # the DXF header's $INSUNITS code for millimetres
+ASSEMBLY_STACKED = "stacked"
+ASSEMBLY_SIDE_BY_SIDE = "side by side"
+NOT_MODELLED = "not modelled"
+FIXED_CENTRE_NOTE = (
+    "The model holds the object's centre fixed while the jaws close, at (0, d1 + r) or, in a "
+    "scenario with a placement error, where the object was placed (a displaced object is held "
+    "where it was placed). Whether a free object stays put is judged from the friction: the "
+    "grasp holds it when the friction coefficient is at least the required friction.")
+DIMENSIONS_NOTE = (
+    "Dimensional tolerances of the parts are not analysed by the model: the design was checked "
+    "under the placement tolerance and the object ranges listed, at its nominal dimensions.")
+# (key, unit, description) of the sheet's scalar rows of the gripper, in this order
 ROWS: tuple[tuple[str, str, str], ...] = (
     ("finger_length_mm", "mm", "finger length l, joint axis to tip"),
     ("finger_width_mm", "mm", "finger width w (gripping face w/2 from the finger's axis)"),
     ("rest_angle_deg", "deg", "rest angle of each finger from the symmetry axis"),
     ("joint_offset_mm", "mm", "joint distance d3 from the symmetry axis"),
     ("joint_spacing_mm", "mm", "distance between the two joints, 2 d3"),
+    ("joint_end_overlap_mm", "mm", "w - 2 d3: how far the fingers' joint ends overlap "
+                                   "(> 0: stacked at the joints, like forceps jaws)"),
     ("object_distance_mm", "mm", "d1: joints' line to the nearest point of the object"),
     ("object_centre_y_mm", "mm", "object centre above the joints' line, d1 + r"),
     ("object_diameter_mm", "mm", "object diameter 2 r"),
@@ -40,42 +69,154 @@ ROWS: tuple[tuple[str, str, str], ...] = (
     ("torsion_stiffness_nm_per_rad", "N·m/rad", "torsion spring at each joint (opens the jaw)"),
     ("torsion_stiffness_nmm_per_deg", "N·mm/deg", "the same spring per degree"),
 )
+# (key, unit, description) of the rows of what the design depends on
+CONDITION_ROWS: tuple[tuple[str, str, str], ...] = (
+    ("friction_coefficient", "-", "Coulomb friction of the fingers' faces on the object the "
+                                  "design was made for (the nominal one with ranges)"),
+    ("strain_limit", "-", "admissible peak compression of the object"),
+    ("placement_tolerance_along_mm", "mm", "placement error along the axis the design was "
+                                           "checked under, +-"),
+    ("placement_tolerance_across_mm", "mm", "placement error across the axis the design was "
+                                            "checked under, +-"),
+    ("density_kg_m3", "kg/m^3", "object density (payload)"),
+    ("payload_factor", "-", "payload factor f: the load is f m g"),
+    ("payload_n", "N", "payload W = f m g the grasp must carry"),
+    ("grip_force_n", "N", "grip force of the grasp"),
+)
+# a scenario row's columns: (key in the sheet, key in the result's row, scale to the sheet)
+SCENARIO_COLUMNS: tuple[tuple[str, str, float], ...] = (
+    ("dx_mm", "dx_m", MM), ("dy_mm", "dy_m", MM), ("reward", "reward", 1.0),
+    ("holds", "holds", 1.0), ("peak_compression", "peak_compression", 1.0),
+    ("required_friction", "required_friction", 1.0), ("payload_n", "payload_n", 1.0),
+    ("grip_force_n", "grip_force_n", 1.0),
+)
+GRASP_KEYS = ("total_force_n", "peak_compression", "contact_score", "converged", "holds",
+              "pin_force_n", "required_friction", "payload_n", "grip_force_n")
+OBJECT_KEYS = ("name", "radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
+               "density_kg_m3", "strain_limit", "friction_coefficient")
 
 
-# the sheet lists a finger's corners joint end (back, face), then tip end (face, back): the
-# order of envs.render.finger_polygon's corners 0, 3, 2, 1
-_SHEET_CORNERS = (0, 3, 2, 1)
+def _mm(key: str, value: Any) -> tuple[str, Any]:
+    """A length in metres (a key ending in ``_m``, a number or a range) as millimetres."""
+    if not key.endswith("_m") or value is None:
+        return key, value
+    scaled = [float(v) * MM for v in value] if isinstance(value, (list, tuple)) else (
+        float(value) * MM)
+    return key[:-2] + "_mm", scaled
+
+
+def assembly_of(joint_offset_m: float, finger_width_m: float) -> tuple[str, str]:
+    """How the fingers are built: :data:`ASSEMBLY_STACKED` when their joint ends overlap
+    (``d_3 < w / 2``), else :data:`ASSEMBLY_SIDE_BY_SIDE`; and a sentence saying why.
+
+    Parameters
+    ----------
+    joint_offset_m
+        Joint distance ``d_3`` from the symmetry axis [m].
+    finger_width_m
+        Finger width ``w`` [m].
+    """
+    d3, w = float(joint_offset_m), float(finger_width_m)
+    if d3 < w / 2:
+        return ASSEMBLY_STACKED, (
+            f"The joints are closer to the axis than half a finger width (d3 = {d3 * MM:.4g} mm "
+            f"< w/2 = {w / 2 * MM:.4g} mm), so the fingers overlap at the joints by w - 2 d3 = "
+            f"{(w - 2 * d3) * MM:.4g} mm: build them stacked, one finger above the other at "
+            "the joints like the jaws of forceps, each gripping face spanning the object. A "
+            "gripper that cannot stack its fingers needs a design with the joints apart "
+            "(psm-grasp optimize --joints-apart).")
+    return ASSEMBLY_SIDE_BY_SIDE, (
+        f"The joints are at least half a finger width from the axis (d3 = {d3 * MM:.4g} mm >= "
+        f"w/2 = {w / 2 * MM:.4g} mm): the fingers' joint ends never meet as they turn, and "
+        "the fingers can be built side by side in one plane.")
 
 
 def _finger_outline_mm(length: float, angle: float, offset: float, width: float,
                        side: int) -> list[list[float]]:
     """Corners of a finger bar at rest [mm]: joint end (back, face), tip end (face, back);
     side 0 right, 1 left (the drawings' own finger, :func:`envs.render.finger_polygon`)."""
+    # the sheet lists the corners joint end (back, face), then tip end (face, back): the order
+    # of envs.render.finger_polygon's corners 0, 3, 2, 1
     corners = finger_polygon(length, angle, offset, width, side)
-    return [[round(float(v) * MM, 4) for v in corners[k]] for k in _SHEET_CORNERS]
+    return [[round(float(v) * MM, 4) for v in corners[k]] for k in (0, 3, 2, 1)]
+
+
+def _scenario_table(rows: list[dict[str, Any]] | None) -> list[dict[str, Any]]:
+    """A result's scenario rows (:meth:`optim.problem.DesignProblem.scenario_rows`) as the
+    sheet's table: label, the placement error in mm, the grasp's measures and the varied
+    object quantities (lengths in mm)."""
+    table = []
+    for row in rows or []:
+        scenario = row.get("scenario", {})
+        entry: dict[str, Any] = {"label": scenario.get("label", "")}
+        for key, source, scale in SCENARIO_COLUMNS:
+            value = scenario.get(source, row.get(source))
+            if value is None:
+                continue
+            entry[key] = bool(value) if key == "holds" else (
+                value if isinstance(value, str) else float(value) * scale)
+        varied = {k: v for k, v in scenario.items()
+                  if k not in ("label", "dx_m", "dy_m")}
+        entry["object"] = dict(_mm(k, v) for k, v in varied.items())
+        table.append(entry)
+    return table
+
+
+def _conditions(obj: dict[str, Any], metrics: dict[str, Any]) -> dict[str, Any]:
+    """What the design depends on: friction, strain limit, placement tolerance, payload."""
+    scenarios = obj.get("scenarios") or {}
+    payload = metrics.get("payload_n")
+
+    def given(value: Any) -> Any:
+        return NOT_MODELLED if value is None else value
+
+    return {
+        "friction_coefficient": obj.get("friction_coefficient"),
+        "strain_limit": obj.get("strain_limit"),
+        "placement_tolerance_along_mm": float(scenarios.get("placement_along_m") or 0.0) * MM,
+        "placement_tolerance_across_mm": float(scenarios.get("placement_across_m") or 0.0) * MM,
+        "density_kg_m3": given(obj.get("density_kg_m3")),
+        "payload_factor": given(obj.get("payload_factor")),
+        "payload_n": given(payload),
+        "grip_force_n": given(metrics.get("grip_force_n")),
+    }
 
 
 def build_sheet(design: dict[str, float], obj: dict[str, Any],
-                metrics: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The design as a builder needs it.
+                metrics: dict[str, Any] | None = None,
+                scenario_rows: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """The design as a builder needs it, every length in millimetres.
 
     Parameters
     ----------
     design
         A design in SI units (keys of :data:`envs.scene.DESIGN_FIELDS`).
     obj
-        The object (``radius_m`` and, where known, ``name``, ``torsion_stiffness_nm_per_rad``
-        and the material fields), as in :attr:`optim.result.OptimResult.object`.
+        The object (``radius_m``, ``torsion_stiffness_nm_per_rad`` and, where known, ``name``,
+        the material fields, ``strain_limit``, ``friction_coefficient``, ``scenarios``,
+        ``density_kg_m3``, ``payload_factor``), as in :attr:`optim.result.OptimResult.object`.
     metrics
-        The design's grasp metrics (jaw angles, forces, ...), copied in where present.
+        The design's grasp metrics (jaw angles, forces, ``payload_n``, ``grip_force_n`` ...),
+        copied in where present.
+    scenario_rows
+        The design under every scenario (``extra["scenario_rows"]`` of a result), or ``None``.
 
     Returns
     -------
     dict
-        ``rows`` (the scalar quantities of :data:`ROWS`), ``finger_outline_mm`` (the corners
-        of the right and left finger at rest), ``joints_mm``, ``object_centre_mm``, ``object``
-        and, with metrics, ``grasp`` (closing angles in degrees, contact forces in N, peak
-        compression).
+        ``rows`` (the gripper's quantities of :data:`ROWS`), ``conditions`` (what the design
+        depends on, :data:`CONDITION_ROWS`; the payload ``"not modelled"`` where the result has
+        none), ``assembly`` (``"stacked"`` or ``"side by side"``) and ``assembly_note``,
+        ``fixed_centre``, ``tolerances`` (the placement tolerance, the object's ranges in mm
+        and what is not analysed), ``scenarios`` (a row per scenario), ``finger_outline_mm``
+        (the corners of the right and left finger at rest), ``joints_mm``,
+        ``object_centre_mm``, ``object`` and, with metrics, ``grasp`` (closing angles in
+        degrees, forces in N, peak compression, required friction).
+
+    Raises
+    ------
+    ValueError
+        If the design lacks a field or the object its radius or joint spring.
     """
     missing = [k for k in DESIGN_FIELDS if k not in design]
     if missing:
@@ -84,33 +225,48 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         raise ValueError("obj needs radius_m and torsion_stiffness_nm_per_rad")
     ln, th0, d3, w, torque, d1 = (float(design[k]) for k in DESIGN_FIELDS)
     r, kf = float(obj["radius_m"]), float(obj["torsion_stiffness_nm_per_rad"])
+    metrics = dict(metrics or {})
     values = {
         "finger_length_mm": ln * MM, "finger_width_mm": w * MM,
         "rest_angle_deg": math.degrees(th0), "joint_offset_mm": d3 * MM,
-        "joint_spacing_mm": 2 * d3 * MM, "object_distance_mm": d1 * MM,
-        "object_centre_y_mm": (d1 + r) * MM, "object_diameter_mm": 2 * r * MM,
-        "torque_nm": torque, "torsion_stiffness_nm_per_rad": kf,
+        "joint_spacing_mm": 2 * d3 * MM, "joint_end_overlap_mm": (w - 2 * d3) * MM,
+        "object_distance_mm": d1 * MM, "object_centre_y_mm": (d1 + r) * MM,
+        "object_diameter_mm": 2 * r * MM, "torque_nm": torque,
+        "torsion_stiffness_nm_per_rad": kf,
         "torsion_stiffness_nmm_per_deg": kf * MM * math.pi / 180.0,
     }
+    conditions = _conditions(obj, metrics)
+    assembly, note = assembly_of(d3, w)
+    ranges = (obj.get("scenarios") or {}).get("ranges") or {}
     sheet: dict[str, Any] = {
-        "object": {k: obj.get(k) for k in ("name", "radius_m", "youngs_modulus_pa",
-                                           "poisson_ratio", "thickness_m", "strain_limit")},
+        "object": dict(_mm(k, obj.get(k)) for k in OBJECT_KEYS),
         "rows": [{"quantity": key, "value": values[key], "unit": unit, "meaning": text}
                  for key, unit, text in ROWS],
+        "conditions": [{"quantity": key, "value": conditions[key], "unit": unit,
+                        "meaning": text} for key, unit, text in CONDITION_ROWS],
+        "assembly": assembly,
+        "assembly_note": note,
+        "fixed_centre": FIXED_CENTRE_NOTE,
+        "tolerances": {
+            "placement_along_mm": conditions["placement_tolerance_along_mm"],
+            "placement_across_mm": conditions["placement_tolerance_across_mm"],
+            "object_ranges": dict(_mm(k, v) for k, v in ranges.items()),
+            "dimensions": DIMENSIONS_NOTE,
+        },
+        "scenarios": _scenario_table(scenario_rows),
         "frame": "origin midway between the joints, x to the right, y up the symmetry axis "
-                 "towards the object; fingers at rest",
+                 "towards the object; fingers at rest; millimetres",
         "joints_mm": [[d3 * MM, 0.0], [-d3 * MM, 0.0]],
         "object_centre_mm": [0.0, (d1 + r) * MM],
         "finger_outline_mm": {"right": _finger_outline_mm(ln, th0, d3, w, 0),
                               "left": _finger_outline_mm(ln, th0, d3, w, 1)},
     }
     if metrics:
-        grasp = {}
+        grasp: dict[str, Any] = {}
         if metrics.get("jaw_angles_rad") is not None:
             grasp["closed_angles_deg"] = [math.degrees(float(a))
                                           for a in metrics["jaw_angles_rad"]]
-        for key in ("total_force_n", "peak_compression", "contact_score", "converged",
-                    "pin_force_n", "required_friction"):
+        for key in GRASP_KEYS:
             if metrics.get(key) is not None:
                 grasp[key] = metrics[key]
         sheet["grasp"] = grasp
@@ -128,21 +284,148 @@ def _dimension(ax, p: np.ndarray, q: np.ndarray, offset: np.ndarray, text: str) 
             bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none"})
 
 
+def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> None:
+    """The two fingers at rest [mm]; stacked ones with the left finger behind the right one
+    (hatched, its hidden edges dashed) and the circles their joint ends sweep."""
+    outline = sheet["finger_outline_mm"]
+    if sheet["assembly"] != ASSEMBLY_STACKED:
+        for side in ("right", "left"):
+            ax.add_patch(Polygon(outline[side], closed=True, facecolor="0.8", edgecolor="0.2",
+                                 lw=1.0))
+        return
+    ax.add_patch(Polygon(outline["left"], closed=True, facecolor="0.93", edgecolor="0.2",
+                         hatch="////", lw=1.0, zorder=1, label="left finger (behind)"))
+    ax.add_patch(Polygon(outline["right"], closed=True, facecolor="0.8", edgecolor="0.2",
+                         lw=1.0, zorder=2, label="right finger (in front)"))
+    ax.add_patch(Polygon(outline["left"], closed=True, fill=False, edgecolor="0.2",
+                         linestyle=(0, (3, 2)), lw=0.8, zorder=3))
+    for x, y in sheet["joints_mm"]:
+        ax.add_patch(Circle((x, y), w / 2, fill=False, edgecolor="tab:red", lw=0.8,
+                            linestyle=":", zorder=3))
+    if legend:
+        ax.legend(loc="upper right", fontsize=7, framealpha=0.9)
+
+
+def _condition_lines(sheet: dict[str, Any]) -> list[str]:
+    """What the design depends on, a line each, for the drawing's notes."""
+    cond = {row["quantity"]: row["value"] for row in sheet["conditions"]}
+    rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
+
+    def number(key: str, fmt: str) -> str:
+        value = cond.get(key)
+        return value if isinstance(value, str) or value is None else format(value, fmt)
+
+    tol = sheet["tolerances"]
+    ranges = "; ".join(f"{k} {v[0]:.4g} to {v[1]:.4g}" for k, v in tol["object_ranges"].items())
+    payload = cond["payload_n"]
+    payload_line = (f"payload: {NOT_MODELLED} (the grasp was judged without the object's weight)"
+                    if isinstance(payload, str) else
+                    f"payload W = {payload:.4g} N (density {number('density_kg_m3', '.4g')} "
+                    f"kg/m^3, factor {number('payload_factor', '.3g')}); grip force "
+                    f"{number('grip_force_n', '.4g')} N")
+    along, across = tol["placement_along_mm"], tol["placement_across_mm"]
+    placement = (f"placement tolerance: +-{along:.3g} mm along the axis, +-{across:.3g} mm "
+                 "across" if along or across else
+                 "placement tolerance: none (the object at its nominal place only)")
+    return [
+        f"actuation torque T_a = {rows['torque_nm']:.4g} N·m on each finger; joint spring k_f = "
+        f"{rows['torsion_stiffness_nm_per_rad']:.4g} N·m/rad "
+        f"({rows['torsion_stiffness_nmm_per_deg']:.4g} N·mm/deg), opening",
+        f"assembly: {sheet['assembly'].upper()}. {sheet['assembly_note']}",
+        f"friction coefficient mu = {number('friction_coefficient', '.3g')} (fingers on the "
+        f"object); strain limit {number('strain_limit', '.3g')}",
+        payload_line,
+        placement + (f"; object ranges: {ranges}" if ranges else ""),
+        f"fixed centre (+ in the drawing): {sheet['fixed_centre']}",
+        tol["dimensions"],
+    ]
+
+
+def _scenario_cells(sheet: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    """The scenario table as text cells: header, rows."""
+    header = ["scenario", "dx [mm]", "dy [mm]", "reward", "holds", "peak compr.",
+              "req. friction"]
+    has_payload = any("payload_n" in row for row in sheet["scenarios"])
+    if has_payload:
+        header += ["payload [N]", "grip [N]"]
+    cells = []
+    for row in sheet["scenarios"]:
+        # the result's labels name quantities in SI ("dx_m+"); the sheet's table is in mm
+        label = " ".join(part.replace("_m", "", 1) if part[:-1].endswith("_m") else part
+                         for part in row["label"].split())
+        line = [label, f"{row.get('dx_mm', 0.0):+.3g}", f"{row.get('dy_mm', 0.0):+.3g}",
+                f"{row.get('reward', math.nan):.4f}", "yes" if row.get("holds") else "no",
+                f"{row.get('peak_compression', math.nan):.3f}",
+                _text(row.get("required_friction"), ".3g")]
+        if has_payload:
+            line += [_text(row.get("payload_n"), ".3g"), _text(row.get("grip_force_n"), ".3g")]
+        cells.append(line)
+    return header, cells
+
+
+def _text(value: Any, fmt: str) -> str:
+    """A number formatted, or the text a result holds instead (``"inf"``, "not modelled")."""
+    if value is None:
+        return "-"
+    return value if isinstance(value, str) else format(float(value), fmt)
+
+
+def _note_text(sheet: dict[str, Any], width: int) -> str:
+    """The drawing's notes, wrapped to ``width`` characters."""
+    import textwrap
+
+    return "\n".join(textwrap.fill(line, width) for line in _condition_lines(sheet))
+
+
+def _draw_joint_detail(ax, sheet: dict[str, Any], w: float) -> None:
+    """Detail of the joints of stacked fingers, magnified: the overlap, the hidden edges and
+    the circles of radius w/2 the joint ends sweep."""
+    _draw_fingers(ax, sheet, w, legend=False)
+    for x, y in sheet["joints_mm"]:
+        ax.plot([x], [y], "o", color="k", ms=3, zorder=4)
+    ax.set_xlim(-1.6 * w, 1.6 * w)
+    ax.set_ylim(-0.9 * w, 2.0 * w)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=6)
+    ax.set_title(f"detail at the joints [mm]\noverlap w - 2 d3 = "
+                 f"{w - 2 * sheet['joints_mm'][0][0]:.3g} mm\n(dotted: joint ends' sweep)",
+                 fontsize=7)
+
+
+def _draw_table(ax, sheet: dict[str, Any]) -> None:
+    """The scenario table in an axes of its own."""
+    ax.axis("off")
+    header, cells = _scenario_cells(sheet)
+    table = ax.table(cellText=cells, colLabels=header, loc="upper center",
+                     bbox=[0.0, 0.0, 1.0, 1.0])
+    table.auto_set_font_size(False)
+    table.set_fontsize(6.5)
+    ax.set_title("scenarios: the design under every object and placement it was checked for "
+                 "(dx across, dy along the axis)", fontsize=8)
+
+
 def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
-    """A dimensioned drawing of a build sheet's gripper at rest with its object [mm]."""
+    """A dimensioned drawing of a build sheet's gripper at rest with its object [mm], with the
+    notes a workshop needs (assembly, friction, payload, tolerances, the fixed centre) and the
+    scenario table below it."""
     rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
     ln, w, d3 = rows["finger_length_mm"], rows["finger_width_mm"], rows["joint_offset_mm"]
     th0 = math.radians(rows["rest_angle_deg"])
     r = rows["object_diameter_mm"] / 2
     centre = np.array(sheet["object_centre_mm"])
-    fig = Figure(figsize=(6.4, 6.4), dpi=110)
-    ax = fig.add_subplot()
-    for side in ("right", "left"):
-        ax.add_patch(Polygon(sheet["finger_outline_mm"][side], closed=True, facecolor="0.8",
-                             edgecolor="0.2", lw=1.0))
+    stacked = sheet["assembly"] == ASSEMBLY_STACKED
+    notes = _note_text(sheet, 80 if stacked else 115)
+    heights = [6.4, max(2.2 if stacked else 0.0, 0.12 * (notes.count("\n") + 1) + 0.1)]
+    if sheet.get("scenarios"):
+        heights.append(0.17 * (len(sheet["scenarios"]) + 1) + 0.3)
+    fig = Figure(figsize=(7.2, sum(heights)), dpi=110)
+    grid = fig.add_gridspec(len(heights), 1, height_ratios=heights)
+    ax = fig.add_subplot(grid[0])
+    _draw_fingers(ax, sheet, w)
     ax.add_patch(Circle(centre, r, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    ax.plot([centre[0]], [centre[1]], "+", color="k", ms=8)
     for x, _ in sheet["joints_mm"]:
-        ax.plot([x], [0.0], "o", color="k", ms=4)
+        ax.plot([x], [0.0], "o", color="k", ms=4, zorder=4)
     scale = max(ln, 2 * r + centre[1])
     gap = 0.06 * scale
     s, c = math.sin(th0), math.cos(th0)
@@ -164,10 +447,6 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
                      color="0.2", lw=0.8))
     ax.text(d3 - 0.02 * ln, 1.1 * arc_r, f"θ0 = {rows['rest_angle_deg']:.1f}°", fontsize=8,
             ha="right", va="center")
-    ax.text(0.02, 0.02, f"T_a = {rows['torque_nm']:.4g} N·m per finger\n"
-            f"k_f = {rows['torsion_stiffness_nm_per_rad']:.4g} N·m/rad "
-            f"({rows['torsion_stiffness_nmm_per_deg']:.4g} N·mm/deg)",
-            transform=ax.transAxes, fontsize=8, va="bottom")
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.12)
@@ -175,37 +454,137 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     ax.set_ylabel("y [mm]")
     ax.grid(alpha=0.2)
     name = (sheet.get("object") or {}).get("name") or "the object"
-    ax.set_title(title or f"gripper for {name}, at rest (millimetres)", fontsize=10)
+    ax.set_title(title or f"gripper for {name}, at rest (millimetres), fingers "
+                 f"{sheet['assembly']}", fontsize=10)
+    if stacked:
+        cells = grid[1].subgridspec(1, 2, width_ratios=[2.6, 1.0])
+        note_ax = fig.add_subplot(cells[0])
+        _draw_joint_detail(fig.add_subplot(cells[1]), sheet, w)
+    else:
+        note_ax = fig.add_subplot(grid[1])
+    note_ax.axis("off")
+    note_ax.text(0.0, 1.0, notes, fontsize=7, va="top", ha="left", transform=note_ax.transAxes)
+    if sheet.get("scenarios"):
+        _draw_table(fig.add_subplot(grid[2]), sheet)
     fig.tight_layout()
     return fig
 
 
-def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: str | Path,
-                      prefix: str, metrics: dict[str, Any] | None = None) -> dict[str, Path]:
-    """Write ``{prefix}_design.json``, ``{prefix}_design.csv`` and ``{prefix}_drawing.png``.
+def _csv_value(value: Any, digits: str) -> str:
+    """A CSV cell: text as it is, a flag as True/False, a number to ``digits``."""
+    if isinstance(value, (str, bool, np.bool_)):
+        return str(value)
+    return "" if value is None else format(float(value), digits)
 
-    Returns the written paths by kind (``design_json``, ``design_csv``, ``drawing``).
-    """
-    from .result import to_jsonable
 
-    sheet = build_sheet(design, obj, metrics)
-    folder = Path(out_dir)
-    paths = {"design_json": folder / f"{prefix}_design.json",
-             "design_csv": folder / f"{prefix}_design.csv",
-             "drawing": folder / f"{prefix}_drawing.png"}
-    paths["design_json"].write_text(json.dumps(to_jsonable(sheet), indent=1) + "\n")
-    with paths["design_csv"].open("w", newline="") as f:
+def _write_design_csv(path: Path, sheet: dict[str, Any], scenarios_file: str) -> None:
+    """The sheet as one table: quantity, value, unit, meaning."""
+    with path.open("w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["quantity", "value", "unit", "meaning"])
-        for row in sheet["rows"]:
-            writer.writerow([row["quantity"], f"{row['value']:.6g}", row["unit"],
+        for row in (*sheet["rows"], *sheet["conditions"]):
+            writer.writerow([row["quantity"], _csv_value(row["value"], ".6g"), row["unit"],
                              row["meaning"]])
+        writer.writerow(["assembly", sheet["assembly"], "", sheet["assembly_note"]])
+        writer.writerow(["fixed_centre", "yes", "", sheet["fixed_centre"]])
+        for key, (low, high) in sheet["tolerances"]["object_ranges"].items():
+            unit = "mm" if key.endswith("_mm") else ""
+            writer.writerow([f"range_{key}", f"{low:.6g} to {high:.6g}", unit,
+                             "object range the design was checked under"])
+        writer.writerow(["dimensional_tolerances", NOT_MODELLED, "",
+                         sheet["tolerances"]["dimensions"]])
+        writer.writerow(["scenarios", len(sheet["scenarios"]), "",
+                         f"one row each in {scenarios_file}" if sheet["scenarios"]
+                         else "none: the object at its nominal place only"])
         for side, corners in sheet["finger_outline_mm"].items():
             for k, (x, y) in enumerate(corners):
                 writer.writerow([f"{side}_finger_corner_{k}_x_mm", f"{x:.4f}", "mm",
                                  "finger outline at rest (joint end back, joint end face, "
                                  "tip face, tip back)"])
                 writer.writerow([f"{side}_finger_corner_{k}_y_mm", f"{y:.4f}", "mm", ""])
+
+
+def _write_scenarios_csv(path: Path, sheet: dict[str, Any]) -> None:
+    """The scenario table: a row per scenario, the varied object quantities in columns."""
+    varied = sorted({k for row in sheet["scenarios"] for k in row["object"]})
+    measures = [key for key, _, _ in SCENARIO_COLUMNS
+                if any(key in row for row in sheet["scenarios"])]
+    with path.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["label", *measures, *varied])
+        for row in sheet["scenarios"]:
+            writer.writerow([row["label"], *(_csv_value(row.get(k), ".6g") for k in measures),
+                             *(_csv_value(row["object"].get(k), ".6g") for k in varied)])
+
+
+def dxf_available() -> bool:
+    """Whether the DXF can be written (the optional extra ``dxf``: ezdxf)."""
+    import importlib.util
+
+    return importlib.util.find_spec("ezdxf") is not None
+
+
+def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
+    """The fingers' outlines at rest as a DXF in millimetres, the format a laser cutter or a CNC
+    shop takes: a closed polyline per finger on its own layer (:data:`DXF_LAYERS`), the joint
+    centres as points with a cross, and the object's outline for reference, in the sheet's
+    frame (origin midway between the joints, y up the symmetry axis).
+
+    Raises
+    ------
+    ValueError
+        Without ezdxf (the extra ``dxf``), with the install hint.
+    """
+    if not dxf_available():
+        raise ValueError("the DXF needs ezdxf: pip install -e '.[dxf]'")
+    import ezdxf
+
+    doc = ezdxf.new("R2010", setup=True)
+    doc.header["$INSUNITS"] = DXF_MILLIMETRES
+    doc.header["$MEASUREMENT"] = 1  # metric
+    space = doc.modelspace()
+    for key, name in DXF_LAYERS.items():
+        doc.layers.add(name, color={"right": 1, "left": 5, "joints": 7, "object": 8}[key])
+    for side in ("right", "left"):
+        space.add_lwpolyline(sheet["finger_outline_mm"][side], close=True,
+                             dxfattribs={"layer": DXF_LAYERS[side]})
+    rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
+    mark = 0.25 * rows["finger_width_mm"]
+    for x, y in sheet["joints_mm"]:
+        attribs = {"layer": DXF_LAYERS["joints"]}
+        space.add_point((x, y), dxfattribs=attribs)
+        space.add_line((x - mark, y), (x + mark, y), dxfattribs=attribs)
+        space.add_line((x, y - mark), (x, y + mark), dxfattribs=attribs)
+    space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
+                     dxfattribs={"layer": DXF_LAYERS["object"]})
+    doc.saveas(Path(path))
+    return Path(path)
+
+
+def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: str | Path,
+                      prefix: str, metrics: dict[str, Any] | None = None,
+                      scenario_rows: list[dict[str, Any]] | None = None) -> dict[str, Path]:
+    """Write ``{prefix}_design.json``, ``{prefix}_design.csv`` and ``{prefix}_drawing.png``,
+    with scenarios ``{prefix}_scenarios.csv``, and with ezdxf the outlines
+    ``{prefix}_fingers.dxf`` (:func:`write_dxf`).
+
+    Returns the written paths by kind (``design_json``, ``design_csv``, ``drawing``,
+    ``scenarios_csv``, ``dxf``).
+    """
+    from .result import to_jsonable
+
+    sheet = build_sheet(design, obj, metrics, scenario_rows)
+    folder = Path(out_dir)
+    paths = {"design_json": folder / f"{prefix}_design.json",
+             "design_csv": folder / f"{prefix}_design.csv",
+             "drawing": folder / f"{prefix}_drawing.png"}
+    if sheet["scenarios"]:
+        paths["scenarios_csv"] = folder / f"{prefix}_scenarios.csv"
+        _write_scenarios_csv(paths["scenarios_csv"], sheet)
+    paths["design_json"].write_text(json.dumps(to_jsonable(sheet), indent=1) + "\n")
+    _write_design_csv(paths["design_csv"], sheet, f"{prefix}_scenarios.csv")
     fig = drawing_figure(sheet)
     fig.savefig(paths["drawing"])
+    if dxf_available():
+        paths["dxf"] = write_dxf(sheet, folder / f"{prefix}_fingers.dxf")
     return paths

@@ -23,6 +23,7 @@ from envs.model.defaults import (
 from envs.render import draw_design, draw_grasp, grasp_figure
 from envs.scene import Design, Scene, SoftDisk
 
+from .build_sheet import assembly_of
 from .result import OptimResult
 
 __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure",
@@ -78,10 +79,11 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
         scene = scene_of(design, obj)
     except ValueError:
         row = np.array([design[k] for k in DESIGN_FIELDS])
-        draw_design(ax, row, obj["radius_m"], title=title + " (invalid)")
+        draw_design(ax, row, obj["radius_m"], title=title + " (invalid)", length_unit="mm")
         return
     res = simulate(scene, design["torque_nm"], **model_of(obj))
-    draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend)
+    draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend,
+               length_unit="mm")
 
 
 def convergence_figure(results: Sequence[OptimResult], path: str | Path | None = None, *,
@@ -121,7 +123,8 @@ def convergence_figure(results: Sequence[OptimResult], path: str | Path | None =
 
 
 def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Figure:
-    """The best design of a result, re-solved with :func:`envs.solver.simulate` and drawn."""
+    """The best design of a result, re-solved with :func:`envs.solver.simulate` and drawn in
+    millimetres (every length in its title too), the centre held where the object sits."""
     from envs.solver import simulate
 
     obj = result.object
@@ -130,23 +133,25 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     title = (f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
              f"contact {m.get('contact_score', math.nan):.2f}, "
-             f"compression {m.get('peak_compression', math.nan):.3f}; "
+             f"compression {m.get('peak_compression', math.nan):.3f}; fingers "
+             f"{assembly_of(d['joint_offset_m'], d['finger_width_m'])[0]}\n"
              f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
-             f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°\n"
-             f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm, "
+             f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
+             f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm\n"
              f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m")
     try:
         scene = scene_of(result.best_design, obj)
     except ValueError:
         fig = Figure(figsize=(5.5, 5.5), dpi=100)
         row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
-        draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)")
+        draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)",
+                    length_unit="mm")
         return _save(fig, path)
     # the member that reported the metrics in the title (the finer one after the finish)
     member = result.extra.get("reward_model") or model_of(obj)
     res = simulate(scene, result.best_design["torque_nm"], **member)
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
-                       figsize=(6.0, 6.0))
+                       figsize=(6.0, 6.0), length_unit="mm")
     return _save(fig, path)
 
 

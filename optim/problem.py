@@ -14,6 +14,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -231,6 +232,11 @@ class DesignProblem:
         feasible when it holds within the strain limit in every scenario).
     robust
         The robust reward with scenarios: ``"worst"`` (default), ``"mean"`` or ``"cvar"``.
+    joints_apart
+        Keep every design's joints at least half a finger width from the axis (``d_3 >= w /
+        2``), for a gripper whose fingers cannot be stacked at the joints
+        (:class:`~envs.evaluate.DesignBounds` ``joints_apart``: ``bounds`` with it set).
+        Default ``False``: the bounds as given.
     """
 
     n_var = N_DESIGN
@@ -255,6 +261,7 @@ class DesignProblem:
         calibrated: bool | None = None,
         scenarios: Scenarios | None = None,
         robust: str = "worst",
+        joints_apart: bool = False,
     ) -> None:
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
@@ -275,7 +282,14 @@ class DesignProblem:
         self.model = resolve_model(n_triangles, n_rings,
                                    DEFAULT_ELEMENT if element is None else element, calibrated)
         self.n_triangles = self.model.n_triangles
+        if not isinstance(joints_apart, bool):
+            raise ValueError(f"joints_apart must be True or False, got {joints_apart!r}")
+        if bounds is not None and not isinstance(bounds, DesignBounds):
+            raise ValueError(f"bounds must be None or a DesignBounds, got "
+                             f"{type(bounds).__name__}")
         self.bounds = DesignBounds() if bounds is None else bounds
+        if joints_apart:
+            self.bounds = replace(self.bounds, joints_apart=True)
         self.weights = RewardWeights() if weights is None else weights
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")
@@ -582,6 +596,7 @@ class DesignProblem:
             options=to_jsonable(dict(options or {})),
             executor=_describe_executor(self.executor),
             extra=to_jsonable({**(extra or {}), "grasp_found": found,
+                               "joints_apart": self.bounds.joints_apart,
                                **self.scenario_extra(best_design)}),
         )
 

@@ -113,7 +113,7 @@ def write_outputs(result: OptimResult, out_dir: Path, prefix: str,
         paths["best_grasp"] = out_dir / f"{prefix}_best_grasp.png"
         best_grasp_figure(result, paths["best_grasp"])
         paths.update(write_build_sheet(result.best_design, result.object, out_dir, prefix,
-                                       result.best_metrics))
+                                       result.best_metrics, result.extra.get("scenario_rows")))
     if result.extra.get("scenario_rows"):
         paths["scenarios"] = out_dir / f"{prefix}_scenarios.png"
         scenario_figure(result, paths["scenarios"])
@@ -212,6 +212,16 @@ def scenarios_of(obj: ObjectSpec | None, placement_tolerance_m=None) -> Scenario
     return None if base is None or base.is_trivial else base
 
 
+def check_joints_apart(method: str, joints_apart: Any) -> None:
+    """``joints_apart`` is True or False, and the design policy, trained in the default design
+    space, cannot keep the joints apart."""
+    if not isinstance(joints_apart, bool):
+        raise ValueError(f"joints_apart must be True or False, got {joints_apart!r}")
+    if joints_apart and method == "policy":
+        raise ValueError("the design policy designs in the default design space and cannot keep "
+                         "the joints apart: use another method with joints_apart (--joints-apart)")
+
+
 def check_observable(target: Any, settings: dict[str, Any]) -> None:
     """The design policy answers objects it can observe only: say so before any work."""
     from envs.design_env import observe
@@ -247,6 +257,7 @@ def run_optimize(
     finish: bool = True,
     placement_tolerance_m: float | tuple[float, float] | None = None,
     robust: str | None = None,
+    joints_apart: bool = False,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -263,6 +274,10 @@ def run_optimize(
     ``placement_tolerance_m`` (one number for both ways, or ``(along, across)`` [m]); the
     reward is then the ``robust`` measure over them (default the worst scenario's), and the
     result JSON has a row per scenario for the reported design (``extra["scenario_rows"]``).
+
+    ``joints_apart``: every design keeps its joints at least half a finger width from the axis
+    (``d_3 >= w / 2``), for fingers that cannot be stacked at the joints
+    (:class:`~envs.evaluate.DesignBounds`); the result JSON records it (``extra["joints_apart"]``).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -295,6 +310,7 @@ def run_optimize(
                                       torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
                                       placement_tolerance_m, robust)
     budget, seed = check_budget(budget), check_seed(seed)
+    check_joints_apart(method, joints_apart)
     if method == "policy":
         check_observable(target, settings)
     model = resolve_model(n_triangles, n_rings, element or DEFAULT_ELEMENT)
@@ -303,7 +319,8 @@ def run_optimize(
     prefix = prefix or f"{method}_seed{seed}"
     bar, hook = _progress_bar(budget, method, progress)
     with make_executor(dask, workers) as executor:
-        common = {"executor": executor, "progress": hook, **settings, **model.kwargs()}
+        common = {"executor": executor, "progress": hook, "joints_apart": joints_apart,
+                  **settings, **model.kwargs()}
         if obj is None:
             problem = DesignProblem.from_scene(target, **common)
         else:
