@@ -54,7 +54,8 @@ def test_defaults_of_the_optional_keys(tmp_path):
 
 
 @pytest.mark.parametrize("text,match", [
-    (GOOD + "colour = 'red'\n", r"\[object\]: unknown key 'colour'; allowed: name, placement_tolerance_m, radius_m"),
+    (GOOD + "colour = 'red'\n",
+     r"\[object\]: unknown key 'colour'; allowed: name, placement_tolerance_m, radius_m"),
     (GOOD.replace("radius_m = 0.012\n", ""), r"\[object\]: missing key 'radius_m'"),
     (GOOD.replace("0.012", "'0.012'"), r"\[object\]: radius_m must be a number, got '0.012'"),
     (GOOD.replace("0.012", "true"), r"\[object\]: radius_m must be a number, got True"),
