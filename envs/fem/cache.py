@@ -14,7 +14,8 @@ from pathlib import Path
 from .result import FemResult
 
 #: Version tag of the discretisation and solver; part of the cache key.
-FEM_VERSION = "fem-4"  # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding
+FEM_VERSION = "fem-5"  # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding;
+# fem-5: the payload, the grip force and what limits the friction
 
 
 def _cache_dir() -> Path:
