@@ -82,6 +82,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in picks])
     out = evaluate_designs(designs, problem.disk, strain_limits=problem.strain_limit,
                            friction_coefficients=problem.friction_coefficient,
+                           payload_factors=problem.payload_factor,
                            weights=problem.weights, **problem.joint_spring_kwargs(), **member)
     order = np.argsort(-out["reward"], kind="stable")
     best = int(order[0])

@@ -38,6 +38,7 @@ from .problem import (
     DesignProblem,
     check_budget,
     check_friction,
+    check_payload_factor,
     check_seed,
     check_strain_limit,
     paper_design,
@@ -150,10 +151,10 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 
 
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
-                    spring_rel, spring_nm) -> tuple[Any, dict[str, Any]]:
+                    spring_rel, spring_nm, payload_factor=None) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults."""
-    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
+    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
     from envs.scene import joint_spring_kwargs
 
     if obj is not None and scene is not None:
@@ -170,8 +171,12 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
     mu = friction if friction is not None else (
         own.friction_coefficient if own is not None and own.friction_coefficient is not None
         else DEFAULT_FRICTION_COEFFICIENT)
+    factor = payload_factor if payload_factor is not None else (
+        own.payload_factor if own is not None and own.payload_factor is not None
+        else DEFAULT_PAYLOAD_FACTOR)
     kwargs: dict[str, Any] = {"strain_limit": check_strain_limit(limit),
-                              "friction_coefficient": check_friction(mu)}
+                              "friction_coefficient": check_friction(mu),
+                              "payload_factor": check_payload_factor(factor)}
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
     return (obj.disk if obj is not None else scene), kwargs
@@ -205,6 +210,7 @@ def run_optimize(
     torsion_stiffness_nm_per_rad: float | None = None,
     n_triangles: int | None = None,
     progress: bool = True,
+    payload_factor: float | None = None,
     n_rings: int | None = None,
     element: str | None = None,
     prefix: str | None = None,
@@ -216,8 +222,9 @@ def run_optimize(
 
     The object is a scene preset's disk (``scene``; its gripper keeps its own joint spring)
     or a designer's own (``obj``, e.g. :func:`envs.object_file.load_object`; the spring is
-    relative to it unless given); neither: :data:`DEMO_SCENE`. The strain limit and the
-    friction coefficient are the arguments', else the object file's, else the defaults. With
+    relative to it unless given); neither: :data:`DEMO_SCENE`. The strain limit, the
+    friction coefficient and the payload factor are the arguments', else the object file's,
+    else the defaults. With
     ``finish`` (default) the run's best distinct designs are re-scored by a finer member
     (:func:`optim.finish.finish_result`): the reported optimum is the FEM's within a few
     percent; the result JSON says which model reported it (``extra["reward_model"]``).
@@ -250,7 +257,8 @@ def run_optimize(
     if obj is None and scene is None:
         scene = DEMO_SCENE
     target, settings = problem_kwargs(scene, obj, strain_limit, friction_coefficient,
-                                      torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+                                      torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
+                                      payload_factor)
     budget, seed = check_budget(budget), check_seed(seed)
     if method == "policy":
         check_observable(target, settings)

@@ -99,7 +99,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
               "friction_coefficients": obj.get("friction_coefficient",
                                                DEFAULT_FRICTION_COEFFICIENT),
               "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
-                                                      PAPER_TORSION_STIFFNESS_NM_PER_RAD)}
+                                                      PAPER_TORSION_STIFFNESS_NM_PER_RAD),
+              # (a run recorded before the payload had none)
+              "payload_factors": obj.get("payload_factor", 0.0)}
     disk = disk_of(obj)
     model = model_of(obj)
     psm = evaluate_designs(designs, disk, **common, **model)

@@ -13,7 +13,7 @@ from scipy.optimize import linprog
 
 from envs import DesignBounds, Scene, evaluate_designs, simulate
 from envs.model.family import resolve_model
-from envs.model.holding import H_MU, holding_row
+from envs.model.holding import H_MU, N_HOLD, holding_row
 from envs.model.layout import S_DISTANCE, S_RADIUS, S_SCALE, S_THICKNESS, S_YOUNG
 from envs.model.problem import pack_params
 from envs.scene import Design
@@ -69,7 +69,7 @@ def _lp_friction(normals, points, forces, centre, length, pin, moment) -> float:
 def test_the_symmetric_grasp_on_the_faces_needs_tan_theta(model):
     """paper-r070 at 0.2 N·m: mu = tan(theta) and |pin force| = (N_R + N_L) sin(theta), the
     pin pulling the object back into the jaws (-y), no moment."""
-    res = simulate(R070, 0.2, **model)
+    res = simulate(R070, 0.2, payload_factor=0, **model)
     assert res.converged and res.n_contacts[0] > 0 and not res.corner_forces_n.any()
     theta = res.jaw_angles_rad[0]
     assert res.jaw_angles_rad[1] == pytest.approx(theta, abs=1e-9)
@@ -87,7 +87,7 @@ def test_a_grasp_turned_off_its_mirror_symmetry_needs_about_the_same_friction():
     shifts a little between its contact points. Torques around a design whose grasp breaks the
     mirror symmetry, and its mirror-symmetric neighbours."""
     designs = DesignBounds().sample(np.random.default_rng(0), 2000, R070.disk)
-    out = evaluate_designs(designs, R070.disk)
+    out = evaluate_designs(designs, R070.disk, payload_factors=0)
     grasp = out["converged"] & out["touching"].all(axis=1) & (out["n_contacts"] > 1).all(axis=1)
     turned = np.abs(out["jaw_angles_rad"][:, 0] - out["jaw_angles_rad"][:, 1])
     rows = np.flatnonzero(grasp & (turned > 1e-6) & (turned < math.radians(0.5)))
@@ -99,7 +99,7 @@ def test_a_grasp_turned_off_its_mirror_symmetry_needs_about_the_same_friction():
     assert np.median(np.abs(need / np.tan(theta) - 1.0)) < 0.05
     sweep = np.repeat(designs[rows[:1]], 11, axis=0)
     sweep[:, 4] *= np.linspace(0.9, 1.1, 11)
-    swept = evaluate_designs(sweep, R070.disk)
+    swept = evaluate_designs(sweep, R070.disk, payload_factors=0)
     assert np.all(np.isfinite(swept["required_friction"]))
     assert np.max(np.abs(np.diff(swept["required_friction"]))) < 0.05
 
@@ -147,7 +147,7 @@ def test_corner_and_face_contacts_match_a_linear_program():
     linear program's optimum, and the pin force is minus the sum of the contact forces."""
     disk = R070.disk
     designs = DesignBounds().sample(np.random.default_rng(11), 120, disk)
-    out = evaluate_designs(designs, disk)
+    out = evaluate_designs(designs, disk, payload_factors=0)
     keep = np.flatnonzero(out["converged"] & out["touching"].all(axis=1))
     spec, rows, sol = _solved(designs[keep], disk)
     n = spec.n_triangles
@@ -157,10 +157,11 @@ def test_corner_and_face_contacts_match_a_linear_program():
     corners = checked = asymmetric = 0
     for b in range(rows.shape[0]):
         force_unit = rows[b, S_SCALE] * rows[b, S_YOUNG] * rows[b, S_THICKNESS] * rows[b, S_RADIUS]
-        normals, points, forces, row = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k), np.empty(4)
+        normals, points, forces = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k)
+        row = np.empty(N_HOLD)
         count = holding_one(rows[b], prm[b], n, sol.state_scaled[b], sol.face_scaled[b],
-                            sol.corner_forces_n[b] / force_unit, np.empty(5), np.empty((5, 5)),
-                            normals, points, forces, np.empty((k, 3)), row)
+                            sol.corner_forces_n[b] / force_unit, 0.0, np.empty(5),
+                            np.empty((5, 5)), normals, points, forces, np.empty((k, 3)), row)
         np.testing.assert_array_equal(row, sol.holding[b])
         normals, points, forces = normals[:count], points[:count], forces[:count]
         # the pin carries what the contact forces leave: minus their sum
@@ -182,7 +183,7 @@ def test_a_miss_carries_nothing_and_a_hold_is_a_converged_grasp_within_the_coeff
     disk = R070.disk
     designs = DesignBounds().sample(np.random.default_rng(2), 300, disk)
     designs[:20, 4] = 0.0  # no torque: the fingers stay open
-    out = evaluate_designs(designs, disk, friction_coefficients=0.3)
+    out = evaluate_designs(designs, disk, friction_coefficients=0.3, payload_factors=0)
     none = out["converged"] & ~out["touching"].any(axis=1)
     assert none[:20].all()
     assert np.all(out["required_friction"][none] == 0.0)
