@@ -136,9 +136,11 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
               f"T_a = {d['torque_nm']:.4g} N·m, d1 = {d['distance_m'] * 1e3:.4g} mm, "
               f"k_f = {result.object['torsion_stiffness_nm_per_rad']:.4g} N·m/rad")
     if m.get("required_friction") is not None:
-        print(f"  holding: needs friction {m['required_friction']:.3g} (the object's "
-              f"{m.get('friction_coefficient', float('nan')):.3g}): "
-              + ("holds" if m.get("holds") else "would slip without the pin")
+        payload = m.get("payload_n", 0.0)
+        print(f"  holding: needs friction {float(m['required_friction']):.3g} (the object's "
+              f"{m.get('friction_coefficient', float('nan')):.3g}) with a payload of "
+              f"{payload:.3g} N and a grip of {m.get('grip_force_n', float('nan')):.3g} N: "
+              + ("holds and lifts it" if m.get("holds") else "would drop it without the pin")
               + f"; the pin carries {math.hypot(*m['pin_force_n']):.4g} N")
     if reference is not None:
         print(f"  the paper's gripper (best of 5 torques): {reference[0]:.4f} at "
