@@ -349,8 +349,9 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         The payload [N] of each row (B,), default 0 (see :func:`solve_columns`).
     """
     b = prm.shape[0]
+    # a writable C-contiguous copy: the kernel is compiled for that one array type
     payload = (np.zeros(b) if payload_n is None
-               else np.ascontiguousarray(np.broadcast_to(payload_n, (b,)), dtype=np.float64))
+               else np.array(np.broadcast_to(payload_n, (b,)), dtype=np.float64, order="C"))
     points = np.empty((b, n, 2))
     interior = np.empty((b, (xs.shape[1] - 2 * n - 2) // 2, 2))
     face = np.empty((b, 2, n))
