@@ -198,8 +198,8 @@ def test_the_point_spring_model_carries_what_the_fem_carries():
     model within 5 % (median) of the FEM's (measured: 0.3 % and 0.2 %)."""
     disk = R070.disk
     designs = DesignBounds().sample(np.random.default_rng(3), 16, disk)
-    psm = evaluate_designs(designs, disk)
-    fem = evaluate_designs(designs, disk, fidelity="fem", fem_rings=6)
+    psm = evaluate_designs(designs, disk, payload_factors=0)
+    fem = evaluate_designs(designs, disk, fidelity="fem", fem_rings=6, payload_factors=0)
     both = (psm["converged"] & fem["converged"] & psm["touching"].all(axis=1)
             & fem["touching"].all(axis=1) & np.isfinite(psm["required_friction"])
             & np.isfinite(fem["required_friction"]))
@@ -216,8 +216,9 @@ def test_an_optimizer_given_a_friction_returns_a_design_that_holds_with_it():
     from optim import DesignProblem, optimize
 
     for mu in (0.3, 0.15):
-        result = optimize("cmaes", DesignProblem(R070.disk, friction_coefficient=mu),
-                          budget=400, seed=0)
+        # (the reaction alone: the subject is the friction an optimizer is given)
+        result = optimize("cmaes", DesignProblem(R070.disk, friction_coefficient=mu,
+                                                 payload_factor=0), budget=400, seed=0)
         m = result.best_metrics
         assert result.extra["grasp_found"] and m["holds"]
         assert m["required_friction"] <= mu and m["friction_coefficient"] == mu
@@ -226,15 +227,17 @@ def test_an_optimizer_given_a_friction_returns_a_design_that_holds_with_it():
 @pytest.mark.parametrize("argv", [[], ["--object", "examples/objects/foam_disk.toml"]],
                          ids=["paper-r070", "foam-disk"])
 def test_the_reported_optimum_is_the_fem_s_within_ten_percent(argv, tmp_path, capsys):
-    """psm-grasp optimize --budget 1000 --verify-top 1: the reward the run reports for its best
-    design (the finer member's, after the finish) within 10 % (+ 0.002) of the FEM's."""
+    """psm-grasp optimize --budget 1000 --verify-top 1 --payload-factor 0: the reward the run
+    reports for its best design (the finer member's, after the finish) within 10 % (+ 0.002)
+    of the FEM's (the reaction alone: with the payload the search's optima sit where the finer
+    member and the FEM need infinite friction, docs/limitations.md)."""
     pytest.importorskip("skfem")
     from cli.main import main
 
     root = Path(__file__).resolve().parents[1]
     argv = [a if not a.endswith(".toml") else str(root / a) for a in argv]
     assert main(["optimize", "--budget", "1000", "--verify-top", "1", "--no-progress",
-                 "--out", str(tmp_path), *argv]) == 0
+                 "--payload-factor", "0", "--out", str(tmp_path), *argv]) == 0
     report = json.loads((tmp_path / "verify.json").read_text())
     s = report["summary"]
     assert s["best_confirmed"]
