@@ -188,7 +188,8 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
                else "no grasp: a finger does not touch the object")
     print(f"  payload        : {res.payload_n:.4g} N to lift (grip {res.grip_force_n:.4g} N; "
           f"at most {friction * res.grip_force_n:.4g} N by friction {friction:g})")
-    print(f"  friction needed: {res.required_friction:.4g} to hold and lift it without the pin "
+    task = "hold and lift it" if res.payload_n > 0.0 else "hold it"
+    print(f"  friction needed: {res.required_friction:.4g} to {task} without the pin "
           f"({_limit_words(res)}); with {friction:g}: {verdict}")
     print(f"  stable         : {res.stable}")
     print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
