@@ -26,7 +26,13 @@ def _optimize_command(args: argparse.Namespace) -> int:
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
     from optim.executors import check_executor_options
-    from optim.problem import check_budget, check_friction, check_seed, check_strain_limit
+    from optim.problem import (
+        check_budget,
+        check_friction,
+        check_payload_factor,
+        check_seed,
+        check_strain_limit,
+    )
     from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
@@ -42,6 +48,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
         cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     if args.friction is not None:
         cli_option("--friction", check_friction, args.friction)
+    if args.payload_factor is not None:
+        cli_option("--payload-factor", check_payload_factor, args.payload_factor)
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
     cli_option("--workers", check_executor_options, None, args.workers)
@@ -65,6 +73,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  seed=args.seed, out=args.out, dask=args.dask,
                                  workers=args.workers, strain_limit=args.strain_limit,
                                  friction_coefficient=args.friction,
+                                 payload_factor=args.payload_factor,
                                  torsion_stiffness_rel=args.joint_spring,
                                  torsion_stiffness_nm_per_rad=args.joint_spring_nm_per_rad,
                                  n_triangles=args.triangles, n_rings=args.rings,
@@ -200,7 +209,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
-                   "stiffness_scale, strain_limit, friction_coefficient); see examples/objects")
+                   "stiffness_scale, strain_limit, friction_coefficient, density_kg_m3, "
+                   "payload_factor); see examples/objects")
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
@@ -225,6 +235,11 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help=f"Coulomb friction coefficient of the fingers on the object, in "
                    f"(0, 10]: a grasp needing more does not hold (default: the object file's, "
                    f"else {DEFAULT_FRICTION_COEFFICIENT}, a rubber or silicone pad)")
+    p.add_argument("--payload-factor", type=float, default=None, metavar="F",
+                   help="the grasp must lift the payload F m g (m: the object's mass) by "
+                   "friction, out of the plane and in every in-plane direction; in [0, 100] "
+                   "(default: the object file's, else 2: the weight plus a lift at 1 g; 0: no "
+                   "payload)")
     p.add_argument("--joint-spring", type=float, default=None, metavar="REL",
                    help="joint torsion spring in the object's torque unit s E t r^2 per "
                    "radian (default 0.0149: the paper gripper's on its r = 0.07 m disk, scaled "

@@ -35,6 +35,10 @@ def add_simulate_parser(subparsers: Any) -> argparse.ArgumentParser:
     sim.add_argument("--friction", type=float, default=None,
                      help="friction coefficient of the fingers on the object, to say whether the "
                      "grasp holds (default: the object file's, else 0.5)")
+    sim.add_argument("--payload-factor", type=float, default=None, metavar="F",
+                     help="the friction needed includes lifting F m g (m: the object's mass), "
+                     "in [0, 100] (default: the object file's, else 2: the weight plus a lift "
+                     "at 1 g; 0: the fixed centre's reaction alone)")
     sim.add_argument("--element", default=None, choices=ELEMENTS,
                      help="nhquad (default: the default model, 40 points, 2 rings, within 2 %% "
                      "RMS of the FEM); spring: springs and the area energy (the paper's fan: "
@@ -83,9 +87,9 @@ def run_simulate(args: argparse.Namespace) -> int:
     if args.torque is not None:
         check_range("--torque", args.torque, 0.0, math.inf)
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
-    scene, torque, name, friction = _scene_of(args)
+    scene, torque, name, friction, factor = _scene_of(args)
     args.torque = torque
-    model = {"stiffness_rule": args.rule, **spec.kwargs()}
+    model = {"stiffness_rule": args.rule, "payload_factor": factor, **spec.kwargs()}
     n_tri = model.pop("n_triangles")
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
     # report the solve of the answer shown, as a user's next call would see it
@@ -114,22 +118,28 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 
 def _scene_of(args: argparse.Namespace):
-    """The scene, torque [N·m], name and friction coefficient of the command's options."""
-    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
+    """The scene, torque [N·m], name, friction coefficient and payload factor of the
+    command's options."""
+    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
     from envs.object_file import load_object
     from envs.scene import Design, Scene
-    from optim.problem import check_friction, paper_design_for
+    from optim.problem import check_friction, check_payload_factor, paper_design_for
 
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other")
     if args.friction is not None:
         cli_option("--friction", check_friction, args.friction)
+    if args.payload_factor is not None:
+        cli_option("--payload-factor", check_payload_factor, args.payload_factor)
     if args.object is None:
         name = args.scene or "paper-r070"
         torque = 0.2 if args.torque is None else args.torque
         friction = DEFAULT_FRICTION_COEFFICIENT if args.friction is None else args.friction
-        return Scene.preset(name), torque, name, friction
+        factor = DEFAULT_PAYLOAD_FACTOR if args.payload_factor is None else args.payload_factor
+        return Scene.preset(name), torque, name, friction, factor
     spec = load_object(args.object)
+    factor = (args.payload_factor if args.payload_factor is not None else spec.payload_factor
+              if spec.payload_factor is not None else DEFAULT_PAYLOAD_FACTOR)
     friction = (args.friction if args.friction is not None else spec.friction_coefficient
                 if spec.friction_coefficient is not None else DEFAULT_FRICTION_COEFFICIENT)
     # the default squeeze: 0.2 N·m on paper-r070, in the object's torque unit s E t r^2
@@ -140,11 +150,22 @@ def _scene_of(args: argparse.Namespace):
         scene = spec.scene()
         torque = (args.torque if args.torque is not None else spec.gripper.torque_nm
                   if spec.gripper.torque_nm is not None else squeeze)
-        return scene, torque, spec.name, friction
+        return scene, torque, spec.name, friction, factor
     # no [gripper] table: the paper's gripper, scaled to the object like a relative design
     design = Design.from_array(paper_design_for(spec.disk, 0.2)[0])
     torque = design.torque_nm if args.torque is None else args.torque
-    return design.to_scene(spec.disk), torque, f"{spec.name} (the paper's gripper)", friction
+    return (design.to_scene(spec.disk), torque, f"{spec.name} (the paper's gripper)", friction,
+            factor)
+
+
+def _limit_words(res) -> str:
+    """What sets the required friction, in words."""
+    from envs.model.holding import LIMIT_IN_PLANE, LIMIT_NAMES
+
+    words = f"set by: {LIMIT_NAMES[res.friction_limit]}"
+    if res.friction_limit == LIMIT_IN_PLANE and math.isfinite(res.friction_limit_angle_rad):
+        words += f", a pull at {math.degrees(res.friction_limit_angle_rad):.0f} deg from +x"
+    return words
 
 
 def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
@@ -165,8 +186,11 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
     verdict = ("holds" if res.holds(friction) else "would slip"
                if all(res.touching) and res.converged
                else "no grasp: a finger does not touch the object")
-    print(f"  friction needed: {res.required_friction:.4g} to hold it without the pin; with "
-          f"{friction:g}: {verdict}")
+    print(f"  payload        : {res.payload_n:.4g} N to lift (grip {res.grip_force_n:.4g} N; "
+          f"at most {friction * res.grip_force_n:.4g} N by friction {friction:g})")
+    task = "hold and lift it" if res.payload_n > 0.0 else "hold it"
+    print(f"  friction needed: {res.required_friction:.4g} to {task} without the pin "
+          f"({_limit_words(res)}); with {friction:g}: {verdict}")
     print(f"  stable         : {res.stable}")
     print(f"  KKT residual   : force {res.kkt.force_residual_rel:.1e}, "
           f"moment {res.kkt.moment_residual_rel:.1e}")

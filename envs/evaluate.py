@@ -32,16 +32,28 @@ from .model.contact_width import contact_share, hertz_arc_coefficient
 from .model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_FRICTION_COEFFICIENT,
+    DEFAULT_PAYLOAD_FACTOR,
     DEFAULT_PHASE_RAD,
     DEFAULT_STRAIN_LIMIT,
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
     MAX_FRICTION_COEFFICIENT,
+    MAX_PAYLOAD_FACTOR,
     PAPER_TORSION_STIFFNESS_REL,
 )
 from .model.family import resolve_model, triangle_range
 from .model.geometry import bar_distance
-from .model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y
+from .model.holding import (
+    H_GRIP,
+    H_LIMIT,
+    H_LIMIT_ANGLE,
+    H_MU,
+    H_PAYLOAD,
+    H_PIN_MOMENT,
+    H_PIN_X,
+    H_PIN_Y,
+    N_HOLD,
+)
 from .model.problem import REST_OK, SceneColumns, _clearance, rest_codes
 from .scene import (
     DESIGN_FIELDS,
@@ -114,6 +126,10 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
     "pin_force_n": (np.float64, (2,)),
     "pin_moment_nm": (np.float64, ()),
     "required_friction": (np.float64, ()),
+    "payload_n": (np.float64, ()),
+    "grip_force_n": (np.float64, ()),
+    "friction_limit": (np.int64, ()),
+    "friction_limit_angle_rad": (np.float64, ()),
     "friction_coefficient": (np.float64, ()),
     "holds": (np.bool_, ()),
     "finger_gap_m": (np.float64, (2,)),
@@ -410,8 +426,9 @@ def _design_table(designs) -> np.ndarray:
 (DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE, DISK_RATIO, DISK_AREA,
  DISK_OFFSET_X) = range(8)
 N_DISK = 8
-# columns of the objects' requirements: strain limit and friction coefficient
-NEED_STRAIN, NEED_FRICTION = range(2)
+# columns of the objects' requirements: strain limit, friction coefficient, payload [N]
+NEED_STRAIN, NEED_FRICTION, NEED_PAYLOAD = range(3)
+N_NEEDS = 3
 
 
 def _disk_table(disks, batch: int) -> np.ndarray:
@@ -429,6 +446,13 @@ def _disk_table(disks, batch: int) -> np.ndarray:
                      d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
                      d.offset_x_m))
     return np.array(rows, dtype=np.float64).reshape(batch, N_DISK)
+
+
+def _payloads(disks, batch: int, factors) -> np.ndarray:
+    """The payload ``W = f rho pi r^2 t g`` [N] of every row (:meth:`SoftDisk.payload_n`)."""
+    f = _per_row("payload_factors", factors, batch, 0.0, MAX_PAYLOAD_FACTOR, low_open=False)
+    disks = [disks] * batch if isinstance(disks, SoftDisk) else disks
+    return np.array([d.payload_n(1.0) for d in disks], dtype=np.float64) * f
 
 
 def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
@@ -533,9 +557,19 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
         out["max_displacement_ratio"], out["peak_compression"])
     ok = rows[out["converged"][rows]]
     done = out["converged"][rows]
-    out["pin_force_n"][ok] = sol.holding[done, H_PIN_X : H_PIN_Y + 1]
-    out["pin_moment_nm"][ok] = sol.holding[done, H_PIN_MOMENT]
-    out["required_friction"][ok] = sol.holding[done, H_MU]
+    _fill_holding(out, ok, sol.holding[done])
+
+
+def _fill_holding(out: dict[str, np.ndarray], rows: np.ndarray, hold: np.ndarray) -> None:
+    """Write the holding rows (layout ``H_*``) of ``rows``; the limit's angle 0 where no
+    in-plane payload sets the friction (the outputs are never NaN)."""
+    out["pin_force_n"][rows] = hold[:, H_PIN_X : H_PIN_Y + 1]
+    out["pin_moment_nm"][rows] = hold[:, H_PIN_MOMENT]
+    out["required_friction"][rows] = hold[:, H_MU]
+    out["payload_n"][rows] = hold[:, H_PAYLOAD]
+    out["grip_force_n"][rows] = hold[:, H_GRIP]
+    out["friction_limit"][rows] = hold[:, H_LIMIT].astype(np.int64)
+    out["friction_limit_angle_rad"][rows] = np.nan_to_num(hold[:, H_LIMIT_ANGLE])
 
 
 def rest_violation(cols: SceneColumns) -> np.ndarray:
@@ -596,7 +630,8 @@ def _soft_disk(row: np.ndarray) -> SoftDisk:
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
-              kf: np.ndarray, cols: SceneColumns, fem_rings: int) -> None:
+              kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray
+              ) -> None:
     """Solve the rows with the finite-element reference and write the same metrics as
     :func:`_fill_group` does for the point-spring model (same definitions, see
     :func:`evaluate_designs`)."""
@@ -604,7 +639,8 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
 
     scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
               for i in rows.tolist()]
-    fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings),
+    fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings,
+                                        payloads_n=payload_n),
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
                       disk[rows, DISK_OFFSET_X])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
@@ -629,13 +665,16 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
             "peak_log_strain": fem["peak_log_strain"],
             "max_displacement_ratio": fem["max_displacement_ratio"],
             "peak_compression": fem["peak_compression"],
-            "pin_force_n": fem["pin_force_n"],
-            "pin_moment_nm": fem["pin_moment_nm"],
-            "required_friction": fem["required_friction"],
         }
+        hold = np.empty((rows.size, N_HOLD))
+        hold[:, H_PIN_X : H_PIN_Y + 1] = fem["pin_force_n"]
+        for k, key in ((H_PIN_MOMENT, "pin_moment_nm"), (H_MU, "required_friction"),
+                       (H_PAYLOAD, "payload_n"), (H_GRIP, "grip_force_n"),
+                       (H_LIMIT, "friction_limit"), (H_LIMIT_ANGLE, "friction_limit_angle_rad")):
+            hold[:, k] = fem[key]
     # (an infinite required friction is an answer, one finger touching: not a failure)
-    floats = np.column_stack([np.reshape(v, (rows.size, -1)) for k, v in metrics.items()
-                              if v.dtype.kind == "f" and k != "required_friction"])
+    floats = np.column_stack([np.reshape(v, (rows.size, -1)) for v in metrics.values()
+                              if v.dtype.kind == "f"] + [hold[:, H_PIN_X : H_PIN_MOMENT + 1]])
     ok = fem["converged"] & np.isfinite(floats).all(axis=1)
     out["status"][rows] = np.where(ok, OK, FEM_FAILED)
     out["iterations"][rows] = fem["iterations"]
@@ -644,6 +683,7 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     out["converged"][rows] = ok
     for key, v in metrics.items():
         out[key][rows[ok]] = v[ok]
+    _fill_holding(out, rows[ok], hold[ok])
 
 
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs: np.ndarray,
@@ -652,7 +692,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                      fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS
                      ) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
-    ``needs``: each object's strain limit and friction coefficient (columns ``NEED_*``);
+    ``needs``: each object's strain limit, friction coefficient and payload (columns
+    ``NEED_*``);
     ``model``: rings, element and the factor of the member's calibration on the disks'
     stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``)."""
     batch = des.shape[0]
@@ -661,6 +702,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     out["n_triangles"][:] = n_tri
     out["strain_limit"][:] = needs[:, NEED_STRAIN]
     out["friction_coefficient"][:] = needs[:, NEED_FRICTION]
+    out["payload_n"][:] = needs[:, NEED_PAYLOAD]
     out["status"][:] = NOT_SOLVED
     material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
@@ -680,12 +722,13 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         rows = np.flatnonzero(valid)
         out["n_triangles"][:] = 0
         if rows.size:
-            _fill_fem(out, rows, des, disk, kf, cols.take(rows), fem_rings)
+            _fill_fem(out, rows, des, disk, kf, cols.take(rows), fem_rings,
+                      needs[rows, NEED_PAYLOAD])
     for n in (np.unique(n_tri[valid]).tolist() if fidelity == "psm" else ()):
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
-                            element=element)
+                            element=element, payload_n=needs[rows, NEED_PAYLOAD])
         _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -734,6 +777,7 @@ def evaluate_designs(
     strain_limits=None,
     friction_coefficients=None,
     offsets_x_m=None,
+    payload_factors=None,
     executor=None,
     chunk_size: int | None = None,
     n_rings: int | None = None,
@@ -795,6 +839,13 @@ def evaluate_designs(
         middle. A displacement that brings the disk onto a finger at rest makes the row
         invalid at rest (:data:`~envs.model.problem.REST_OFFSET`); a displacement along the
         axis is a change of the design's ``distance_m``.
+    payload_factors
+        Payload factor ``f`` [-], in [0, 100]; scalar or shape (B,). The grasp must carry the
+        payload ``W = f m g`` (``m = rho pi r^2 t`` of each row's disk, its
+        ``density_kg_m3``; g = 9.81 m/s^2) by friction, out of the plane and in every in-plane
+        direction, besides the centre's reaction (:mod:`envs.model.holding`). Default
+        :data:`~envs.model.defaults.DEFAULT_PAYLOAD_FACTOR` (2: the weight plus a lift at 1 g);
+        0 turns the payload off (the reaction alone).
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
@@ -882,10 +933,20 @@ def evaluate_designs(
           contacts could carry that force and moment instead of the centre [-]
           (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction
           can (one finger touching); ``tan(theta)`` for a symmetric grasp on the faces at
-          finger angle ``theta``.
+          finger angle ``theta``. It includes the payload: friction must carry the reaction
+          plus ``payload_n`` out of the plane (3-D Coulomb cones, exact) and in every in-plane
+          direction (closed form).
+        - ``payload_n``: the payload ``W = f rho pi r^2 t g`` the required friction includes
+          [N] (0 with ``payload_factors=0``); ``grip_force_n``: the sum of the contacts'
+          normal forces [N] (``mu * grip_force_n >= payload_n`` is necessary to lift the
+          object); ``friction_limit``: what sets the required friction, a code of
+          :mod:`envs.model.holding` (0 nothing, 1 the reaction alone, 2 the payload out of the
+          plane, 3 the payload in the plane); ``friction_limit_angle_rad``: for 3, the
+          direction of the payload's pull on the object that needs most friction [rad from
+          +x, gripper frame], 0 otherwise.
         - ``friction_coefficient``: the coefficient used [-]; ``holds``: a converged grasp
           touching with both fingers whose required friction is within it (it would hold
-          the object without the pin).
+          and lift the object without the pin).
         - ``finger_gap_m`` (B, 2): for a converged grasp, the distance from each finger that
           does not touch the disk to the undeformed disk [m] (0 for a touching finger).
         - ``rest_violation``: for a design invalid at rest, how far it is from valid,
@@ -928,13 +989,15 @@ def evaluate_designs(
         raise ValueError("a calibrated constant-strain member has one N (its scale depends on "
                          "N): pass a scalar n_triangles")
     model = (spec.n_rings, spec.element, spec.scale)
-    needs = np.empty((batch, 2))
+    needs = np.empty((batch, N_NEEDS))
     needs[:, NEED_STRAIN] = _per_row(
         "strain_limits", DEFAULT_STRAIN_LIMIT if strain_limits is None else strain_limits,
         batch, 0.0, 1.0, low_open=True)
     needs[:, NEED_FRICTION] = _per_row(
         "friction_coefficients", DEFAULT_FRICTION_COEFFICIENT if friction_coefficients is None
         else friction_coefficients, batch, 0.0, MAX_FRICTION_COEFFICIENT, low_open=True)
+    needs[:, NEED_PAYLOAD] = _payloads(disks, batch, DEFAULT_PAYLOAD_FACTOR
+                                       if payload_factors is None else payload_factors)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if offsets_x_m is not None:
         disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,

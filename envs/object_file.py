@@ -13,10 +13,12 @@ A designer's own object is four numbers and, optionally, what the design must re
     friction_coefficient = 0.5    # optional: Coulomb coefficient of the finger pads on it
     placement_tolerance_m = 0.0015  # optional: +- placement error, both ways, or
                                     # [along, across] the gripper's axis
+    density_kg_m3 = 1000          # optional: its density (default 1000, water-like)
+    payload_factor = 2            # optional: payload W = f m g to lift (default 2; 0: none)
 
 A range instead of a number, e.g. ``radius_m = [0.010, 0.015]``, asks for one design that
-serves every object in it (radius, modulus, Poisson ratio, thickness, friction): the design is
-made for the ranges' centre and judged over the scenarios of :mod:`envs.scenarios`.
+serves every object in it (radius, modulus, Poisson ratio, thickness, density, friction): the
+design is made for the ranges' centre and judged over the scenarios of :mod:`envs.scenarios`.
 
     [gripper]                     # optional, for one grasp (psm-grasp simulate)
     finger_length_m = 0.05
@@ -28,21 +30,29 @@ made for the ranges' centre and judged over the scenarios of :mod:`envs.scenario
     torsion_stiffness_nm_per_rad = 0.001  # optional (default: relative to the object)
 
 Every key is checked before any work: an unknown key, a missing key or a bad value is one
-``ValueError`` naming the file, the table, the key and the allowed range.
+``ValueError`` naming the file, the table, the key and the allowed range. A radius, thickness,
+modulus or density outside the plausible range of a graspable object
+(:data:`envs.model.defaults.PLAUSIBLE_RANGES`) is refused with the unit it was most likely
+typed in (``radius_m = 15``: millimetres).
 """
 
 from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from .model.defaults import DEFAULT_STIFFNESS_SCALE, MAX_FRICTION_COEFFICIENT
+from .model.defaults import (
+    DEFAULT_STIFFNESS_SCALE,
+    MAX_FRICTION_COEFFICIENT,
+    MAX_PAYLOAD_FACTOR,
+    OBJECT_DENSITY_KG_M3,
+)
 from .scenarios import RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
-from .validation import check_range
+from .validation import check_range, unit_slip
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -60,6 +70,8 @@ OBJECT_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
     "stiffness_scale": (0.0, math.inf, True, False, False),
     "strain_limit": (0.0, 1.0, True, False, False),
     "friction_coefficient": (0.0, MAX_FRICTION_COEFFICIENT, True, False, False),
+    "density_kg_m3": (0.0, math.inf, True, False, False),
+    "payload_factor": (0.0, MAX_PAYLOAD_FACTOR, False, False, False),
 }
 # key -> (low, high, low_open, high_open, required) of the [gripper] table
 GRIPPER_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
@@ -109,6 +121,8 @@ class ObjectSpec:
         Admissible peak compression [-], or ``None`` (the caller's default).
     friction_coefficient
         Coulomb friction coefficient between the fingers and the object [-], or ``None``.
+    payload_factor
+        ``f`` of the payload ``W = f m g`` to lift [-], or ``None`` (the caller's default).
     gripper
         The ``[gripper]`` table, or ``None``.
     path
@@ -126,6 +140,7 @@ class ObjectSpec:
     gripper: GripperSpec | None = None
     path: Path | None = None
     scenarios: Scenarios | None = None
+    payload_factor: float | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -138,8 +153,7 @@ class ObjectSpec:
         if self.gripper is None:
             raise ValueError(f"{self._where()}: no [gripper] table to build a scene from")
         g = self.gripper
-        disk = SoftDisk(self.disk.radius_m, g.distance_m, self.disk.youngs_modulus_pa,
-                        self.disk.poisson_ratio, self.disk.thickness_m, self.disk.stiffness_scale)
+        disk = replace(self.disk, distance_m=g.distance_m)
         try:  # the table's keys, named with the file (finger_length_m > finger_width_m)
             kf = joint_spring_nm_per_rad(disk, None, g.torsion_stiffness_nm_per_rad)
             gripper = Gripper(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
@@ -154,8 +168,10 @@ class ObjectSpec:
         return {"name": self.name, "radius_m": d.radius_m,
                 "youngs_modulus_pa": d.youngs_modulus_pa, "poisson_ratio": d.poisson_ratio,
                 "thickness_m": d.thickness_m, "stiffness_scale": d.stiffness_scale,
+                "density_kg_m3": d.density_kg_m3,
                 "strain_limit": self.strain_limit,
                 "friction_coefficient": self.friction_coefficient,
+                "payload_factor": self.payload_factor,
                 "file": None if self.path is None else str(self.path),
                 **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()})}
 
@@ -170,9 +186,13 @@ def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bo
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValueError(f"{where}: {key} must be a number, got {value!r}")
     try:
-        return check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+        value = check_range(key, value, low, high, low_open=low_open, high_open=high_open)
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
+    slip = unit_slip(key, value)
+    if slip is not None:
+        raise ValueError(f"{where}: {slip}")
+    return value
 
 
 def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = ()
@@ -228,10 +248,12 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
             raise ValueError(f"{where}: [object]: {exc}") from None
     disk = SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
                     values["poisson_ratio"], values["thickness_m"],
-                    values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE))
+                    values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
+                    density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3))
     gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
-                      values.get("friction_coefficient"), gripper, path, scenarios)
+                      values.get("friction_coefficient"), gripper, path, scenarios,
+                      values.get("payload_factor"))
 
 
 def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str, tuple]]:

@@ -9,6 +9,7 @@ angles are measured from +y, positive when opening.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -16,12 +17,16 @@ import numpy as np
 from .model.defaults import (
     DEFAULT_AREA_STIFFNESS_SCALE,
     DEFAULT_CONTOUR_STIFFNESS_RATIO,
+    DEFAULT_DENSITY_KG_M3,
     DEFAULT_POISSON_RATIO,
     DEFAULT_STIFFNESS_SCALE,
     DEFAULT_THICKNESS_M,
     DEFAULT_YOUNGS_MODULUS_PA,
+    GRAVITY_M_S2,
+    MAX_PAYLOAD_FACTOR,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
     PAPER_TORSION_STIFFNESS_REL,
+    TPU_DENSITY_KG_M3,
 )
 from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
@@ -35,7 +40,7 @@ from .model.problem import (
     _clearance,
     rest_codes,
 )
-from .validation import check_range, check_real
+from .validation import UnitSlipWarning, check_range, check_real, unit_slip
 
 __all__ = [
     "Gripper",
@@ -162,6 +167,15 @@ class SoftDisk:
         conservative bench, where a free object on a slippery surface would be pushed towards
         the middle. A displacement that brings the disk onto a finger at rest makes the scene
         invalid (:data:`~envs.model.problem.REST_OFFSET`).
+    density_kg_m3
+        Density ``rho`` of the object [kg/m^3], > 0: its mass ``rho pi r^2 t`` is the payload
+        a grasp must carry (:meth:`payload_n`). Default 50, the paper's soft foam
+        (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`); soft tissue ~1060, fruit
+        950-1050, silicone ~1100.
+
+    A radius, thickness, modulus or density outside the plausible range of a graspable object
+    (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit) gives
+    a :class:`~envs.validation.UnitSlipWarning` naming the likely unit.
     """
 
     radius_m: float
@@ -173,6 +187,7 @@ class SoftDisk:
     contour_stiffness_ratio: float = DEFAULT_CONTOUR_STIFFNESS_RATIO
     area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
     offset_x_m: float = 0.0
+    density_kg_m3: float = DEFAULT_DENSITY_KG_M3
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -186,8 +201,30 @@ class SoftDisk:
         )
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         check_range("offset_x_m", self.offset_x_m)
+        check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
+        for name in ("radius_m", "thickness_m", "youngs_modulus_pa", "density_kg_m3"):
+            slip = unit_slip(name, getattr(self, name))
+            if slip is not None:
+                warnings.warn(f"SoftDisk: {slip}", UnitSlipWarning, stacklevel=3)
+
+    @property
+    def mass_kg(self) -> float:
+        """Mass ``rho pi r^2 t`` of the object [kg]."""
+        return self.density_kg_m3 * math.pi * self.radius_m**2 * self.thickness_m
+
+    def payload_n(self, payload_factor: float) -> float:
+        """The payload ``W = f m g`` a grasp must carry [N] (g = 9.81 m/s^2).
+
+        Parameters
+        ----------
+        payload_factor
+            ``f`` [-], in [0, 100]: 2 (the default of the evaluators) is the weight plus a lift
+            at 1 g, 0 no payload.
+        """
+        f = check_range("payload_factor", payload_factor, 0.0, MAX_PAYLOAD_FACTOR)
+        return f * self.mass_kg * GRAVITY_M_S2
 
     @property
     def bulk_modulus_pa(self) -> float:
@@ -505,5 +542,6 @@ for _tag, (_r_mm, _d_mm) in zip(
             _d_mm * 1e-3,
             youngs_modulus_pa=TPU_MODULUS_PA,
             stiffness_scale=TPU_SCALE,
+            density_kg_m3=TPU_DENSITY_KG_M3,
         ),
     )

@@ -24,6 +24,8 @@ __all__ = [
     "check_real",
     "check_output_file",
     "check_output_dir",
+    "unit_slip",
+    "UnitSlipWarning",
 ]
 
 
@@ -230,3 +232,45 @@ def check_output_dir(name: str, path) -> Path:
     else:
         _writable_dir(name, p.parent if str(p.parent) else Path("."), path)
     return p
+
+
+# the unit a value outside its plausible range was most likely typed in: (factor to SI, unit)
+_SLIPS = {
+    "radius_m": ((1e-3, "millimetres"), (1e-2, "centimetres")),
+    "thickness_m": ((1e-3, "millimetres"), (1e-2, "centimetres")),
+    "youngs_modulus_pa": ((1e6, "MPa"), (1e3, "kPa"), (1e9, "GPa")),
+    "density_kg_m3": ((1e3, "g/cm^3"), (1e-3, "g/m^3")),
+}
+
+
+class UnitSlipWarning(UserWarning):
+    """A value outside the plausible range of an object's description (most likely typed in
+    another unit); the API warns, object files and the command line refuse it."""
+
+
+def unit_slip(name: str, value: float) -> str | None:
+    """The message for a value of an object's field outside its plausible range
+    (:data:`envs.model.defaults.PLAUSIBLE_RANGES`), naming the unit it was most likely typed
+    in; ``None`` for a plausible value (or a field without a range).
+
+    Parameters
+    ----------
+    name
+        The field (``radius_m``, ``thickness_m``, ``youngs_modulus_pa``, ``density_kg_m3``).
+    value
+        Its value in SI units.
+    """
+    from envs.model.defaults import PLAUSIBLE_RANGES
+
+    if name not in PLAUSIBLE_RANGES or not math.isfinite(value):
+        return None
+    low, high = PLAUSIBLE_RANGES[name]
+    if low <= value <= high:
+        return None
+    guess = ""
+    for factor, unit in _SLIPS.get(name, ()):
+        if low <= value * factor <= high:
+            guess = f": was it typed in {unit}? {value:g} {unit} is {value * factor:g} in SI"
+            break
+    return (f"{name} = {value:g} is outside the plausible range [{low:g}, {high:g}] of a "
+            f"graspable object (SI units){guess}")

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from envs.evaluate import DESIGN_FIELDS
 from envs.model.defaults import (
     DEFAULT_CONTOUR_STIFFNESS_RATIO,
+    DEFAULT_DENSITY_KG_M3,
     PAPER_N_TRIANGLES,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
@@ -45,7 +46,8 @@ def disk_of(obj: dict[str, Any], distance_m: float = 0.0) -> SoftDisk:
     """The disk of a result's object (its placement ``distance_m``; a design replaces it)."""
     return SoftDisk(obj["radius_m"], distance_m, obj["youngs_modulus_pa"],
                     obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
-                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO))
+                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO),
+                    density_kg_m3=obj.get("density_kg_m3", DEFAULT_DENSITY_KG_M3))
 
 
 def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:

@@ -30,8 +30,10 @@ from envs.evaluate import (
 from envs.model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_FRICTION_COEFFICIENT,
+    DEFAULT_PAYLOAD_FACTOR,
     DEFAULT_STRAIN_LIMIT,
     MAX_FRICTION_COEFFICIENT,
+    MAX_PAYLOAD_FACTOR,
 )
 from envs.model.family import resolve_model
 from envs.scenarios import ROBUST_MEASURES, Scenarios, ScenarioTable, evaluate_scenarios
@@ -72,6 +74,7 @@ BEST_METRIC_KEYS = (
     "jaw_angles_rad", "contact_score", "peak_strain", "peak_log_strain", "max_displacement_ratio",
     "peak_compression",
     "strain_limit", "pin_force_n", "pin_moment_nm", "required_friction", "friction_coefficient",
+    "payload_n", "grip_force_n", "friction_limit", "friction_limit_angle_rad",
     "holds", "penalty_slip",
     "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
     "reward",
@@ -109,6 +112,11 @@ def check_seed(seed: Any) -> int:
 def check_strain_limit(strain_limit: Any) -> float:
     """Validate the object's admissible strain, in (0, 1]."""
     return check_range("strain_limit", strain_limit, 0.0, 1.0, low_open=True)
+
+
+def check_payload_factor(payload_factor: Any) -> float:
+    """Validate a payload factor, in [0, 100] (0: no payload)."""
+    return check_range("payload_factor", payload_factor, 0.0, MAX_PAYLOAD_FACTOR)
 
 
 def check_friction(friction_coefficient: Any) -> float:
@@ -195,6 +203,10 @@ class DesignProblem:
         Coulomb friction coefficient between the fingers and the object [-], in (0, 10]
         (default 0.5, a rubber or silicone pad): a grasp needing more does not hold the
         object once its centre is free, and scores below every grasp that does.
+    payload_factor
+        ``f`` of the payload ``W = f rho pi r^2 t g`` (the disk's ``density_kg_m3``) that
+        friction must carry besides the centre's reaction, in [0, 100] (default 2: the weight
+        plus a lift at 1 g; 0: no payload). A grasp that cannot lift its object does not hold.
     torsion_stiffness_rel
         Joint torsion spring ``k_f`` in the object's torque unit ``s E t r^2`` per radian
         [1/rad], > 0 (:func:`envs.scene.joint_spring`). Default (with
@@ -247,6 +259,7 @@ class DesignProblem:
         strain_limit: float = DEFAULT_STRAIN_LIMIT,
         friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
         *,
+        payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
         torsion_stiffness_rel: float | None = None,
         torsion_stiffness_nm_per_rad: float | None = None,
         n_triangles: int | None = None,
@@ -277,6 +290,8 @@ class DesignProblem:
         self.friction_coefficient = check_friction(
             friction_coefficient if self.scenarios is None
             else self.scenarios.nominal_friction(friction_coefficient))
+        self.payload_factor = check_payload_factor(payload_factor)
+        self.payload_n = self.disk.payload_n(self.payload_factor)
         self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
@@ -400,7 +415,8 @@ class DesignProblem:
             return self.evaluate_scenarios(designs, member).summary
         return evaluate_designs(
             designs, self.disk, strain_limits=self.strain_limit,
-            friction_coefficients=self.friction_coefficient, **self.joint_spring_kwargs(),
+            friction_coefficients=self.friction_coefficient,
+            payload_factors=self.payload_factor, **self.joint_spring_kwargs(),
             weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(designs.shape[0]),
@@ -417,7 +433,8 @@ class DesignProblem:
             designs, self.disk, scenarios,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
             friction_coefficient=self.friction_coefficient, robust=self.robust,
-            strain_limits=self.strain_limit, weights=self.weights, executor=self.executor,
+            strain_limits=self.strain_limit, payload_factors=self.payload_factor,
+            weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(rows))
 
@@ -555,6 +572,9 @@ class DesignProblem:
             "contour_stiffness_ratio": d.contour_stiffness_ratio,
             "strain_limit": self.strain_limit,
             "friction_coefficient": self.friction_coefficient,
+            "density_kg_m3": d.density_kg_m3,
+            "payload_factor": self.payload_factor,
+            "payload_n": self.payload_n,
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **self.model.kwargs(),

@@ -36,12 +36,14 @@ class NoGraspWarning(UserWarning):
 
 
 def grasp_found(metrics: dict[str, Any]) -> bool:
-    """Whether a design's metrics (:attr:`OptimResult.best_metrics`) are a grasp that holds:
-    valid at rest, converged, both fingers touching and, where the metrics say it, the
-    required friction within the object's coefficient (``holds``)."""
+    """Whether a design's metrics (:attr:`OptimResult.best_metrics`) are a grasp that lifts
+    its object: valid at rest, converged, both fingers touching and, where the metrics say
+    it, the required friction (its payload included) within the object's coefficient
+    (``holds``) and the peak compression within the strain limit."""
     touching = metrics.get("touching") or [False, False]
+    within = metrics.get("peak_compression", 0.0) <= metrics.get("strain_limit", math.inf)
     return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching)
-                and metrics.get("holds", True))
+                and metrics.get("holds", True) and within)
 
 
 def no_grasp_reason(metrics: dict[str, Any]) -> str:
@@ -56,8 +58,29 @@ def no_grasp_reason(metrics: dict[str, Any]) -> str:
     if not all(touching):
         return "does not touch the disk with both fingers"
     need, mu = metrics.get("required_friction"), metrics.get("friction_coefficient")
-    return (f"would let the object slip out: it needs a friction coefficient of {need}, more "
-            f"than the object's {mu}")
+    if metrics.get("holds", True):
+        return (f"squeezes the object beyond its strain limit (limited by the strain limit: "
+                f"peak compression {metrics.get('peak_compression', math.nan):.3g} > "
+                f"{metrics.get('strain_limit', math.nan):.3g})")
+    payload, grip = metrics.get("payload_n", 0.0), metrics.get("grip_force_n", math.nan)
+    if payload and mu is not None and not mu * grip >= payload:
+        return (f"cannot lift the object (limited by the payload: its grip of {grip:.3g} N "
+                f"carries at most {mu * grip:.3g} N by friction {mu:g}, less than the payload "
+                f"of {payload:.3g} N)")
+    what = {2: f"to carry its payload of {payload:.3g} N out of the plane",
+            3: f"to carry its payload of {payload:.3g} N in the plane"}.get(
+                metrics.get("friction_limit", 0), "to hold it without the fixed centre")
+    return (f"would let the object slip out (limited by friction: it needs a coefficient of "
+            f"{_number(need)} {what}, more than the object's {mu})")
+
+
+def _number(value: Any) -> str:
+    """A friction coefficient in words (infinite: none can)."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    return f"{v:.3g}" if math.isfinite(v) else "inf (no friction can)"
 
 
 @dataclass(frozen=True)

@@ -39,6 +39,7 @@ from .problem import (
     DesignProblem,
     check_budget,
     check_friction,
+    check_payload_factor,
     check_seed,
     check_strain_limit,
     paper_design,
@@ -141,9 +142,11 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
               f"T_a = {d['torque_nm']:.4g} N·m, d1 = {d['distance_m'] * 1e3:.4g} mm, "
               f"k_f = {result.object['torsion_stiffness_nm_per_rad']:.4g} N·m/rad")
     if m.get("required_friction") is not None:
-        print(f"  holding: needs friction {m['required_friction']:.3g} (the object's "
-              f"{m.get('friction_coefficient', float('nan')):.3g}): "
-              + ("holds" if m.get("holds") else "would slip without the pin")
+        payload = m.get("payload_n", 0.0)
+        print(f"  holding: needs friction {float(m['required_friction']):.3g} (the object's "
+              f"{m.get('friction_coefficient', float('nan')):.3g}) with a payload of "
+              f"{payload:.3g} N and a grip of {m.get('grip_force_n', float('nan')):.3g} N: "
+              + ("holds and lifts it" if m.get("holds") else "would drop it without the pin")
               + f"; the pin carries {math.hypot(*m['pin_force_n']):.4g} N")
     rows = extra.get("scenario_rows")
     if rows:
@@ -166,13 +169,14 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
                     spring_rel, spring_nm, placement_tolerance_m=None,
-                    robust: str | None = None) -> tuple[Any, dict[str, Any]]:
+                    robust: str | None = None, payload_factor=None
+                    ) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults.
 
     The scenarios: the object file's ranges, with the placement tolerance given here (one
     number for both ways, or ``(along, across)`` [m]) or else the file's."""
-    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT
+    from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
     from envs.scene import joint_spring_kwargs
 
     if obj is not None and scene is not None:
@@ -189,8 +193,12 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
     mu = friction if friction is not None else (
         own.friction_coefficient if own is not None and own.friction_coefficient is not None
         else DEFAULT_FRICTION_COEFFICIENT)
+    factor = payload_factor if payload_factor is not None else (
+        own.payload_factor if own is not None and own.payload_factor is not None
+        else DEFAULT_PAYLOAD_FACTOR)
     kwargs: dict[str, Any] = {"strain_limit": check_strain_limit(limit),
-                              "friction_coefficient": check_friction(mu)}
+                              "friction_coefficient": check_friction(mu),
+                              "payload_factor": check_payload_factor(factor)}
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
     scenarios = scenarios_of(own, placement_tolerance_m)
@@ -250,6 +258,7 @@ def run_optimize(
     torsion_stiffness_nm_per_rad: float | None = None,
     n_triangles: int | None = None,
     progress: bool = True,
+    payload_factor: float | None = None,
     n_rings: int | None = None,
     element: str | None = None,
     prefix: str | None = None,
@@ -264,8 +273,9 @@ def run_optimize(
 
     The object is a scene preset's disk (``scene``; its gripper keeps its own joint spring)
     or a designer's own (``obj``, e.g. :func:`envs.object_file.load_object`; the spring is
-    relative to it unless given); neither: :data:`DEMO_SCENE`. The strain limit and the
-    friction coefficient are the arguments', else the object file's, else the defaults. With
+    relative to it unless given); neither: :data:`DEMO_SCENE`. The strain limit, the
+    friction coefficient and the payload factor are the arguments', else the object file's,
+    else the defaults. With
     ``finish`` (default) the run's best distinct designs are re-scored by a finer member
     (:func:`optim.finish.finish_result`): the reported optimum is the FEM's within a few
     percent; the result JSON says which model reported it (``extra["reward_model"]``).
@@ -308,7 +318,8 @@ def run_optimize(
         scene = DEMO_SCENE
     target, settings = problem_kwargs(scene, obj, strain_limit, friction_coefficient,
                                       torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
-                                      placement_tolerance_m, robust)
+                                      placement_tolerance_m, robust,
+                                      payload_factor=payload_factor)
     budget, seed = check_budget(budget), check_seed(seed)
     check_joints_apart(method, joints_apart)
     if method == "policy":

@@ -132,7 +132,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
               "friction_coefficients": obj.get("friction_coefficient",
                                                DEFAULT_FRICTION_COEFFICIENT),
               "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
-                                                      PAPER_TORSION_STIFFNESS_NM_PER_RAD)}
+                                                      PAPER_TORSION_STIFFNESS_NM_PER_RAD),
+              # (a run recorded before the payload had none)
+              "payload_factors": obj.get("payload_factor", 0.0)}
     disk = disk_of(obj)
     model = model_of(obj)
     reward_model = result.extra.get("reward_model", model)
@@ -210,7 +212,7 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     mu = common["friction_coefficients"]
     kw = {"torsion_stiffness_nm_per_rad": common["torsion_stiffness_nm_per_rad"],
           "friction_coefficient": mu, "strain_limits": common["strain_limits"],
-          "robust": obj.get("robust", "worst")}
+          "payload_factors": common["payload_factors"], "robust": obj.get("robust", "worst")}
     psm = evaluate_scenarios(designs, disk, scenarios, **kw, **model)
     fine = evaluate_scenarios(designs, disk, scenarios, **kw, **RANKING_MEMBER)
     worst = fine.summary["worst_scenario"]
@@ -218,6 +220,7 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     rows, disks, frictions, offsets = place(designs, disk, mu, cases)
     fem = evaluate_designs(rows, disks, strain_limits=common["strain_limits"],
                            friction_coefficients=frictions, offsets_x_m=offsets,
+                           payload_factors=common["payload_factors"],
                            torsion_stiffness_nm_per_rad=common["torsion_stiffness_nm_per_rad"],
                            fidelity="fem", fem_rings=fem_rings, executor=executor)
     table = fine if dict(reward_model) == dict(RANKING_MEMBER) else psm

@@ -13,7 +13,8 @@ Stores in ``tests/data/regression_corpus.npz``:
 * the default model (nh-quad, 40 points on 2 rings, its shipped calibration): 700 random designs
   of the object-relative box (:class:`envs.DesignBounds`) on the three paper disks, and every
   preset at three torques, with the same answers (keys ``default_*``), and for the designs
-  also the peak compression, the contact score, the pin force and the required friction. The
+  also the peak compression, the contact score, the pin force, the required friction (the
+  default payload, the weight plus a lift at 1 g, included), the payload and the grip. The
   ring meshes have their own kernels (element energies, the scalar banded factor), which these
   rows pin beside the fan's.
 
@@ -45,7 +46,7 @@ DEFAULT_SEED = 20261125
 DEFAULT_DESIGN_ROWS = {"paper-r070": 300, "paper-r050": 200, "paper-r100": 200}
 DEFAULT_TORQUES_REL = (0.2, 0.5, 1.0)  # of the preset's reference torque
 DEFAULT_DESIGN_KEYS = DESIGN_KEYS + ("peak_compression", "contact_score", "pin_force_n",
-                                     "required_friction")
+                                     "required_friction", "payload_n", "grip_force_n")
 
 
 def design_inputs() -> tuple[np.ndarray, np.ndarray]:

@@ -32,7 +32,7 @@ def test_the_example_objects_load():
     assert set(names) >= {"cherry_tomato", "tissue_sample", "foam_disk"}
     tomato = names["cherry_tomato"]
     assert tomato.name == "cherry tomato"
-    assert tomato.disk == SoftDisk(0.012, 0.0, 150e3, 0.45, 0.024)
+    assert tomato.disk == SoftDisk(0.012, 0.0, 150e3, 0.45, 0.024, density_kg_m3=1000.0)
     assert tomato.strain_limit == 0.10 and tomato.friction_coefficient == 0.5
     assert tomato.info()["radius_m"] == 0.012
     foam = names["foam_disk"]

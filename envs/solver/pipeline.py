@@ -22,7 +22,17 @@ import numpy as np
 from numba import njit
 
 from envs import check
-from envs.model.holding import H_MU, H_PIN_MOMENT, H_PIN_X, H_PIN_Y, N_HOLD
+from envs.model.holding import (
+    H_GRIP,
+    H_LIMIT,
+    H_LIMIT_ANGLE,
+    H_MU,
+    H_PAYLOAD,
+    H_PIN_MOMENT,
+    H_PIN_X,
+    H_PIN_Y,
+    N_HOLD,
+)
 from envs.model.layout import (
     I_ITERATIONS,
     I_ROUNDS,
@@ -104,7 +114,7 @@ class BatchSolution(NamedTuple):
     state_scaled: np.ndarray  # (B, 2 N M + 2) solver state (warm starts)
     interior_points_m: np.ndarray  # (B, (M - 1) N, 2) interior points of a ring mesh
     face_scaled: np.ndarray  # (B, 2, N) scaled face multipliers (warm starts)
-    holding: np.ndarray  # (B, N_HOLD): pin force x, y [N], its moment [N·m], required friction
+    holding: np.ndarray  # (B, N_HOLD): layout H_* of envs.model.holding
     solve_time_s: float  # compiled solve time of the whole batch
 
 
@@ -247,7 +257,7 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
 @njit(cache=True, error_model="numpy", nogil=True)
 def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
                  points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
-                 status, counts, flags, jaw, holding):
+                 status, counts, flags, jaw, payload, holding):
     """Finish rows ``start .. stop_row - 1``: SI answers, metrics, the check, the public
     status, the pin reaction and required friction (:mod:`envs.solver.reaction`), and the
     per-row columns of :class:`BatchSolution` (``counts`` and ``flags`` one row a column,
@@ -259,8 +269,8 @@ def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_s
     normals, contact_points = np.empty((k, 2)), np.empty((k, 2))
     forces, gens = np.empty(k), np.empty((k, 3))
     for b in range(start, stop_row):
-        holding_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], grad5, hess5,
-                    normals, contact_points, forces, gens, holding[b])
+        holding_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], payload[b], grad5,
+                    hess5, normals, contact_points, forces, gens, holding[b])
         st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                          infos[b], points[b], interior[b], face[b], corner[b], stop[b],
                          totals[b], edges[b], metrics[b], ck[b], verdict[b])
@@ -280,7 +290,8 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
                   lam0: np.ndarray | None = None, n_rings: int = 1,
-                  element: str = "spring") -> BatchSolution:
+                  element: str = "spring", payload_n: np.ndarray | None = None
+                  ) -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -299,6 +310,9 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
         Rings ``M`` of the point mesh (1: the paper's fan).
     element
         ``"spring"``, ``"cst"`` or ``"nhquad"`` (:func:`envs.model.problem.pack_params`).
+    payload_n
+        The payload ``W`` [N] of each row (B,) that holding judges (:mod:`envs.model.holding`);
+        default 0: the reaction of the fixed centre alone.
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
@@ -311,12 +325,14 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     t0 = time.perf_counter()
     infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
     elapsed = time.perf_counter() - t0
-    return checked_solution(scene, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed)
+    return checked_solution(scene, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed,
+                            payload_n)
 
 
 def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
                      lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
-                     infos: np.ndarray, elapsed: float) -> BatchSolution:
+                     infos: np.ndarray, elapsed: float,
+                     payload_n: np.ndarray | None = None) -> BatchSolution:
     """Measure, convert to SI, check and give a public status to solver answers.
 
     Parameters
@@ -330,8 +346,13 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         Solver info rows (B, N_INFO) (layout ``I_*``): its claim in ``I_STATUS``.
     elapsed
         Solver time of the batch [s].
+    payload_n
+        The payload [N] of each row (B,), default 0 (see :func:`solve_columns`).
     """
     b = prm.shape[0]
+    # a writable C-contiguous copy: the kernel is compiled for that one array type
+    payload = (np.zeros(b) if payload_n is None
+               else np.array(np.broadcast_to(payload_n, (b,)), dtype=np.float64, order="C"))
     points = np.empty((b, n, 2))
     interior = np.empty((b, (xs.shape[1] - 2 * n - 2) // 2, 2))
     face = np.empty((b, 2, n))
@@ -350,7 +371,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     holding = np.empty((b, N_HOLD))
     run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
              interior, face, corner, stop, totals, edges, metrics, ck, verdict, status, counts,
-             flags, jaw, holding)
+             flags, jaw, payload, holding)
     return BatchSolution(
         status=status, converged=flags[F_CONVERGED], folded=flags[F_FOLDED],
         iterations=counts[C_ITERATIONS], rounds=counts[C_ROUNDS],
@@ -413,4 +434,8 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         pin_force_n=sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy(),
         pin_moment_nm=float(sol.holding[i, H_PIN_MOMENT]),
         required_friction=float(sol.holding[i, H_MU]),
+        payload_n=float(sol.holding[i, H_PAYLOAD]),
+        grip_force_n=float(sol.holding[i, H_GRIP]),
+        friction_limit=int(sol.holding[i, H_LIMIT]),
+        friction_limit_angle_rad=float(sol.holding[i, H_LIMIT_ANGLE]),
     )

@@ -30,8 +30,8 @@ def max_contacts(n):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, points, forces,
-                gens, out):
+def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, normals, points,
+                forces, gens, out):
     """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer.
 
     Parameters
@@ -40,11 +40,15 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, point
         The scene row (SI), its packed parameters and N.
     x, lam_face, lam_corner
         The scaled state and the face (2, N) and corner (2, 4, N) multipliers.
+    payload
+        The payload ``W`` [N] the grasp must carry in every direction of the load set
+        (:mod:`envs.model.holding`), >= 0.
     grad5, hess5, normals, points, forces, gens
         Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / 3).
     out
-        The holding row, written: the pin force on the object [N], its moment about the
-        centre [N·m], the required friction [-].
+        The holding row (layout ``H_*``), written: the pin force on the object [N], its
+        moment about the centre [N·m], the required friction [-], the payload and the grip
+        [N], what limits the friction.
 
     Returns
     -------
@@ -104,6 +108,6 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, grad5, hess5, normals, point
                 forces[count] = f * size
                 count += 1
     # the centre carries what the contacts leave unbalanced
-    holding_of_contacts(normals, points, forces, count, xc, yc, r, -fx, -fy, -moment, gens,
-                        out)
+    holding_of_contacts(normals, points, forces, count, xc, yc, r, -fx, -fy, -moment, payload,
+                        gens, out)
     return count

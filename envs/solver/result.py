@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from envs.check import KKTReport
+from envs.model.holding import LIMIT_NAMES
 
 __all__ = ["GraspResult"]
 
@@ -100,7 +101,20 @@ class GraspResult:
         coefficient times its normal force) could carry the pin's force and moment instead [-]
         (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction can
         (one finger touching). A symmetric grasp on the faces at finger angle ``theta`` needs
-        ``tan(theta)``.
+        ``tan(theta)``. With a payload (:attr:`payload_n` > 0) the friction must also carry it
+        in every direction of the load set: out of the plane (the object hanging from a
+        horizontal grasp) and in every in-plane direction (the grasp turned any way).
+    payload_n : float
+        The payload ``W = f rho pi r^2 t g`` the required friction includes [N] (0: none).
+    grip_force_n : float
+        The grip: the sum of the contacts' normal forces [N] (``mu`` times it is the most any
+        friction can carry out of the plane).
+    friction_limit : int
+        What sets the required friction, a code of :mod:`envs.model.holding`
+        (``LIMIT_NONE``, ``LIMIT_REACTION``, ``LIMIT_OUT_OF_PLANE``, ``LIMIT_IN_PLANE``).
+    friction_limit_angle_rad : float
+        For ``LIMIT_IN_PLANE``: the direction of the payload's pull on the object that needs
+        most friction [rad from +x, gripper frame]; NaN otherwise.
     inverted_triangles : int
         Mesh triangles (the fan's: centre, point i, point i+1) turned over in the returned
         state. The
@@ -141,6 +155,10 @@ class GraspResult:
     pin_force_n: np.ndarray = field(default_factory=lambda: np.zeros(2))
     pin_moment_nm: float = 0.0
     required_friction: float = 0.0
+    payload_n: float = 0.0
+    grip_force_n: float = 0.0
+    friction_limit: int = 0
+    friction_limit_angle_rad: float = math.nan
 
     @property
     def touching(self) -> tuple[bool, bool]:
@@ -209,6 +227,12 @@ class GraspResult:
             "pin_moment_nm": self.pin_moment_nm,
             "required_friction": (self.required_friction if math.isfinite(self.required_friction)
                                   else "inf"),
+            "payload_n": self.payload_n,
+            "grip_force_n": self.grip_force_n,
+            "friction_limit": LIMIT_NAMES[self.friction_limit],
+            "friction_limit_angle_rad": (self.friction_limit_angle_rad
+                                         if math.isfinite(self.friction_limit_angle_rad)
+                                         else None),
             "max_displacement_ratio": self.max_displacement_ratio,
             "n_contacts": list(self.n_contacts),
             "total_force_n": list(self.total_force_n),

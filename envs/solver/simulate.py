@@ -16,7 +16,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from envs.model.defaults import DEFAULT_ELEMENT, DEFAULT_PHASE_RAD, STIFFNESS_RULES
+from envs.model.defaults import (
+    DEFAULT_ELEMENT,
+    DEFAULT_PAYLOAD_FACTOR,
+    DEFAULT_PHASE_RAD,
+    STIFFNESS_RULES,
+)
 from envs.model.family import ModelSpec, resolve_model
 from envs.model.layout import S_SCALE
 from envs.model.problem import pack_params, rest_state, stiffness_unit
@@ -47,22 +52,25 @@ class _Problem:
     """One scene at one torque and mesh, solved through the pipeline (newton)."""
 
     def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float,
-                 m: int = 1, element: str = "spring", model_scale: float = 1.0):
+                 m: int = 1, element: str = "spring", model_scale: float = 1.0,
+                 payload_n: float = 0.0):
         self.scene, self.torque_nm, self.n, self.rule, self.phase, self.m = (
             scene, float(torque_nm), int(n), rule, float(phase_rad), int(m))
         self.element, self.model_scale = element, float(model_scale)
+        self.payload_n = float(payload_n)
         self.rows = scene.rows(self.torque_nm)
         # the member's shipped calibration: a factor on the disk's stiffness scale
         self.rows[:, S_SCALE] *= self.model_scale
 
     def at(self, torque_nm: float, n: int | None = None) -> _Problem:
         return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
-                        self.phase, self.m, self.element, self.model_scale)
+                        self.phase, self.m, self.element, self.model_scale, self.payload_n)
 
     def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
               ) -> tuple[GraspResult, BatchSolution]:
         sol = solve_columns(self.rows, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
-                            x0=x0, lam0=lam0, n_rings=self.m, element=self.element)
+                            x0=x0, lam0=lam0, n_rings=self.m, element=self.element,
+                            payload_n=np.array([self.payload_n]))
         return grasp_result(sol, 0, self.torque_nm, "newton", self.rule,
                             element=self.element, model_scale=self.model_scale), sol
 
@@ -277,6 +285,7 @@ def simulate(
     n_rings: int | None = None,
     element: str | None = None,
     calibrated: bool | None = None,
+    payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
 ) -> GraspResult:
     """Solve the grasp at one actuation torque, starting from the rest configuration.
 
@@ -310,6 +319,10 @@ def simulate(
         Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
     time_limit_s
         Wall-time budget for the baselines [s] (the Newton solver needs none).
+    payload_factor
+        ``f`` of the payload ``W = f rho pi r^2 t g`` the required friction includes
+        (:meth:`envs.scene.SoftDisk.payload_n`), in [0, 100]: default 2 (the weight plus a
+        lift at 1 g), 0 for the reaction of the fixed centre alone.
 
     Returns
     -------
@@ -326,14 +339,15 @@ def simulate(
                          n_rings, element, calibrated)
     n = spec.n_triangles
     torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
+    payload = scene.disk.payload_n(payload_factor)
     prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), spec.n_rings,
-                    spec.element, spec.scale)
+                    spec.element, spec.scale, payload)
     if method == "newton":
         return _solve_newton(prob)
     from . import baselines
 
     return baselines.solve(scene, torque, n, stiffness_rule, float(phase_rad), method,
-                           float(time_limit_s))
+                           float(time_limit_s), payload)
 
 
 def simulate_ramp(
@@ -349,6 +363,7 @@ def simulate_ramp(
     element: str | None = None,
     calibrated: bool | None = None,
     until_peak_strain: float | None = None,
+    payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
 ) -> list[GraspResult]:
     """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
 
@@ -391,9 +406,10 @@ def simulate_ramp(
             raise ValueError(f"until_peak_strain needs method = 'newton', got {method!r}")
         return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
                          phase_rad=phase_rad, time_limit_s=time_limit_s, n_rings=1,
-                         element="spring", calibrated=False) for t in torques]
+                         element="spring", calibrated=False, payload_factor=payload_factor)
+                for t in torques]
     base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), spec.n_rings,
-                    spec.element, spec.scale)
+                    spec.element, spec.scale, scene.disk.payload_n(payload_factor))
     out: list[GraspResult] = []
     prev: GraspResult | None = None
     for t in torques.tolist():
