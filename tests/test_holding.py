@@ -13,8 +13,8 @@ from scipy.optimize import linprog
 
 from envs import DesignBounds, Scene, evaluate_designs, simulate
 from envs.model.family import resolve_model
-from envs.model.holding import H_MU, N_HOLD, holding_row
-from envs.model.layout import S_DISTANCE, S_RADIUS, S_SCALE, S_THICKNESS, S_YOUNG
+from envs.model.holding import H_MU, N_HOLD, hertz_half_width, holding_row
+from envs.model.layout import S_DISTANCE, S_POISSON, S_RADIUS, S_SCALE, S_THICKNESS, S_YOUNG
 from envs.model.problem import pack_params
 from envs.scene import Design
 from envs.solver.pipeline import solve_columns
@@ -23,11 +23,11 @@ from envs.solver.reaction import holding_one, max_contacts
 R070 = Scene.preset("paper-r070")
 
 
-def _pressure_shift(normals, points, forces, centre, length) -> tuple[float, float]:
-    """How far the normal forces' moment can move when each face's pressure shifts between its
-    points (faces: one normal, one line), computed again here in numpy."""
-    arms = ((points[:, 0] - centre[0]) * normals[:, 1]
-            - (points[:, 1] - centre[1]) * normals[:, 0])
+def _pressure_shift(normals, points, forces, centre, length, half_width=0.0
+                    ) -> tuple[float, float]:
+    """How far the normal forces' moment can move when each face's pressure shifts within its
+    Hertz patch of half-width ``half_width sqrt(F)`` (faces: one normal, one line), computed
+    again here in numpy."""
     offsets = np.einsum("ij,ij->i", points, normals)
     low = high = 0.0
     done = np.zeros(forces.size, dtype=bool)
@@ -35,23 +35,23 @@ def _pressure_shift(normals, points, forces, centre, length) -> tuple[float, flo
         if done[i]:
             continue
         face = (np.abs(normals - normals[i]).max(axis=1) <= 1e-9) & (
-            np.abs(offsets - offsets[i]) <= 1e-9 * length)
+            np.abs(offsets - offsets[i]) <= 1e-6 * length)
         done |= face
         total = forces[face].sum()
-        mean = (forces[face] * arms[face]).sum() / total
-        low += total * (arms[face].min() - mean)
-        high += total * (arms[face].max() - mean)
+        low -= total * half_width * np.sqrt(total)
+        high += total * half_width * np.sqrt(total)
     return low, high
 
 
-def _lp_friction(normals, points, forces, centre, length, pin, moment) -> float:
+def _lp_friction(normals, points, forces, centre, length, pin, moment, half_width=0.0
+                 ) -> float:
     """The required friction as a plain linear program (scipy): min mu over (t, mu, delta) with
     sum t_i tau_i = pin, sum t_i m_i + delta = moment, |t_i| <= mu N_i, delta within the faces'
     pressure shift."""
     k = forces.size
     tau = np.column_stack([-normals[:, 1], normals[:, 0]])
     arm = (points[:, 0] - centre[0]) * tau[:, 1] - (points[:, 1] - centre[1]) * tau[:, 0]
-    low, high = _pressure_shift(normals, points, forces, centre, length)
+    low, high = _pressure_shift(normals, points, forces, centre, length, half_width)
     a_eq = np.zeros((3, k + 2))
     a_eq[0, :k], a_eq[1, :k], a_eq[2, :k] = tau[:, 0], tau[:, 1], arm / length
     a_eq[2, k + 1] = 1.0 / length
@@ -169,7 +169,10 @@ def test_corner_and_face_contacts_match_a_linear_program():
         np.testing.assert_allclose(row[:2], -total, rtol=1e-12, atol=1e-12)
         corners += bool(sol.corner_totals_n[b].any())
         centre = np.array([0.0, rows[b, S_DISTANCE] + disk.radius_m])
-        mu_lp = _lp_friction(normals, points, forces, centre, disk.radius_m, row[:2], row[2])
+        half = hertz_half_width(disk.radius_m, rows[b, S_THICKNESS],
+                                rows[b, S_SCALE] * rows[b, S_YOUNG], rows[b, S_POISSON])
+        mu_lp = _lp_friction(normals, points, forces, centre, disk.radius_m, row[:2], row[2],
+                             half)
         if mu_lp < 1e6:
             assert row[H_MU] == pytest.approx(mu_lp, rel=1e-6, abs=1e-9), b
             checked += 1

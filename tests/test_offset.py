@@ -19,7 +19,9 @@ from matplotlib.patches import Circle
 from envs import DesignBounds, Scene, evaluate_designs, simulate, simulate_ramp
 from envs.check import check_grasp
 from envs.evaluate import finger_gaps_m
+from envs.model.family import resolve_model
 from envs.model.geometry import distance_to_finger_bar
+from envs.model.holding import hertz_half_width
 from envs.model.problem import REST_OFFSET, REST_OK, REST_OVERLAP, rest_codes
 from envs.scene import DESIGN_FIELDS, Design, SoftDisk
 from tests.kkt_reference import kkt_check
@@ -211,7 +213,7 @@ def test_the_fixed_centre_carries_what_the_contacts_leave_about_the_true_centre(
     vanishes (about the axis point below it, it would be x_c times their y sum). The pin force
     is minus the faces' forces along their normals."""
     scene = R070.with_changes(offset_x_m=1e-3)
-    res = simulate(scene, 0.2, **FAN)
+    res = simulate(scene, 0.2, payload_factor=0, **FAN)  # the reaction alone
     assert res.converged and not res.corner_forces_n.any()
     normals = [np.array([-math.cos(t), math.sin(t)]) if side == 0
                else np.array([math.cos(t), math.sin(t)])
@@ -230,7 +232,10 @@ def test_the_fixed_centre_carries_what_the_contacts_leave_about_the_true_centre(
     side = np.where(res.contact_forces_n[0] > 0, 0, 1)[pressed]
     lp = _lp_friction(np.array([normals[j] for j in side]), res.points_m[pressed],
                       np.linalg.norm(forces[pressed], axis=1), scene.disk.center_m,
-                      DISK.radius_m, res.pin_force_n, res.pin_moment_nm)
+                      DISK.radius_m, res.pin_force_n, res.pin_moment_nm,
+                      hertz_half_width(DISK.radius_m, DISK.thickness_m,
+                                       resolve_model(**FAN).scale * DISK.stiffness_scale
+                                       * DISK.youngs_modulus_pa, DISK.poisson_ratio))
     assert res.required_friction == pytest.approx(lp, rel=1e-6)
     # a grasp turned off the axis needs about tan(theta) of its mean angle
     theta = float(np.mean(res.jaw_angles_rad))

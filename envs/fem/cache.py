@@ -18,8 +18,9 @@ from .result import FemResult
 #: Version tag of the discretisation and solver; part of the cache key.
 # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding; fem-5: the disk's
 # lateral offset in the key (every disk field but the point-spring calibration scales); fem-6:
-# the payload, the grip force and what limits the friction
-FEM_VERSION = "fem-6"
+# the payload, the grip force and what limits the friction; fem-7: the pressure shift within the
+# faces' Hertz patches
+FEM_VERSION = "fem-7"
 
 
 def fem_cache_dir() -> Path:

@@ -24,6 +24,7 @@ from envs.model.holding import (
     H_PIN_MOMENT,
     H_PIN_X,
     H_PIN_Y,
+    hertz_half_width,
     holding_row,
 )
 from envs.scene import Scene
@@ -275,7 +276,8 @@ def _solve_grasp(
         normals, points, node_forces, net, moment = system.contact_list(x, load)
         # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
         moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
-        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c, payload)
+        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c, payload,
+                           hertz_half_width(r, t, disk.youngs_modulus_pa, disk.poisson_ratio))
         gaps = system.gaps(x)
         pen = 0.0
         for (g, valid), f in zip(gaps, forces, strict=True):

@@ -13,14 +13,16 @@ these cones carry the reaction instead::
 
     sum_i t_i tau_i = F,     sum_i t_i (p_i - C) x tau_i = M,     |t_i| <= mu N_i.
 
-The normal forces are those of the solved grasp, with one freedom a free object has: on a face
-pressed at several points, the pressure may shift between them (their total fixed), which moves
-the face's normal force along the face and changes its moment about ``C`` within ``N_f [c_min -
-c, c_max - c]`` (``c`` the moment arm of the face's resultant, ``c_min``, ``c_max`` those of its
-outermost contact points). Without it, the two faces' tangential forces could balance the
-reaction's force but, in general, not its moment too, and a grasp turned a hair off its mirror
-symmetry would need infinite friction; with it, the required friction changes continuously with
-the grasp.
+The normal forces are those of the solved grasp, with one freedom a free object has: on a face,
+the pressure may shift within its contact patch (its total fixed), which moves the face's normal
+force along the face and changes its moment about ``C`` within ``N_f [-a, a]``, ``a`` the
+patch's half-width, the Hertz line contact of the face's force (:func:`hertz_half_width`: the
+physical width, the same at every mesh and at both fidelities, continuous as a contact is
+pressed or released). Without it, the two faces' tangential forces could balance the reaction's
+force but, in general, not its moment too, and a grasp turned a hair off its mirror symmetry, or
+an object placed off the axis, would need infinite friction; with it, the required friction
+changes continuously with the grasp. A corner's patch is given the same width (an upper bound:
+the rounded corner is more curved than a face).
 
 The *required friction* is the smallest such ``mu``: 0 when nothing is carried, infinite when
 no tangential forces can carry it (one finger touching: its tangent cannot balance its own
@@ -46,6 +48,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from .contact_width import hertz_arc_coefficient
 
 __all__ = [
     "H_PIN_X",
@@ -497,14 +501,21 @@ def payload_friction(gens, count, cx, cy, cz, shift, weight, tol, out):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _pressure_shift(normals, points, forces, count, centre_x, centre_y, length_scale):
+def _pressure_shift(normals, points, forces, count, length_scale, half_width):
     """How far the normal forces' moment about the centre can change [N·m] when the pressure
-    on each face shifts between its contact points, total fixed: (low <= 0, high >= 0).
+    on each face shifts within its contact patch, total fixed: (low <= 0, high >= 0).
 
     A face is the contacts of one normal on one line (a finger's gripping face; a corner is a
-    face of one point, with no shift)."""
+    face of one point). Its patch is the Hertz line contact of its total force ``F``, half-width
+    ``a = half_width sqrt(F)`` [m] (:func:`hertz_half_width`) about the resultant: moving the
+    resultant along the face by ``s`` changes its moment by ``F s``, so the face adds ``-F a``
+    to ``low`` and ``F a`` to ``high``. The patch, not the pressed points, bounds the shift: it
+    is the physical width, the same at every mesh and at both fidelities, and it shrinks
+    continuously to nothing as a contact is released (the points' span jumps by a spacing when
+    one point more is pressed)."""
     low = high = 0.0
-    tol = 1e-9 * length_scale
+    # contacts of one face lie on its line to the solver's tolerance on the gap (~1e-8 r)
+    tol = 1e-6 * length_scale
     for i in range(count):
         if not forces[i] > 0.0:
             continue
@@ -515,20 +526,24 @@ def _pressure_shift(normals, points, forces, count, centre_x, centre_y, length_s
                 break
         if not leader:
             continue
-        total = moment = 0.0
-        c_min, c_max = math.inf, -math.inf
+        total = 0.0
         for k in range(i, count):
             if forces[k] > 0.0 and (k == i or _same_face(normals, points, i, k, tol)):
-                c = ((points[k, 0] - centre_x) * normals[k, 1]
-                     - (points[k, 1] - centre_y) * normals[k, 0])
                 total += forces[k]
-                moment += forces[k] * c
-                c_min = min(c_min, c)
-                c_max = max(c_max, c)
-        c_mean = moment / total
-        low += total * (c_min - c_mean)
-        high += total * (c_max - c_mean)
-    return min(low, 0.0), max(high, 0.0)
+        reach = total * half_width * math.sqrt(total)
+        low -= reach
+        high += reach
+    return low, high
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def hertz_half_width(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio):
+    """``c`` [m N^-1/2] such that ``c sqrt(F)`` is the half-width of the contact patch of a
+    flat face pressed on the disk by a force ``F`` [N]: Hertz line contact in plane strain,
+    ``a = sqrt(4 F r / (pi t E*))`` with ``E* = E / (1 - nu^2)`` (the width of
+    :func:`envs.model.contact_width.hertz_arc_coefficient`, as a length)."""
+    return hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa,
+                                 poisson_ratio) * math.pi * radius_m
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -542,7 +557,7 @@ def _same_face(normals, points, i, j, tol):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, length_scale,
-                        pin_x, pin_y, pin_moment, payload, gens, out):
+                        pin_x, pin_y, pin_moment, payload, half_width, gens, out):
     """The holding row of a contact list, a pin reaction and a payload.
 
     Parameters
@@ -559,6 +574,9 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
     payload
         The payload ``W`` to carry in every direction of the load set [N], >= 0 (0: the
         reaction alone).
+    half_width
+        ``c`` [m N^-1/2] of the faces' contact patches, half-width ``c sqrt(F)``
+        (:func:`hertz_half_width` of the object): how far a face's pressure may shift.
     gens
         Scratch, (>= count, 3).
     out
@@ -582,8 +600,7 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
     out[H_PIN_MOMENT] = pin_moment
     out[H_PAYLOAD] = payload
     out[H_GRIP] = total
-    low, high = _pressure_shift(normals, points, forces, count, centre_x, centre_y,
-                                length_scale)
+    low, high = _pressure_shift(normals, points, forces, count, length_scale, half_width)
     scale = max(total, math.sqrt(pin_x * pin_x + pin_y * pin_y))
     # the tangential forces carry the pin's moment less what the shifted pressure takes over:
     # anywhere in [pin_moment - high, pin_moment - low], over L
@@ -593,8 +610,9 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
 
 
 def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                pin_moment_nm, payload_n: float = 0.0) -> np.ndarray:
-    """:func:`holding_of_contacts` of plain arrays (the FEM's contact list), a row (N_HOLD,)."""
+                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0) -> np.ndarray:
+    """:func:`holding_of_contacts` of plain arrays (the FEM's contact list), a row (N_HOLD,);
+    ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no shift)."""
     normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
@@ -603,5 +621,5 @@ def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
     out = np.empty(N_HOLD)
     holding_of_contacts(normals, points, forces, count, float(centre_m[0]), float(centre_m[1]),
                         float(length_scale_m), float(pin_force_n[0]), float(pin_force_n[1]),
-                        float(pin_moment_nm), float(payload_n), gens, out)
+                        float(pin_moment_nm), float(payload_n), float(half_width), gens, out)
     return out

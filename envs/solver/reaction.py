@@ -14,8 +14,17 @@ import math
 
 from numba import njit
 
-from ..model.holding import holding_of_contacts
-from ..model.layout import N_CORNERS, S_DISTANCE, S_OFFSET_X, S_RADIUS
+from ..model.holding import hertz_half_width, holding_of_contacts
+from ..model.layout import (
+    N_CORNERS,
+    S_DISTANCE,
+    S_OFFSET_X,
+    S_POISSON,
+    S_RADIUS,
+    S_SCALE,
+    S_THICKNESS,
+    S_YOUNG,
+)
 from ..model.problem import stiffness_unit
 from .contact import _corner_eval, _face_eval, _sel, _trig
 
@@ -108,6 +117,8 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
                 forces[count] = f * size
                 count += 1
     # the centre carries what the contacts leave unbalanced
+    # the faces' contact patches with the solved model's stiffness (its scale times E)
+    half_width = hertz_half_width(r, s[S_THICKNESS], s[S_SCALE] * s[S_YOUNG], s[S_POISSON])
     holding_of_contacts(normals, points, forces, count, xc, yc, r, -fx, -fy, -moment, payload,
-                        gens, out)
+                        half_width, gens, out)
     return count
