@@ -14,7 +14,9 @@ from pathlib import Path
 from .result import FemResult
 
 #: Version tag of the discretisation and solver; part of the cache key.
-FEM_VERSION = "fem-4"  # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding
+# fem-3: contact fractions, stop torques, stretch strain; fem-4: holding; fem-5: the contact
+# fractions interpolated between rim nodes (envs.model.contact_width)
+FEM_VERSION = "fem-5"
 
 
 def _cache_dir() -> Path:
