@@ -797,7 +797,7 @@ def evaluate_designs(
           between a pressed point and its free neighbour from the pressed point's pressure and
           the free one's gap to the finger (not a count of points: continuous in the design,
           from 0 at first touch), at most the Hertz width of the face force on a flat face (a
-          contact narrower than a point spacing counts with its physical width). FEM: the same
+          contact resolved by a point spacing counts with its physical width). FEM: the same
           measure on the rim nodes (penalty forces, gaps), capped alike.
         - ``grip_share``: the share of the actuation torque that grips the object (not taken
           by the torsion springs or the joint stops), the smaller finger's (:func:`grip_share`):
