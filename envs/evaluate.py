@@ -28,7 +28,12 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .model.contact_width import contact_share, hertz_arc_coefficient
+from .model.contact_width import (
+    FLAT_FACE_CURVATURE_PER_M,
+    contact_share,
+    hertz_arc_coefficient,
+    relative_radius_m,
+)
 from .model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_FRICTION_COEFFICIENT,
@@ -547,8 +552,9 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
     (the contact width takes the material's modulus)."""
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
-        sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, sol.peak_strain,
-        sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression, cols.radius_m,
+        sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm,
+        sol.peak_strain, sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression,
+        cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
         material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
         cols.rest_angle_rad, out["status"], out["converged"], out["iterations"], out["stable"],
@@ -649,7 +655,8 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     shares = np.empty(rows.size)
     for i, d in enumerate(disk[rows]):
         k = hertz_arc_coefficient(d[DISK_RADIUS], d[DISK_THICKNESS], d[DISK_YOUNG],
-                                  d[DISK_POISSON])
+                                  d[DISK_POISSON],
+                                  relative_radius_m(d[DISK_RADIUS], FLAT_FACE_CURVATURE_PER_M))
         shares[i] = sum(contact_share(float(f), float(force), k) for f, force in
                         zip(fem["contact_fractions"][i], fem["face_force_n"][i], strict=True))
     with np.errstate(invalid="ignore"):
@@ -896,14 +903,13 @@ def evaluate_designs(
         - ``touching`` (B, 2): each finger touches the disk (face or corner contact).
         - ``total_force_n`` (B, 2): normal force of each finger on the disk [N].
         - ``contact_score``: ``grip_share`` times the fraction of the contour in contact,
-          summed over the two faces, each face's share the smaller of its pressed points
-          ``n_contacts / N`` (each point stands for an arc ``2 pi r / N``) and the Hertz width
-          of its face force (:mod:`envs.model.contact_width`: a contact narrower than a point
-          spacing, a light touch, counts with its physical width, not a whole facet), as far
-          as the actuation grips the object. FEM: the share of the rim's length whose nodes
-          press on each face (each node with its share of the rim), capped alike: the same
-          measure (the node count alone would let an optimizer exploit facets with forces
-          near zero).
+          summed over the two faces (:mod:`envs.model.contact_width`), as far as the actuation
+          grips the object. Each face's share is the contact's extent, its edges interpolated
+          between a pressed point and its free neighbour from the pressed point's pressure and
+          the free one's gap to the finger (not a count of points: continuous in the design,
+          from 0 at first touch), at most the Hertz width of the face force on a flat face (a
+          contact resolved by a point spacing counts with its physical width). FEM: the same
+          measure on the rim nodes (penalty forces, gaps), capped alike.
         - ``grip_share``: the share of the actuation torque that grips the object (not taken
           by the torsion springs or the joint stops), the smaller finger's (:func:`grip_share`):
           near 1 for a squeeze with little travel, 0 for fingers that merely touch the object

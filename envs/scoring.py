@@ -14,7 +14,16 @@ import math
 
 from numba import njit
 
-from .model.contact_width import contact_share, hertz_arc_coefficient
+from .model.contact_width import (
+    FLAT_FACE_CURVATURE_PER_M,
+    contact_indicator,
+    contact_share,
+    hertz_arc_coefficient,
+    plane_strain_modulus_pa,
+    relative_radius_m,
+    segment_contact,
+)
+from .model.geometry import finger_gap_m
 from .solver.status import CHECK_FAILED
 
 # layout of the weights vector of :func:`reward_rows` (RewardWeights.vector())
@@ -59,15 +68,60 @@ def grip_share_rows(torque_nm, kf_nm_per_rad, rest_angle_rad, jaw_angles_rad, st
                              stop_torques_nm[i, 0], stop_torques_nm[i, 1])
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _point_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m, width_m,
+                     spacing_m, thickness_m, e_star_pa):
+    """:func:`~envs.model.contact_width.contact_indicator` of contour point ``i`` against the
+    face of finger ``j`` (a pressed point's gap is 0: the solver holds it on the face)."""
+    force = forces_n[i]
+    gap = 0.0 if force > 0.0 else finger_gap_m(points_m[i, 0], points_m[i, 1], j, angle_rad,
+                                               joint_offset_m, length_m, width_m)
+    return contact_indicator(force, spacing_m * thickness_m, spacing_m, gap, e_star_pa)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def face_extent_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m,
+                      radius_m, thickness_m, e_star_pa):
+    """Share of a contour of ``N`` evenly spaced points in contact with the face of finger
+    ``j``, interpolated between points (:func:`envs.model.contact_width.contact_arc_share`
+    without its arrays: each point stands for ``1 / N`` of the contour, an arc ``2 pi r / N``).
+
+    Parameters
+    ----------
+    points_m
+        The deformed contour points, counter-clockwise, (N, 2) [m].
+    forces_n
+        The face's normal force on each point, (N,) [N].
+    j, angle_rad, joint_offset_m, length_m, width_m
+        Finger ``j`` (0 right, 1 left), its angle [rad] and the gripper's ``d_3``, ``l``,
+        ``w`` [m] (the gaps of the free points to its bar).
+    radius_m, thickness_m, e_star_pa
+        The disk's radius and thickness [m] and plane-strain modulus [Pa].
+    """
+    n = points_m.shape[0]
+    spacing = 2.0 * math.pi * radius_m / n
+    first = _point_indicator(points_m, forces_n, 0, j, angle_rad, joint_offset_m, length_m,
+                             width_m, spacing, thickness_m, e_star_pa)
+    here = first
+    total = 0.0
+    for i in range(n):
+        after = first if i == n - 1 else _point_indicator(
+            points_m, forces_n, i + 1, j, angle_rad, joint_offset_m, length_m, width_m,
+            spacing, thickness_m, e_star_pa)
+        total += segment_contact(here, after)
+        here = after
+    return total / n
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
-                     jaw_angles_rad, face_forces_n, corner_totals_n, stop_torques_nm,
+                     jaw_angles_rad, points_m, face_forces_n, corner_totals_n, stop_torques_nm,
                      peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
-                     radius_m, thickness_m, youngs_modulus_pa, poisson_ratio, material_scale,
-                     torque_nm, kf_nm_per_rad, rest_angle_rad, status, converged,
-                     iterations, stable, jaw_out, n_contacts, touching, total_force_n,
-                     contact_score, grip_share, peak_out, peak_log_out, displacement_out,
-                     compression_out):
+                     finger_length_m, joint_offset_m, finger_width_m, radius_m, thickness_m,
+                     youngs_modulus_pa, poisson_ratio, material_scale, torque_nm,
+                     kf_nm_per_rad, rest_angle_rad, status, converged, iterations, stable,
+                     jaw_out, n_contacts, touching, total_force_n, contact_score, grip_share,
+                     peak_out, peak_log_out, displacement_out, compression_out):
     """Write the point-spring metrics of solved rows ``rows`` (group order ``g``) into the
     output columns.
 
@@ -75,10 +129,12 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     (otherwise ``CHECK_FAILED``); failed rows keep their zeros. Contacts are the points with a
     positive face force, a finger touches with a face contact or a corner force, and the
     contact score is ``grip_share`` times the two faces'
-    :func:`~envs.model.contact_width.contact_share`, the Hertz width
-    (:func:`envs.model.contact_width.hertz_arc_coefficient`) with the object's modulus,
-    ``material_scale`` times E: the disk's own scale, not a member's discretization scale
-    (which the solve's stiffness carries, and which is not part of the material).
+    :func:`~envs.model.contact_width.contact_share`: the contact's extent interpolated between
+    the contour points (:func:`face_extent_share`), at most the Hertz width
+    (:func:`envs.model.contact_width.hertz_arc_coefficient`, flat faces). Both take the
+    object's modulus, ``material_scale`` times E: the disk's own scale, not a member's
+    discretization scale (which the solve's stiffness carries, and which is not part of the
+    material).
     """
     for g in range(rows.shape[0]):
         r = rows[g]
@@ -86,9 +142,11 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                   and math.isfinite(max_displacement_ratio[g])
                   and math.isfinite(peak_compression[g]))
         shares = 0.0
-        hertz_k = hertz_arc_coefficient(radius_m[g], thickness_m[g],
-                                        material_scale[g] * youngs_modulus_pa[g],
-                                        poisson_ratio[g])
+        modulus = material_scale[g] * youngs_modulus_pa[g]
+        e_star = plane_strain_modulus_pa(modulus, poisson_ratio[g])
+        hertz_k = hertz_arc_coefficient(
+            radius_m[g], thickness_m[g], modulus, poisson_ratio[g],
+            relative_radius_m(radius_m[g], FLAT_FACE_CURVATURE_PER_M))
         for j in range(2):
             corner = 0.0
             for k in range(corner_totals_n.shape[2]):
@@ -100,7 +158,11 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                 total += f
                 if f > 0.0:
                     cnt += 1
-            shares += contact_share(cnt / n_points, total, hertz_k)
+            extent = face_extent_share(points_m[g], face_forces_n[g, j], j,
+                                       jaw_angles_rad[g, j], joint_offset_m[g],
+                                       finger_length_m[g], finger_width_m[g], radius_m[g],
+                                       thickness_m[g], e_star)
+            shares += contact_share(extent, total, hertz_k)
             total += corner
             finite = finite and math.isfinite(jaw_angles_rad[g, j]) and math.isfinite(total)
             # written for every row; a failed row's are zeroed below

@@ -29,9 +29,9 @@ from .result import OptimResult, to_jsonable
 __all__ = ["RANKING_MEMBER", "FINISH_TOP", "finish_result"]
 
 # the finer member whose reward ranks random designs like the FEM's, also at soft strain
-# limits where the default's ranking drops (scripts/fidelity.py, docs/accuracy.md): the
-# re-ranking to trust when the FEM is not at hand, and the member that reports an
-# optimization's optimum
+# limits where the default's ranking is a little below it (scripts/fidelity.py,
+# docs/accuracy.md): the re-ranking to trust when the FEM is not at hand, and the member that
+# reports an optimization's optimum
 RANKING_MEMBER = {"n_triangles": 96, "n_rings": 6, "element": "nhquad", "calibrated": True}
 FINISH_TOP = 10  # distinct designs re-scored (what an OptimResult keeps)
 

@@ -29,6 +29,8 @@ from envs.model.family import resolve_model
 from envs.model.problem import REST_OK, pack_params, rest_codes, scaled_params
 from envs.scene import PRESETS, Gripper
 
+from .contact_reference import face_extent_shares
+
 GRIPPER, DISK = PRESETS["paper-r070"]
 PAPER = np.array([GRIPPER.finger_length_m, GRIPPER.rest_angle_rad, GRIPPER.joint_offset_m,
                   GRIPPER.finger_width_m, 0.2, DISK.distance_m])
@@ -53,6 +55,15 @@ def paper_designs(torques) -> np.ndarray:
     return des
 
 
+def _extents(design: np.ndarray, n: int = 20, element: str = "spring") -> np.ndarray:
+    """Each face's interpolated contact share of the design's grasp on DISK (the definition
+    in numpy, tests/contact_reference.py, on simulate's answer)."""
+    scene = Design.from_array(design).to_scene(DISK)
+    res = envs.simulate(scene, float(design[4]), n, element=element)
+    return face_extent_shares(res.points_m, res.contact_forces_n, scene.gripper,
+                              res.jaw_angles_rad, DISK)
+
+
 def assert_outputs_equal(a: dict, b: dict) -> None:
     assert a.keys() == b.keys()
     for key in a:
@@ -75,14 +86,17 @@ def test_outputs_have_documented_keys_shapes_and_paper_values():
         assert out[key].dtype == dtype, key
     assert out["converged"].all() and out["valid_at_rest"].all()
     np.testing.assert_array_equal(out["n_contacts"], [[3, 3], [3, 3]])
-    # three pressed points a face (3 / 20 of the contour) are three facets; the face force's
-    # Hertz width is narrower and is what counts (no corner touches here: face = total force)
+    # each face's share: the contact's extent interpolated between its points (three pressed
+    # points a face: two segments and parts of the next), at most the Hertz width of the face
+    # force (no corner touches here: face = total force)
     k = hertz_arc_coefficient(DISK.radius_m, DISK.thickness_m, DISK.youngs_modulus_pa,
-                              DISK.poisson_ratio)
+                              DISK.poisson_ratio, DISK.radius_m)
     width = k * np.sqrt(out["total_force_n"])
-    assert np.all(width < 0.15)
-    np.testing.assert_allclose(out["contact_score"], out["grip_share"] * width.sum(axis=1),
-                               rtol=1e-12)
+    extents = np.array([_extents(row) for row in paper_designs([0.1, 0.2])])
+    assert np.all((extents > 2 / 20) & (extents < 4 / 20))
+    np.testing.assert_allclose(out["contact_score"],
+                               out["grip_share"] * np.minimum(extents, width).sum(axis=1),
+                               rtol=1e-9)
     total = (out["reward_contact"] + out["reward_deform"] + out["penalty_slip"]
              + out["penalty_miss"] + out["penalty_gap"] + out["penalty_invalid"]
              + out["penalty_fail"])
@@ -683,10 +697,11 @@ def test_fingers_that_merely_touch_score_no_contact():
     assert squeeze["grip_share"][0] == pytest.approx(np.min(1 - spring / 0.2), rel=1e-12)
     assert 0.5 < squeeze["grip_share"][0] < 1.0
     k = hertz_arc_coefficient(DISK.radius_m, DISK.thickness_m, DISK.youngs_modulus_pa,
-                              DISK.poisson_ratio)
-    shares = np.minimum(squeeze["n_contacts"][0] / 40, k * np.sqrt(squeeze["total_force_n"][0]))
+                              DISK.poisson_ratio, DISK.radius_m)
+    shares = np.minimum(_extents(paper_designs([0.2])[0], 40, "nhquad"),
+                        k * np.sqrt(squeeze["total_force_n"][0]))
     assert squeeze["contact_score"][0] == pytest.approx(
-        squeeze["grip_share"][0] * shares.sum(), rel=1e-12)
+        squeeze["grip_share"][0] * shares.sum(), rel=1e-9)
 
 
 def test_object_draws_follow_the_stated_distribution():

@@ -118,16 +118,17 @@ def test_bad_fidelity_options_are_refused(scene, designs, kwargs, match):
 
 
 def test_the_contact_width_of_the_fem_is_hertz_s():
-    """The cap of the contact score is physics, not a fit: the FEM's own rim measure of the
-    contact on each face (r / 12 mesh, ~150 rim nodes) is Hertz's line-contact width of the
-    face force on paper-r070 from light to firm (0.05-0.5 N·m), to 3 % and the rim's
-    resolution (one node of the 144 on the rim of 12 rings)."""
+    """The cap of the contact score is physics, not a fit: the FEM's own measure of the
+    contact on each face (its extent interpolated between rim nodes, uncapped; r / 12 mesh,
+    144 rim nodes) is Hertz's line-contact width of the face force on paper-r070 from light to
+    firm (0.05-0.5 N·m), to 3 % and the rim's resolution (one node of the 144)."""
     from envs.fem import fem_grasp
     from envs.model.contact_width import hertz_arc_coefficient
 
     scene = Scene.preset("paper-r070")
     d = scene.disk
-    k = hertz_arc_coefficient(d.radius_m, d.thickness_m, d.youngs_modulus_pa, d.poisson_ratio)
+    k = hertz_arc_coefficient(d.radius_m, d.thickness_m, d.youngs_modulus_pa, d.poisson_ratio,
+                              d.radius_m)
     for res in fem_grasp(scene, [0.05, 0.2, 0.5]):
         face = np.subtract(res.contact_forces_n, res.tip_forces_n)
         np.testing.assert_allclose(res.contact_fractions, k * np.sqrt(face), rtol=0.03,

@@ -19,8 +19,9 @@ from .result import FemResult
 # fem-3: contact fractions, stop torques, stretch strain; fem-4: holding; fem-5: the disk's
 # lateral offset in the key (every disk field but the point-spring calibration scales); fem-6:
 # the payload, the grip force and what limits the friction; fem-7: the pressure shift within the
-# faces' Hertz patches
-FEM_VERSION = "fem-7"
+# faces' Hertz patches; fem-8: the contact fractions interpolated between rim nodes
+# (envs.model.contact_width)
+FEM_VERSION = "fem-8"
 
 
 def fem_cache_dir() -> Path:

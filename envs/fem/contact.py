@@ -12,7 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from envs.model.geometry import finger_frame
+from envs.model.contact_width import (
+    contact_arc_share,
+    contact_indicator,
+    plane_strain_modulus_pa,
+)
+from envs.model.geometry import bar_distance, finger_frame
 from envs.scene import Scene
 
 from .body import _Body
@@ -179,3 +184,54 @@ def _corner_feature(poly: np.ndarray, c: np.ndarray) -> tuple[float, str, int]:
     if 0.0 < xi[k] < 1.0:
         return gap, "segment", k
     return gap, "vertex", (k if xi[k] == 0.0 else (k + 1) % poly.shape[0])
+
+
+def rim_contact_shares(scene: Scene, rim: _Rim, order: np.ndarray, positions_m: np.ndarray,
+                       face_forces_n: list[np.ndarray], jaw_angles_rad: np.ndarray
+                       ) -> tuple[float, float]:
+    """Share of the rim in contact with each jaw's face, interpolated between rim nodes: the
+    point-spring model's measure (:mod:`envs.model.contact_width`) on the FEM's rim.
+
+    Parameters
+    ----------
+    scene
+        The grasped scene (the gripper's bars; the disk's ``E``, ``nu``, its centre).
+    rim
+        The rim nodes (reference positions, their share of the rim times the thickness).
+    order
+        The rim nodes counter-clockwise (indices into ``rim``).
+    positions_m
+        Deformed rim node positions [m], (m, 2), in ``rim``'s order.
+    face_forces_n
+        Each face's penalty force on each rim node [N], two arrays (m,) in ``rim``'s order.
+    jaw_angles_rad
+        The fingers' angles [rad], (2,).
+
+    Returns
+    -------
+    tuple of float
+        Right and left face's share: each rim segment between neighbours counts with its share
+        of the reference rim, in full where both nodes press, in part where one does
+        (:func:`~envs.model.contact_width.contact_arc_share`). A pressed node's indicator
+        takes its pressure (force over its Simpson weight) and its spacing (the mean of its two
+        segments), a free node's its distance to the finger's bar.
+    """
+    disk, grip = scene.disk, scene.gripper
+    e_star = plane_strain_modulus_pa(disk.youngs_modulus_pa, disk.poisson_ratio)
+    ref = rim.ref_m[order] - disk.center_m
+    angle = np.arctan2(ref[:, 1], ref[:, 0])
+    segment = np.mod(np.roll(angle, -1) - angle, 2 * math.pi) / (2 * math.pi)
+    spacing_m = 0.5 * (segment + np.roll(segment, 1)) * 2 * math.pi * disk.radius_m
+    weight_m2 = rim.weight_m2[order]
+    p = positions_m[order]
+    shares = []
+    for side, forces in enumerate(face_forces_n):
+        joint, axis, normal = finger_frame(grip, side, float(jaw_angles_rad[side]))
+        rel = p - joint
+        gap_m = bar_distance(rel @ axis, rel @ normal, grip.finger_length_m,
+                             grip.finger_width_m)
+        f = forces[order]
+        phi = np.array([contact_indicator(float(f[i]), float(weight_m2[i]), float(spacing_m[i]),
+                                          float(gap_m[i]), e_star) for i in range(f.size)])
+        shares.append(float(contact_arc_share(phi, segment)))
+    return shares[0], shares[1]

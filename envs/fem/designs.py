@@ -2,8 +2,9 @@
 
 :func:`envs.evaluate.evaluate_designs` with ``fidelity="fem"`` solves each design valid at rest
 here instead of with the point-spring model, and reports the same metric keys with the same
-meaning (:func:`fem_metrics`): the fraction of the contour in contact by rim length, the grip
-share of the actuation torque, the largest principal logarithmic strain outside the hub.
+meaning (:func:`fem_metrics`): the fraction of the contour in contact (interpolated between rim
+nodes), the grip share of the actuation torque, the largest principal logarithmic strain outside
+the hub.
 """
 
 from __future__ import annotations
@@ -42,8 +43,9 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
     :func:`envs.evaluate.evaluate_designs`); rows that did not converge hold NaN and
     ``converged`` False.
 
-    ``contact_fractions`` (B, 2) is the share of the rim's length in contact with each face
-    (each rim node with its share of the rim), ``contact_fraction`` (B,) their sum,
+    ``contact_fractions`` (B, 2) is the share of the rim in contact with each face (the
+    contact's extent interpolated between rim nodes, :func:`envs.fem.contact.rim_contact_shares`;
+    uncapped), ``contact_fraction`` (B,) their sum,
     ``n_contacts`` (B, 2) the rim nodes in contact, ``face_force_n`` (B, 2) the force each face
     carries (the total without the tip corner's), ``peak_compression`` (B,) the largest
     shortening of a radius ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C =

@@ -32,7 +32,7 @@ from envs.validation import check_range
 
 from .body import _Body
 from .cache import FEM_VERSION, _cache_dir, _cache_key, _load_cache, _store_cache
-from .contact import _PENALTY_FACTOR, _JawFace, _JawTip, _Rim
+from .contact import _PENALTY_FACTOR, _JawFace, _JawTip, _Rim, rim_contact_shares
 from .material import _check_plane, _log_strain_magnitude, _stretch_strain_magnitude
 from .mesh import (
     _arc_facets,
@@ -292,7 +292,6 @@ def _solve_grasp(
         disp = np.linalg.norm(x[rim.dofs], axis=1)
         at_stop = bool(np.any(x[n:] < th_stop))
         stop = k_stop * np.maximum(0.0, th_stop - x[n:])
-        rim_length = float(np.sum(rim.weight_m2))
         results.append(
             FemResult(
                 jaw_angles_rad=(float(x[n]), float(x[n + 1])),
@@ -312,8 +311,8 @@ def _solve_grasp(
                     int(np.count_nonzero(forces[0] > 0)),
                     int(np.count_nonzero(forces[1] > 0)),
                 ),
-                contact_fractions=tuple(
-                    float(np.sum(rim.weight_m2[f > 0]) / rim_length) for f in forces[:2]),
+                contact_fractions=rim_contact_shares(scene, rim, order, system.rim_positions(x),
+                                                     forces[:2], x[n:]),
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
                 pin_force_n=(float(hold[H_PIN_X]), float(hold[H_PIN_Y])),

@@ -63,10 +63,11 @@ class FemResult:
     hub_edge_peak_strain
         Same strain measure over the layer ``hub_radius_m < rho <= 2 hub_radius_m`` [-].
     contact_fractions
-        Share of the rim's length whose nodes press on the right and left jaw's face (each node
-        counts with its share of the rim, the Simpson weights of the P2 rim edges) [-]: the
-        fraction of the contour in contact, the measure the point-spring model's ``N`` equal
-        arcs give.
+        Share of the rim in contact with the right and left jaw's face [-], the contact's
+        extent interpolated between rim nodes from their pressures and gaps
+        (:func:`envs.fem.contact.rim_contact_shares`): the point-spring model's measure of the
+        fraction of the contour in contact (:mod:`envs.model.contact_width`), continuous in
+        the design.
     stop_torques_nm
         Torque the closed-jaw stop takes from each finger [N·m] (0 unless the jaws are on it).
     peak_stretch_strain

@@ -30,6 +30,7 @@ __all__ = [
     "finger_frame",
     "closed_angle_rad",
     "distance_to_finger_bar",
+    "finger_gap_m",
     "rest_points",
     "corner_radius",
 ]
@@ -115,6 +116,17 @@ def bar_distance(along_m, across_m, length_m, width_m):
     ds = max(0.0, max(-along_m, along_m - length_m))
     dm = max(0.0, max(across_m - hw, -hw - across_m))
     return math.hypot(ds, dm)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def finger_gap_m(x_m, y_m, j, angle_rad, joint_offset_m, length_m, width_m):
+    """Distance [m] from the point ``(x_m, y_m)`` (gripper frame) to the bar of finger ``j``
+    (0 right, 1 left) at ``angle_rad``, 0 on or inside it (compiled: the design evaluator's
+    contact measure calls it per contour point; :func:`distance_to_finger_bar` is its Python
+    counterpart for a gripper object)."""
+    ex, ey, nx, ny = finger_axes(j, math.sin(angle_rad), math.cos(angle_rad))
+    rx = x_m - (joint_offset_m if j == 0 else -joint_offset_m)
+    return bar_distance(ex * rx + ey * y_m, nx * rx + ny * y_m, length_m, width_m)
 
 
 def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point):
