@@ -542,8 +542,9 @@ def hertz_half_width(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio):
     flat face pressed on the disk by a force ``F`` [N]: Hertz line contact in plane strain,
     ``a = sqrt(4 F r / (pi t E*))`` with ``E* = E / (1 - nu^2)`` (the width of
     :func:`envs.model.contact_width.hertz_arc_coefficient`, as a length)."""
-    return hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa,
-                                 poisson_ratio) * math.pi * radius_m
+    # a flat face: the relative radius is the disk's own
+    return hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio,
+                                 radius_m) * math.pi * radius_m
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
