@@ -313,10 +313,13 @@ class RewardWeights:
     the tier above, and every outcome of a tier below every outcome of the tiers above:
 
     1. a grasp that **holds** (converged, both fingers touching, ``required_friction`` within
-       the object's friction coefficient ``mu``):
-       ``contact * min(contact_score, contact_cap) - deform * min(peak_compression /
-       strain_limit, deform_cap)``, in ``[-F, contact * contact_cap]`` with ``F = deform *
-       deform_cap`` (-1 with the defaults);
+       the object's friction coefficient ``mu``) within the strain limit (``q =
+       peak_compression / strain_limit <= 1``):
+       ``contact * min(contact_score, contact_cap) - deform * q``, in ``[-deform, contact *
+       contact_cap]``; one that holds but **crushes** (``q > 1``, beyond the strain limit):
+       ``-deform - (F - deform) x / (1 + x)``, ``x = q - 1``, in ``(-F, -deform)``, below
+       every hold within the limit (a design must not crush its object in any scenario), with
+       ``F = deform * deform_cap`` (-1 with the defaults);
     2. a grasp that would **slip** (it needs more friction than ``mu``):
        ``-F - slip * x / (1 + x)``, ``x = required_friction / mu - 1`` (``x / (1 + x)`` = 1
        for an infinite need), in ``[-F - slip, -F)``: the less friction it needs, the
@@ -330,8 +333,9 @@ class RewardWeights:
        it is from valid (overlap depth and the other violated limits, in radii or radians;
        :func:`rest_violation`); ``invalid`` at least ``fail``.
 
-    With the defaults: holds ``[-1, 0.5]``, slips ``[-1.5, -1)``, misses ``(-3, -2]``, a failure
-    -3, invalid designs ``[-4.5, -3.5]``. Weights that would break the order are rejected.
+    With the defaults: holds within the strain limit ``[-0.25, 0.5]``, crushes ``(-1, -0.25)``,
+    slips ``[-1.5, -1)``, misses ``(-3, -2]``, a failure -3, invalid designs ``[-4.5, -3.5]``.
+    Weights that would break the order are rejected.
 
     Parameters
     ----------
@@ -357,7 +361,8 @@ class RewardWeights:
     contact_cap
         Cap of the contact score [-], > 0.
     deform_cap
-        Cap of ``peak_compression / strain_limit`` [-], > 0 (keeps the reward bounded).
+        ``F / deform`` [-], > 1: the floor ``-F`` of the crushing grasps (keeps the reward
+        bounded).
     slip
         Width of the tier of grasps that would slip [-], > 0: how much a grasp needing
         unlimited friction scores below one needing just the object's coefficient.
@@ -377,7 +382,8 @@ class RewardWeights:
     def __post_init__(self) -> None:
         for f in fields(self):
             low_open = f.name.endswith("_cap") or f.name in ("slip", "miss")
-            v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), 0.0, math.inf,
+            low = 1.0 if f.name == "deform_cap" else 0.0
+            v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), low, math.inf,
                             low_open=low_open)
             object.__setattr__(self, f.name, v)
         worst_valid = self.deform * self.deform_cap + self.slip + 2 * self.miss + self.gap

@@ -208,7 +208,9 @@ def reward_rows(weights, valid, converged, contact_score, peak_compression, stra
                 penalty_miss, penalty_gap, penalty_invalid, penalty_fail, reward):
     """The reward terms of every row (:class:`envs.evaluate.RewardWeights`; ``weights`` in
     the ``W_*`` layout), in tiers: a grasp that holds (both fingers touching, the required
-    friction within the object's coefficient) gets the contact and deformation terms; one
+    friction within the object's coefficient) within the strain limit gets the contact and
+    deformation terms; one that holds but presses beyond the strain limit only a deformation
+    term below every hold within it, graded by how far beyond; one
     that would slip scores below every hold, graded by how much more friction it needs; a
     converged design with a finger off the object below every grasp, graded by the fingers
     missing and the gap; a valid design whose solve failed, the failure penalty; a design
@@ -230,9 +232,13 @@ def reward_rows(weights, valid, converged, contact_score, peak_compression, stra
                 excess = required_friction[i] / friction_coefficient[i] - 1.0
                 ps = 0.0 - floor - weights[W_SLIP] * _bounded(excess)
             else:
-                rc = weights[W_CONTACT] * _capped(contact_score[i], weights[W_CONTACT_CAP])
-                ratio = _capped(peak_compression[i] / strain_limit[i], weights[W_DEFORM_CAP])
-                rd = 0.0 - weights[W_DEFORM] * ratio
+                ratio = peak_compression[i] / strain_limit[i]
+                if ratio <= 1.0:
+                    rc = weights[W_CONTACT] * _capped(contact_score[i], weights[W_CONTACT_CAP])
+                    rd = 0.0 - weights[W_DEFORM] * ratio
+                else:  # NaN included: beyond the strain limit, below every hold within it
+                    rd = 0.0 - weights[W_DEFORM] - (floor - weights[W_DEFORM]) * _bounded(
+                        ratio - 1.0)
         pi = 0.0 if valid[i] else (0.0 - weights[W_INVALID]
                                    - weights[W_VIOLATION] * rest_violation[i])
         pf = 0.0 - weights[W_FAIL] if (valid[i] and not ok) else 0.0

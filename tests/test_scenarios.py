@@ -5,17 +5,20 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from envs.evaluate import DesignBounds, evaluate_designs
-from envs.object_file import parse_object
+from envs.object_file import load_object, parse_object
 from envs.scenarios import Scenarios, evaluate_scenarios, robust_reward
 from envs.scene import DESIGN_FIELDS, Scene, SoftDisk
 from optim.problem import DesignProblem
 
 KF = 0.073  # the paper gripper's spring [N·m/rad]
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "objects"
 D1 = DESIGN_FIELDS.index("distance_m")
 
 
@@ -180,9 +183,10 @@ def test_a_strawberry_design_survives_its_placement_tolerance():
     """+-1.5 mm both ways: the robust optimum holds within the strain limit at every
     displacement of a 3 x 3 grid inside the box (checked independently, at half and full
     tolerance), and its worst case beats the nominal optimum's worst case."""
-    disk = SoftDisk(0.015, 0.0, 2e5, 0.45, 0.03)
-    mu, limit, tol = 0.6, 0.06, 0.0015
-    sc = Scenarios.of(placement_tolerance_m=tol)
+    spec = load_object(EXAMPLES / "strawberry.toml")
+    disk, mu, limit = spec.disk, spec.friction_coefficient, spec.strain_limit
+    tol = spec.scenarios.placement_along_m
+    sc = spec.scenarios
     robust = DesignProblem(disk, limit, mu, scenarios=sc)
     nominal = DesignProblem(disk, limit, mu)
     best_robust = _optimize(robust, 600).best_design
@@ -200,17 +204,16 @@ def test_a_strawberry_design_survives_its_placement_tolerance():
 
 
 def test_one_design_serves_tomatoes_of_a_range():
-    """Tomatoes of 10-15 mm and 100-300 kPa: one design holds within the strain limit on a
-    3 x 3 grid of the ranges."""
-    spec = parse_object({"object": {"radius_m": [0.010, 0.015], "youngs_modulus_pa": [1e5, 3e5],
-                                    "poisson_ratio": 0.45, "thickness_m": 0.02,
-                                    "strain_limit": 0.08}}, "tomatoes.toml")
-    problem = DesignProblem(spec.disk, 0.08, 0.5, scenarios=spec.scenarios)
-    best = _optimize(problem, 600).best_design
-    disks = [SoftDisk(r, 0.0, e, 0.45, 0.02) for r in (0.010, 0.0125, 0.015)
+    """Tomatoes of 10-15 mm and 100-300 kPa (examples/objects/tomatoes_10_15mm.toml): one
+    design holds within the strain limit on a 3 x 3 grid of the ranges."""
+    spec = load_object(EXAMPLES / "tomatoes_10_15mm.toml")
+    limit, mu = spec.strain_limit, spec.friction_coefficient
+    problem = DesignProblem(spec.disk, limit, mu, scenarios=spec.scenarios)
+    best = _optimize(problem, 1500).best_design
+    disks = [replace(spec.disk, radius_m=r, youngs_modulus_pa=e) for r in (0.010, 0.0125, 0.015)
              for e in (1e5, 2e5, 3e5)]
-    out = _grid_check(best, problem.disk, problem.torsion_stiffness_nm_per_rad, 0.5, 0.08,
+    out = _grid_check(best, problem.disk, problem.torsion_stiffness_nm_per_rad, mu, limit,
                       [(0.0, 0.0)], disks)
     assert out["holds"].all()
-    assert (out["peak_compression"] <= 0.08).all()
+    assert (out["peak_compression"] <= limit).all()
     assert math.isfinite(problem.best_reward)

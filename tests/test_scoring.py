@@ -63,9 +63,11 @@ def test_reward_terms_follow_their_formulas(batch):
     floor = w.deform * w.deform_cap
     assert hold.sum() >= 20 and slip.sum() >= 20 and miss_row.sum() >= 5
     np.testing.assert_array_equal(out["holds"], hold)
-    contact = np.where(hold, w.contact * np.minimum(out["contact_score"], w.contact_cap), 0.0)
-    deform = np.where(hold, -w.deform * np.minimum(out["peak_compression"]
-                                                   / out["strain_limit"], w.deform_cap), 0.0)
+    q = out["peak_compression"] / out["strain_limit"]
+    within = hold & (q <= 1.0)
+    contact = np.where(within, w.contact * np.minimum(out["contact_score"], w.contact_cap), 0.0)
+    crush = -w.deform - (floor - w.deform) * (q - 1.0) / q  # x / (1 + x) with x = q - 1
+    deform = np.where(within, -w.deform * q, np.where(hold, crush, 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         excess = need / mu - 1.0
         bounded = np.where(np.isfinite(excess), excess / (1.0 + excess), 1.0)

@@ -514,8 +514,9 @@ def _pressure_shift(normals, points, forces, count, length_scale, half_width):
     continuously to nothing as a contact is released (the points' span jumps by a spacing when
     one point more is pressed)."""
     low = high = 0.0
-    # contacts of one face lie on its line to the solver's tolerance on the gap (~1e-8 r)
-    tol = 1e-6 * length_scale
+    # contacts of one face lie on its line to the solver's tolerance on the gap; two faces of
+    # one normal lie far apart (a finger has one gripping face)
+    tol = 1e-3 * length_scale
     for i in range(count):
         if not forces[i] > 0.0:
             continue
