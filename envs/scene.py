@@ -171,11 +171,10 @@ class SoftDisk:
         Density ``rho`` of the object [kg/m^3], > 0: its mass ``rho pi r^2 t`` is the payload
         a grasp must carry (:meth:`payload_n`). Default 50, the paper's soft foam
         (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`); soft tissue ~1060, fruit
-        950-1050, silicone ~1100.
-
-    A radius, thickness, modulus or density outside the plausible range of a graspable object
-    (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit) gives
-    a :class:`~envs.validation.UnitSlipWarning` naming the likely unit.
+        950-1050, silicone ~1100. A radius, thickness, modulus or density outside the
+        plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
+        most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
+        naming the likely unit.
     """
 
     radius_m: float
