@@ -23,17 +23,42 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .model.contact_width import (
-    FLAT_FACE_CURVATURE_PER_M,
-    contact_share,
-    hertz_arc_coefficient,
-    relative_radius_m,
+from .batch_inputs import (  # noqa: F401 (re-exported: the layouts of the batch's tables)
+    DISK_AREA,
+    DISK_OFFSET_X,
+    DISK_POISSON,
+    DISK_RADIUS,
+    DISK_RATIO,
+    DISK_SCALE,
+    DISK_THICKNESS,
+    DISK_YOUNG,
+    N_DISK,
+    N_NEEDS,
+    NEED_FRICTION,
+    NEED_PAYLOAD,
+    NEED_STRAIN,
+    _design_table,
+    _disk_table,
+    _joint_springs,
+    _payloads,
+    _per_row,
 )
+from .batch_metrics import (  # noqa: F401 (re-exported: the metrics' definitions)
+    METRIC_KEYS,
+    _columns,
+    _empty_output,
+    _fill_fem,
+    _fill_group,
+    _fill_holding,
+    _soft_disk,
+    finger_gaps_m,
+    grip_share,
+    rest_violation,
+)
+from .design_space import DesignBounds  # noqa: F401
 from .model.defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_FRICTION_COEFFICIENT,
@@ -43,52 +68,18 @@ from .model.defaults import (
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
     MAX_FRICTION_COEFFICIENT,
-    MAX_PAYLOAD_FACTOR,
-    PAPER_TORSION_STIFFNESS_REL,
 )
 from .model.family import resolve_model, triangle_range
-from .model.geometry import bar_distance
-from .model.holding import (
-    H_GRIP,
-    H_LIMIT,
-    H_LIMIT_ANGLE,
-    H_MU,
-    H_PAYLOAD,
-    H_PIN_MOMENT,
-    H_PIN_X,
-    H_PIN_Y,
-    N_HOLD,
-)
-from .model.problem import REST_OK, SceneColumns, _clearance, rest_codes
+from .model.problem import REST_OK, rest_codes
+from .reward import RewardWeights, add_reward  # noqa: F401
 from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
-    RELATIVE_FIELDS,
-    SPRING_TWICE,
     Design,
-    SoftDisk,
-    design_from_relative,
-    relative_from_design,
 )
-from .scoring import (
-    N_WEIGHTS,
-    W_CONTACT,
-    W_CONTACT_CAP,
-    W_DEFORM,
-    W_DEFORM_CAP,
-    W_FAIL,
-    W_GAP,
-    W_INVALID,
-    W_MISS,
-    W_SLIP,
-    W_VIOLATION,
-    grip_share_rows,
-    psm_metrics_rows,
-    reward_rows,
-)
-from .solver.pipeline import BatchSolution, solve_columns
-from .solver.status import FEM_FAILED, NOT_SOLVED, OK
-from .validation import check_integer, check_range
+from .solver.pipeline import solve_columns
+from .solver.status import NOT_SOLVED
+from .validation import check_integer
 
 __all__ = [
     "DESIGN_FIELDS",
@@ -106,597 +97,6 @@ __all__ = [
 
 DEFAULT_CHUNK_SIZE = 256
 FIDELITIES = ("psm", "fem")
-TORQUE_COLUMN = DESIGN_FIELDS.index("torque_nm")
-DISTANCE_COLUMN = DESIGN_FIELDS.index("distance_m")
-
-# Keys of the dict returned by evaluate_designs, with their dtype and trailing shape.
-METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
-    "valid_at_rest": (np.bool_, ()),
-    "converged": (np.bool_, ()),
-    "stable": (np.bool_, ()),
-    "status": (np.int64, ()),
-    "iterations": (np.int64, ()),
-    "n_triangles": (np.int64, ()),
-    "jaw_angles_rad": (np.float64, (2,)),
-    "n_contacts": (np.int64, (2,)),
-    "touching": (np.bool_, (2,)),
-    "total_force_n": (np.float64, (2,)),
-    "contact_score": (np.float64, ()),
-    "grip_share": (np.float64, ()),
-    "peak_strain": (np.float64, ()),
-    "peak_log_strain": (np.float64, ()),
-    "max_displacement_ratio": (np.float64, ()),
-    "peak_compression": (np.float64, ()),
-    "strain_limit": (np.float64, ()),
-    "pin_force_n": (np.float64, (2,)),
-    "pin_moment_nm": (np.float64, ()),
-    "required_friction": (np.float64, ()),
-    "payload_n": (np.float64, ()),
-    "grip_force_n": (np.float64, ()),
-    "friction_limit": (np.int64, ()),
-    "friction_limit_angle_rad": (np.float64, ()),
-    "friction_coefficient": (np.float64, ()),
-    "holds": (np.bool_, ()),
-    "finger_gap_m": (np.float64, (2,)),
-    "rest_violation": (np.float64, ()),
-    "reward_contact": (np.float64, ()),
-    "reward_deform": (np.float64, ()),
-    "penalty_slip": (np.float64, ()),
-    "penalty_miss": (np.float64, ()),
-    "penalty_gap": (np.float64, ()),
-    "penalty_invalid": (np.float64, ()),
-    "penalty_fail": (np.float64, ()),
-    "reward": (np.float64, ()),
-}
-
-
-def _scales(disks, batch: int | None) -> tuple[np.ndarray, np.ndarray]:
-    """Radius [m] and torque unit ``s E t r^2`` [N·m] of one disk (scalars) or of a sequence of
-    ``batch`` disks (arrays (batch,))."""
-    if isinstance(disks, SoftDisk):
-        return np.float64(disks.radius_m), np.float64(disks.torque_unit_nm)
-    if not isinstance(disks, Sequence) or (batch is not None and len(disks) != batch):
-        raise ValueError(f"disks must be a SoftDisk or a sequence of {batch} SoftDisks, got "
-                         f"{type(disks).__name__}")
-    for i, d in enumerate(disks):
-        if not isinstance(d, SoftDisk):
-            raise ValueError(f"disks[{i}] must be a SoftDisk, got {type(d).__name__}")
-    return (np.array([d.radius_m for d in disks], dtype=np.float64),
-            np.array([d.torque_unit_nm for d in disks], dtype=np.float64))
-
-
-# the relative columns the joints-apart option couples (DesignBounds.joints_apart)
-_OFFSET_R = RELATIVE_FIELDS.index("joint_offset_r")
-_WIDTH_R = RELATIVE_FIELDS.index("finger_width_r")
-
-
-@dataclass(frozen=True)
-class DesignBounds:
-    """Box of the design space relative to the object; maps actions in [-1, 1] to designs.
-
-    The box is in the units of :data:`envs.scene.RELATIVE_FIELDS`: finger length, joint offset
-    and finger width in disk radii, the rest angle in radians, the torque in the disk's torque
-    unit ``s E t r^2`` (:attr:`~envs.scene.SoftDisk.torque_unit_nm`) and, for the placement, the
-    rest clearance between the disk and the gripping faces in radii
-    (:func:`~envs.scene.design_from_relative`). The model is invariant under this scaling, so
-    a box means the same for every object: the paper's foam disks and the forceps' 2 mm TPU
-    beads alike. Every design of the default box is valid at rest (its clearance is positive),
-    and most of its random designs grasp with both fingers, on every preset.
-
-    | # | field | meaning | low | high |
-    |---|---|---|---|---|
-    | 0 | ``finger_length_r`` | finger length ``l / r`` | 1.5 | 8 |
-    | 1 | ``rest_angle_rad`` | rest angle ``theta_a0`` | 10 deg | 60 deg |
-    | 2 | ``joint_offset_r`` | joint offset ``d_3 / r`` | 0 | 0.6 |
-    | 3 | ``finger_width_r`` | finger width ``w / r`` | 0.05 | 0.4 |
-    | 4 | ``torque_rel`` | ``T_a / (s E t r^2)`` | 0 | 0.3 |
-    | 5 | ``rest_clearance_r`` | rest clearance / ``r`` | 0.005 | 1.2 |
-
-    The box holds the paper's grippers (``l / r`` = 2 to 4, 45 deg, clearance 0.01 to 0.02, the
-    paper's torques 0.05 to 0.5 N·m at 0.005 to 0.2 units) and the forceps (``l / r`` = 5.3 to 8,
-    15 deg, clearance 0.6 to 1.2).
-
-    With ``joints_apart`` the joint offset's coordinate spans ``[max(low, w / 2), high]``
-    instead of ``[low, high]`` (``w`` the row's own finger width), so every design keeps
-    ``d_3 >= w / 2``: each finger's joint end, a square end of half-width ``w / 2``, sweeps a
-    circle of radius ``w / 2`` about its joint as the finger turns, and with ``d_3 >= w / 2`` the
-    two circles do not overlap, so the fingers can be built side by side in one plane. Without
-    it (the default) a design may have ``d_3 < w / 2``, fingers that overlap at the joints and
-    must be built stacked, one above the other, like forceps jaws. The box stays ``[-1, 1]^6``
-    either way: only the map from it changes.
-
-    Parameters
-    ----------
-    low, high
-        Lower and upper bound of each relative column, ``low < high``.
-    joints_apart
-        Keep the joints at least half a finger width from the axis (``d_3 >= w / 2``); needs
-        ``high`` of ``joint_offset_r`` at least half ``high`` of ``finger_width_r``.
-    """
-
-    low: tuple[float, ...] = (1.5, math.radians(10.0), 0.0, 0.05, 0.0, 0.005)
-    high: tuple[float, ...] = (8.0, math.radians(60.0), 0.6, 0.4, 0.3, 1.2)
-    joints_apart: bool = False
-
-    def __post_init__(self) -> None:
-        for name in ("low", "high"):
-            given = tuple(getattr(self, name))
-            if len(given) != N_DESIGN:
-                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(given)}")
-            # checked as given, not after float(): "0.2" and True are not bounds
-            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v)
-                         for field_name, v in zip(RELATIVE_FIELDS, given, strict=True))
-            object.__setattr__(self, name, vals)
-        for field_name, lo, hi in zip(RELATIVE_FIELDS, self.low, self.high, strict=True):
-            if not lo < hi:
-                raise ValueError(
-                    f"DesignBounds for {field_name}: low = {lo!r} must be smaller than "
-                    f"high = {hi!r}"
-                )
-        if not isinstance(self.joints_apart, bool):
-            raise ValueError(f"DesignBounds.joints_apart must be True or False, got "
-                             f"{self.joints_apart!r}")
-        if self.joints_apart and self.high[_OFFSET_R] < self.high[_WIDTH_R] / 2:
-            raise ValueError(
-                f"DesignBounds with joints_apart: high joint_offset_r = {self.high[_OFFSET_R]!r}"
-                f" must be at least half of high finger_width_r = {self.high[_WIDTH_R]!r}, so "
-                f"that d_3 >= w / 2 has room")
-
-    @property
-    def low_array(self) -> np.ndarray:
-        """Lower bounds (relative units) as a float64 array (6,)."""
-        return np.array(self.low, dtype=np.float64)
-
-    @property
-    def high_array(self) -> np.ndarray:
-        """Upper bounds (relative units) as a float64 array (6,)."""
-        return np.array(self.high, dtype=np.float64)
-
-    def _offset_floor(self, width_r: np.ndarray) -> np.ndarray:
-        """Lowest relative joint offset of rows of relative finger width ``width_r``: the
-        box's, or with :attr:`joints_apart` at least half the width."""
-        return np.maximum(self.low[_OFFSET_R], 0.5 * width_r)
-
-    def relative(self, action) -> np.ndarray:
-        """Map normalized actions in [-1, 1] (shape (..., 6)) to relative designs."""
-        a = np.asarray(action, dtype=np.float64)
-        lo, hi = self.low_array, self.high_array
-        rel = lo + 0.5 * (a + 1.0) * (hi - lo)
-        if self.joints_apart:
-            floor = self._offset_floor(rel[..., _WIDTH_R])
-            rel[..., _OFFSET_R] = floor + 0.5 * (a[..., _OFFSET_R] + 1.0) * (
-                hi[_OFFSET_R] - floor)
-        return rel
-
-    def scale(self, action, disks) -> np.ndarray:
-        """Map normalized actions (shape (B, 6) or (6,)) to SI designs for their objects.
-
-        Parameters
-        ----------
-        action
-            Normalized actions in [-1, 1].
-        disks
-            One :class:`~envs.scene.SoftDisk` for every row or a sequence of one per row (its
-            radius and torque unit set the scale; its ``distance_m`` is not used).
-        """
-        a = np.asarray(action, dtype=np.float64)
-        radius, unit = _scales(disks, a.shape[0] if a.ndim == 2 else None)
-        return design_from_relative(self.relative(a), radius, unit)
-
-    def unscale(self, designs, disks) -> np.ndarray:
-        """Map SI designs (shape (B, 6) or (6,)) to normalized actions (inverse of
-        :meth:`scale` where the placement was not raised to 0)."""
-        d = np.asarray(designs, dtype=np.float64)
-        radius, unit = _scales(disks, d.shape[0] if d.ndim == 2 else None)
-        rel = relative_from_design(d, radius, unit)
-        lo, hi = self.low_array, self.high_array
-        action = 2.0 * (rel - lo) / (hi - lo) - 1.0
-        if self.joints_apart:
-            floor = self._offset_floor(rel[..., _WIDTH_R])
-            span = hi[_OFFSET_R] - floor
-            # a finger as wide as the box allows leaves one joint offset: its middle coordinate
-            share = np.divide(rel[..., _OFFSET_R] - floor, span, out=np.full_like(span, 0.5),
-                              where=span > 0)
-            action[..., _OFFSET_R] = 2.0 * share - 1.0
-        return action
-
-    def sample(self, rng: np.random.Generator, size: int, disks) -> np.ndarray:
-        """Draw ``size`` SI designs uniformly in the box for the object(s), shape (size, 6)."""
-        return self.scale(rng.uniform(-1.0, 1.0, size=(int(size), N_DESIGN)), disks)
-
-
-@dataclass(frozen=True)
-class RewardWeights:
-    """Weights of the named reward terms of :func:`evaluate_designs`.
-
-    The reward ranks outcomes in tiers, each graded so that an optimizer is pointed towards
-    the tier above, and every outcome of a tier below every outcome of the tiers above:
-
-    1. a grasp that **holds** (converged, both fingers touching, ``required_friction`` within
-       the object's friction coefficient ``mu``) within the strain limit (``q =
-       peak_compression / strain_limit <= 1``):
-       ``contact * min(contact_score, contact_cap) - deform * q``, in ``[-deform, contact *
-       contact_cap]``; one that holds but **crushes** (``q > 1``, beyond the strain limit):
-       ``-deform - (F - deform) x / (1 + x)``, ``x = q - 1``, in ``(-F, -deform)``, below
-       every hold within the limit (a design must not crush its object in any scenario), with
-       ``F = deform * deform_cap`` (-1 with the defaults);
-    2. a grasp that would **slip** (it needs more friction than ``mu``):
-       ``-F - slip * x / (1 + x)``, ``x = required_friction / mu - 1`` (``x / (1 + x)`` = 1
-       for an infinite need), in ``[-F - slip, -F)``: the less friction it needs, the
-       higher;
-    3. a **miss** (converged, a finger not touching the object):
-       ``-F - slip - miss * m - gap * g / (1 + g)`` with ``m`` the fingers not touching and
-       ``g`` the largest gap of such a finger to the disk, in radii: closer fingers score
-       higher, in ``(-F - slip - 2 miss - gap, -F - slip - miss]``;
-    4. a solver **failure** on a valid design: ``-fail``, at most the worst miss;
-    5. a design **invalid** at rest: ``-invalid - violation * v / (1 + v)``, with ``v`` how far
-       it is from valid (overlap depth and the other violated limits, in radii or radians;
-       :func:`rest_violation`); ``invalid`` at least ``fail``.
-
-    With the defaults: holds within the strain limit ``[-0.25, 0.5]``, crushes ``(-1, -0.25)``,
-    slips ``[-1.5, -1)``, misses ``(-3, -2]``, a failure -3, invalid designs ``[-4.5, -3.5]``.
-    Weights that would break the order are rejected.
-
-    Parameters
-    ----------
-    contact
-        Weight of the contact score (fraction of the contour in contact) [-].
-    deform
-        Weight of the peak compression (the largest shortening of a radius by the fingers,
-        over r: how deep the grasp presses in) relative to the object's strain limit [-].
-    miss
-        Penalty per finger that does not touch the disk [-], > 0.
-    gap
-        Weight of the normalised gap ``g / (1 + g)`` of the farthest finger that does not
-        touch the disk (``g`` its distance to the undeformed disk in the grasp, in radii) [-].
-    invalid
-        Penalty for a design that is invalid at rest (fingers overlapping the disk, ...) [-],
-        at least ``fail``.
-    violation
-        Weight of the normalised violation ``v / (1 + v)`` of an invalid design, added to
-        ``invalid`` [-].
-    fail
-        Penalty when the solver did not converge [-], at least ``deform * deform_cap + slip
-        + 2 miss + gap``.
-    contact_cap
-        Cap of the contact score [-], > 0.
-    deform_cap
-        ``F / deform`` [-], > 1: the floor ``-F`` of the crushing grasps (keeps the reward
-        bounded).
-    slip
-        Width of the tier of grasps that would slip [-], > 0: how much a grasp needing
-        unlimited friction scores below one needing just the object's coefficient.
-    """
-
-    contact: float = 1.0
-    deform: float = 0.25
-    miss: float = 0.5
-    gap: float = 0.5
-    invalid: float = 3.5
-    violation: float = 1.0
-    fail: float = 3.0
-    contact_cap: float = 0.5
-    deform_cap: float = 4.0
-    slip: float = 0.5
-
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            low_open = f.name.endswith("_cap") or f.name in ("slip", "miss")
-            low = 1.0 if f.name == "deform_cap" else 0.0
-            v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), low, math.inf,
-                            low_open=low_open)
-            object.__setattr__(self, f.name, v)
-        worst_valid = self.deform * self.deform_cap + self.slip + 2 * self.miss + self.gap
-        if self.fail < worst_valid:
-            raise ValueError(
-                f"RewardWeights.fail = {self.fail!r} must be at least deform * deform_cap + "
-                f"slip + 2 miss + gap = {worst_valid!r}, so that every solver failure scores "
-                "below every converged design")
-        if self.invalid < self.fail:
-            raise ValueError(
-                f"RewardWeights.invalid = {self.invalid!r} must be at least fail = "
-                f"{self.fail!r}, so that every invalid design scores below every valid one")
-        weights = np.empty(N_WEIGHTS)
-        for name, k in (("contact", W_CONTACT), ("contact_cap", W_CONTACT_CAP),
-                        ("deform", W_DEFORM), ("deform_cap", W_DEFORM_CAP), ("miss", W_MISS),
-                        ("gap", W_GAP), ("invalid", W_INVALID), ("violation", W_VIOLATION),
-                        ("fail", W_FAIL), ("slip", W_SLIP)):
-            weights[k] = getattr(self, name)
-        weights.flags.writeable = False
-        object.__setattr__(self, "_vector", weights)
-
-    def vector(self) -> np.ndarray:
-        """The weights in the layout of :func:`envs.scoring.reward_rows` (read-only)."""
-        return self._vector
-
-
-# ---------------------------------------------------------------------------------------------
-# input normalization
-
-
-def _design_table(designs) -> np.ndarray:
-    if isinstance(designs, Design):
-        return designs.to_array()[None, :]
-    if isinstance(designs, Sequence) and len(designs) > 0 and isinstance(designs[0], Design):
-        if not all(isinstance(d, Design) for d in designs):
-            raise ValueError("designs mixes Design objects and other values")
-        return np.stack([d.to_array() for d in designs])
-    try:
-        arr = np.array(designs, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"designs must be a (B, {N_DESIGN}) array of numbers: {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != N_DESIGN:
-        raise ValueError(
-            f"designs must have shape (B, {N_DESIGN}) with columns {DESIGN_FIELDS}, "
-            f"got {arr.shape} (use designs[None] for a single row)"
-        )
-    return arr
-
-
-# columns of :func:`_disk_table`
-(DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE, DISK_RATIO, DISK_AREA,
- DISK_OFFSET_X) = range(8)
-N_DISK = 8
-# columns of the objects' requirements: strain limit, friction coefficient, payload [N]
-NEED_STRAIN, NEED_FRICTION, NEED_PAYLOAD = range(3)
-N_NEEDS = 3
-
-
-def _disk_table(disks, batch: int) -> np.ndarray:
-    """Columns (``DISK_*``): radius, Young's modulus, Poisson ratio, thickness, stiffness scale,
-    contour stiffness ratio, area stiffness scale, the centre's lateral offset."""
-    if isinstance(disks, SoftDisk):
-        disks = [disks] * batch
-    elif not isinstance(disks, Sequence) or len(disks) != batch:
-        raise ValueError(f"disks must be a SoftDisk or a sequence of {batch} SoftDisks")
-    rows = []
-    for i, d in enumerate(disks):
-        if not isinstance(d, SoftDisk):
-            raise ValueError(f"disks[{i}] must be a SoftDisk, got {type(d).__name__}")
-        rows.append((d.radius_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
-                     d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
-                     d.offset_x_m))
-    return np.array(rows, dtype=np.float64).reshape(batch, N_DISK)
-
-
-def _payloads(disks, batch: int, factors) -> np.ndarray:
-    """The payload ``W = f rho pi r^2 t g`` [N] of every row (:meth:`SoftDisk.payload_n`)."""
-    f = _per_row("payload_factors", factors, batch, 0.0, MAX_PAYLOAD_FACTOR, low_open=False)
-    disks = [disks] * batch if isinstance(disks, SoftDisk) else disks
-    return np.array([d.payload_n(1.0) for d in disks], dtype=np.float64) * f
-
-
-def _per_row(name: str, value, batch: int, low: float, high: float, *, low_open: bool,
-             integer: bool = False) -> np.ndarray:
-    """A scalar or one value per row, each validated (the message names the row)."""
-    arr = np.asarray(value, dtype=object if integer else None)
-    if arr.ndim == 0:
-        one = (check_integer(name, arr.item(), int(low), int(high)) if integer
-               else check_range(name, arr.item(), low, high, low_open=low_open))
-        return np.full(batch, one, dtype=np.int64 if integer else np.float64)
-    if arr.shape != (batch,):
-        raise ValueError(f"{name} must be a scalar or have shape ({batch},), got {arr.shape}")
-    if not integer and arr.dtype.kind in "fiu":
-        # a numeric column (a vector env's strain limits each step): checked as one array; the
-        # row loop below only runs to name the first bad row
-        vals = arr.astype(np.float64)
-        with np.errstate(invalid="ignore"):
-            inside = (vals > low if low_open else vals >= low) & (vals <= high)
-        if np.all(inside & np.isfinite(vals)):
-            return vals
-    out = np.empty(batch, dtype=np.int64 if integer else np.float64)
-    for i, v in enumerate(arr.tolist()):
-        out[i] = (check_integer(f"{name}[{i}]", v, int(low), int(high)) if integer
-                  else check_range(f"{name}[{i}]", v, low, high, low_open=low_open))
-    return out
-
-
-def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
-    """The joint spring ``k_f`` [N·m/rad] of every row: an absolute one as given, a relative
-    one (default :data:`PAPER_TORSION_STIFFNESS_REL`) times the row's torque unit ``s E t r^2``
-    with the disk's own scale (see :func:`envs.scene.joint_spring`)."""
-    if absolute is not None:
-        if rel is not None:
-            raise ValueError(SPRING_TWICE)
-        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0, math.inf,
-                        low_open=True)
-    rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,
-                   batch, 0.0, math.inf, low_open=True)
-    unit = (disk[:, DISK_SCALE] * disk[:, DISK_YOUNG] * disk[:, DISK_THICKNESS]
-            * disk[:, DISK_RADIUS] ** 2)
-    return rel * unit
-
-
-# ---------------------------------------------------------------------------------------------
-# scenes, solve and metrics
-
-
-def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
-    """Scene columns of design rows (the one Design -> Scene mapping, see
-    :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's; the disk keeps
-    its lateral offset (a placement of the object, not part of the design)."""
-    ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des.T)
-    radius, young, nu, thick, scale, ratio, area, offset = (np.ascontiguousarray(c)
-                                                            for c in disk.T)
-    return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, area,
-                        torque, offset)
-
-
-def _empty_output(batch: int) -> dict[str, np.ndarray]:
-    return {k: np.zeros((batch, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
-
-
-def grip_share(cols: SceneColumns, jaw_angles_rad: np.ndarray, stop_torques_nm: np.ndarray
-               ) -> np.ndarray:
-    """Share of the actuation torque that grips the object, the smaller of the two fingers',
-    in [0, 1], shape (B,).
-
-    By a finger's moment balance the object receives ``T_a - k_f (theta_a0 - theta) - M_stop``:
-    what the torsion spring and the joint stop take does not grip. A design that tunes the
-    torque so that the spring stops the fingers just at the object (contact forces of 1e-7 N)
-    or that closes the jaws on their stops has a share near 0 (CMA-ES found such designs when
-    contact was counted by force > 0 alone); a squeeze with little travel keeps nearly all.
-    """
-    angles = np.ascontiguousarray(jaw_angles_rad, dtype=np.float64)
-    stops = np.ascontiguousarray(stop_torques_nm, dtype=np.float64)
-    for name, arr in (("jaw_angles_rad", angles), ("stop_torques_nm", stops)):
-        # the compiled loop does not check bounds: a short array would be read past its end
-        if arr.shape != (cols.size, 2):
-            raise ValueError(f"{name} must have shape ({cols.size}, 2) (one row a scene, one "
-                             f"column a finger), got {arr.shape}")
-    out = np.empty(cols.size)
-    grip_share_rows(cols.torque_nm, cols.torsion_stiffness_nm_per_rad, cols.rest_angle_rad,
-                    angles, stops, out)
-    return out
-
-
-def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution, n: int,
-                cols: SceneColumns, material_scale: np.ndarray) -> None:
-    """Write the metrics of solved rows (failed rows keep zeros: finite, the fail penalty says
-    what happened; :func:`envs.scoring.psm_metrics_rows`); ``material_scale``: the rows' own
-    disk scale, without the member's calibration factor that ``cols.stiffness_scale`` carries
-    (the contact width takes the material's modulus)."""
-    psm_metrics_rows(
-        rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
-        sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm,
-        sol.peak_strain, sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression,
-        cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
-        cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
-        material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
-        cols.rest_angle_rad, out["status"], out["converged"], out["iterations"], out["stable"],
-        out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
-        out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
-        out["max_displacement_ratio"], out["peak_compression"])
-    ok = rows[out["converged"][rows]]
-    done = out["converged"][rows]
-    _fill_holding(out, ok, sol.holding[done])
-
-
-def _fill_holding(out: dict[str, np.ndarray], rows: np.ndarray, hold: np.ndarray) -> None:
-    """Write the holding rows (layout ``H_*``) of ``rows``; the limit's angle 0 where no
-    in-plane payload sets the friction (the outputs are never NaN)."""
-    out["pin_force_n"][rows] = hold[:, H_PIN_X : H_PIN_Y + 1]
-    out["pin_moment_nm"][rows] = hold[:, H_PIN_MOMENT]
-    out["required_friction"][rows] = hold[:, H_MU]
-    out["payload_n"][rows] = hold[:, H_PAYLOAD]
-    out["grip_force_n"][rows] = hold[:, H_GRIP]
-    out["friction_limit"][rows] = hold[:, H_LIMIT].astype(np.int64)
-    out["friction_limit_angle_rad"][rows] = np.nan_to_num(hold[:, H_LIMIT_ANGLE])
-
-
-def rest_violation(cols: SceneColumns) -> np.ndarray:
-    """How far each scene is from being valid at rest, >= 0 (0 where it is valid), shape (B,).
-
-    The sum of every violated limit of :func:`envs.model.problem.rest_codes`, lengths in disk
-    radii, angles in radians, the torque in the disk's torque unit ``s E t r^2``: the depth of
-    the fingers' overlap with the disk, how far the disk centre lies behind a gripping face, how
-    much wider than the disk the fingers are, how far a gripper field is out of its range. A
-    scene exactly on a limit is invalid with violation 0; a non-finite value gives ``inf``.
-    """
-    r = cols.radius_m
-    unit = cols.stiffness_scale * cols.youngs_modulus_pa * cols.thickness_m * r * r
-    ln, th0, d3, w = (cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
-                      cols.finger_width_m)
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        front, clearance = _clearance(cols)
-        parts = (
-            np.maximum(0.0, -clearance) / r,  # overlap depth
-            np.maximum(0.0, -front) / r,  # centre behind a gripping face
-            np.maximum(0.0, w - 2 * r) / r,  # fingers wider than the disk
-            np.maximum(0.0, -ln) / r,
-            np.maximum(0.0, -th0) + np.maximum(0.0, th0 - math.pi / 2),
-            np.maximum(0.0, -d3) / r,
-            np.maximum(0.0, -w) / r + np.maximum(0.0, w - ln) / r,
-            np.maximum(0.0, -cols.torque_nm) / unit,
-        )
-        total = np.sum(parts, axis=0)
-    return np.where(np.isfinite(total), total, math.inf)
-
-
-def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndarray,
-                  offset_x_m=0.0) -> np.ndarray:
-    """Distance from each finger bar to the undeformed disk at given jaw angles [m], (B, 2).
-
-    0 where a bar reaches into the disk. Used for the fingers that do not touch the disk in a
-    grasp: how far they are from closing on it (the disk centre is fixed, so the undeformed
-    circle is where the fingers would meet it). ``offset_x_m``: the centre's lateral offset
-    ``x_c`` [m], scalar or (B,); the centre is at ``(x_c, d_1 + r)``.
-    """
-    ln, _, d3, w, _, d1 = (des[:, k] for k in range(N_DESIGN))
-    centre_y = d1 + radius_m
-    out = np.empty((des.shape[0], 2))
-    for side, centre_x in enumerate((offset_x_m, -np.asarray(offset_x_m))):
-        # frame of the right finger; the left one is its mirror image about the axis, which
-        # sees the centre mirrored too
-        s, c = np.sin(jaw_angles_rad[:, side]), np.cos(jaw_angles_rad[:, side])
-        along = s * (centre_x - d3) + c * centre_y
-        across = -c * (centre_x - d3) + s * centre_y
-        out[:, side] = np.maximum(0.0, bar_distance(along, across, ln, w) - radius_m)
-    return out
-
-
-def _soft_disk(row: np.ndarray) -> SoftDisk:
-    """The disk of a row of :func:`_disk_table` (its distance ``d_1`` comes from the design)."""
-    radius, young, nu, thick, scale, ratio, area, offset = row.tolist()
-    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
-
-
-def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
-              kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray
-              ) -> None:
-    """Solve the rows with the finite-element reference and write the same metrics as
-    :func:`_fill_group` does for the point-spring model (same definitions, see
-    :func:`evaluate_designs`)."""
-    from .fem.designs import fem_design_grasps, fem_metrics
-
-    scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
-              for i in rows.tolist()]
-    fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings,
-                                        payloads_n=payload_n),
-                      disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
-                      disk[rows, DISK_OFFSET_X])
-    n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
-    # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
-    # with the physical E the FEM solves with); NaN (not converged) stays NaN
-    shares = np.empty(rows.size)
-    for i, d in enumerate(disk[rows]):
-        k = hertz_arc_coefficient(d[DISK_RADIUS], d[DISK_THICKNESS], d[DISK_YOUNG],
-                                  d[DISK_POISSON],
-                                  relative_radius_m(d[DISK_RADIUS], FLAT_FACE_CURVATURE_PER_M))
-        shares[i] = sum(contact_share(float(f), float(force), k) for f, force in
-                        zip(fem["contact_fractions"][i], fem["face_force_n"][i], strict=True))
-    with np.errstate(invalid="ignore"):
-        grip = grip_share(cols, fem["jaw_angles_rad"], fem["stop_torques_nm"])
-        metrics = {
-            "jaw_angles_rad": fem["jaw_angles_rad"],
-            "n_contacts": n_contacts,
-            "touching": (n_contacts > 0) | (fem["tip_forces_n"] > 0.0),
-            "total_force_n": fem["total_force_n"],
-            "contact_score": grip * shares,
-            "grip_share": grip,
-            "peak_strain": fem["peak_strain"],
-            "peak_log_strain": fem["peak_log_strain"],
-            "max_displacement_ratio": fem["max_displacement_ratio"],
-            "peak_compression": fem["peak_compression"],
-        }
-        hold = np.empty((rows.size, N_HOLD))
-        hold[:, H_PIN_X : H_PIN_Y + 1] = fem["pin_force_n"]
-        for k, key in ((H_PIN_MOMENT, "pin_moment_nm"), (H_MU, "required_friction"),
-                       (H_PAYLOAD, "payload_n"), (H_GRIP, "grip_force_n"),
-                       (H_LIMIT, "friction_limit"), (H_LIMIT_ANGLE, "friction_limit_angle_rad")):
-            hold[:, k] = fem[key]
-    # (an infinite required friction is an answer, one finger touching: not a failure)
-    floats = np.column_stack([np.reshape(v, (rows.size, -1)) for v in metrics.values()
-                              if v.dtype.kind == "f"] + [hold[:, H_PIN_X : H_PIN_MOMENT + 1]])
-    ok = fem["converged"] & np.isfinite(floats).all(axis=1)
-    out["status"][rows] = np.where(ok, OK, FEM_FAILED)
-    out["iterations"][rows] = fem["iterations"]
-    out["n_triangles"][rows] = fem["n_elements"]
-    out["stable"][rows] = ok  # Newton on the total energy with a descent line search
-    out["converged"][rows] = ok
-    for key, v in metrics.items():
-        out[key][rows[ok]] = v[ok]
-    _fill_holding(out, rows[ok], hold[ok])
 
 
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs: np.ndarray,
@@ -751,19 +151,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         out["finger_gap_m"][rows] = np.where(missing[rows], gaps, 0.0)
     out["holds"][:] = (out["converged"] & out["touching"].all(axis=1)
                        & (out["required_friction"] <= out["friction_coefficient"]))
-    _add_reward(out, valid, disk[:, DISK_RADIUS], weights)
+    add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
-
-
-def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndarray,
-                w: RewardWeights) -> None:
-    reward_rows(w.vector(), valid, out["converged"], out["contact_score"],
-                out["peak_compression"], out["strain_limit"], out["touching"],
-                out["finger_gap_m"], np.ascontiguousarray(radius_m, dtype=np.float64),
-                out["rest_violation"], out["required_friction"], out["friction_coefficient"],
-                out["reward_contact"], out["reward_deform"], out["penalty_slip"],
-                out["penalty_miss"], out["penalty_gap"], out["penalty_invalid"],
-                out["penalty_fail"], out["reward"])
 
 
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,

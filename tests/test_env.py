@@ -321,7 +321,8 @@ def test_every_default_scores_relative_designs_alike_on_objects_far_apart():
         by_batch = out["reward"]
         assert out["touching"].all(axis=1).mean() > 0.5  # grasps, not 64 misses scoring alike
         problem = DesignProblem(disk)
-        by_problem = problem.evaluate(a)["reward"]
+        # (the nominal payload: the search's evaluate judges it SEARCH_PAYLOAD_MARGIN heavier)
+        by_problem = problem.evaluate_physical(problem.to_physical(a))["reward"]
         env = GripperDesignEnv()
         fixed = {"disk": disk, "strain_limit": 0.1, "friction_coefficient": 0.5}
         env.reset(seed=0, options=fixed)
