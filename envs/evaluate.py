@@ -603,13 +603,12 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
 
 
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs: np.ndarray,
-                     kf: np.ndarray, leads: np.ndarray, weights: RewardWeights,
+                     kf: np.ndarray, weights: RewardWeights,
                      model: tuple[int, str, float] = (1, "spring", 1.0),
                      fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS
                      ) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
     ``needs``: each object's strain limit and friction coefficient (columns ``NEED_*``);
-    ``leads``: the row whose answer starts each row's solve (-1: none; checked);
     ``model``: rings, element and the factor of the member's calibration on the disks'
     stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``)."""
     batch = des.shape[0]
@@ -642,7 +641,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
-                            element=element, leads=_group_leads(leads, rows))
+                            element=element)
         _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -654,35 +653,6 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                        & (out["required_friction"] <= out["friction_coefficient"]))
     _add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
-
-
-def _group_leads(leads: np.ndarray, rows: np.ndarray) -> np.ndarray | None:
-    """The leads of the batch's ``rows`` as positions among them (-1 where a row has none or
-    its lead is not among them); ``None`` where no row has one."""
-    own = leads[rows]
-    if not np.any(own >= 0):
-        return None
-    position = np.full(leads.shape[0], -1, dtype=np.int64)
-    position[rows] = np.arange(rows.size)
-    return np.where(own >= 0, position[np.maximum(own, 0)], -1)
-
-
-def check_leads(leads, batch: int) -> np.ndarray:
-    """``leads`` of :func:`evaluate_designs` as (B,) int64, checked (-1 where ``None``)."""
-    if leads is None:
-        return np.full(batch, -1, dtype=np.int64)
-    arr = np.asarray(leads)
-    if arr.shape != (batch,) or not np.issubdtype(arr.dtype, np.integer):
-        raise ValueError(f"leads must be integers of shape ({batch},), got {arr.dtype} "
-                         f"{arr.shape}")
-    arr = arr.astype(np.int64)
-    if np.any((arr < -1) | (arr >= batch)):
-        raise ValueError(f"leads must be row indices in [-1, {batch - 1}] (-1: no lead)")
-    has = arr >= 0
-    if np.any(arr[has] == np.flatnonzero(has)) or np.any(arr[arr[has]] >= 0):
-        raise ValueError("leads: a row must not lead itself, and a lead row must have no "
-                         "lead (-1)")
-    return arr
 
 
 def _add_reward(out: dict[str, np.ndarray], valid: np.ndarray, radius_m: np.ndarray,
@@ -727,7 +697,6 @@ def evaluate_designs(
     calibrated: bool | None = None,
     fidelity: str = "psm",
     fem_rings: int = FEM_DESIGN_RINGS,
-    leads=None,
 ) -> dict[str, np.ndarray]:
     """Solve the grasp of every design and return its metrics and reward terms.
 
@@ -810,15 +779,6 @@ def evaluate_designs(
         ``n_triangles``, ``n_rings``, ``element`` and ``calibrated`` must be left ``None``.
     fem_rings
         Rings of the FEM mesh at ``fidelity="fem"``, in [2, 40].
-    leads
-        Warm starts between rows (``fidelity="psm"``): shape (B,) of integers, for each row
-        the row whose answer starts its solve, -1 for none (default ``None``: none). A lead
-        row must have no lead itself. For rows whose answers lie close (one design under
-        scenarios: :func:`envs.scenarios.evaluate_scenarios` leads each scenario by the
-        nominal one), in fewer iterations than from rest; a led row whose warm solve does not
-        end on a stable equilibrium is solved from rest after all
-        (:func:`envs.solver.pipeline.solve_led`). With an executor, a lead outside a row's
-        chunk is ignored.
 
     Returns
     -------
@@ -935,22 +895,17 @@ def evaluate_designs(
     if offsets_x_m is not None:
         disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
                                           math.inf, low_open=False)
-    lead = check_leads(leads, batch)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     if executor is None:
-        return _evaluate_arrays(des, disk, n_tri, needs, kf, lead, weights, model, fidelity,
+        return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
                                 fem_rings)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     starts = range(0, batch, int(chunk_size))
-    size = int(chunk_size)
-    # a lead outside the chunk is dropped; inside, it is renumbered from the chunk's start
-    chunks = [(*(a[s : s + size] for a in (des, disk, n_tri, needs, kf)),
-               np.where((lead[s : s + size] >= s) & (lead[s : s + size] < s + size),
-                        lead[s : s + size] - s, -1))
+    chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf))
               for s in starts]
     fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
                            fem_rings=fem_rings)

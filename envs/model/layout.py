@@ -84,10 +84,7 @@ I_STATIONARITY = 4  # stationarity residual / force scale
 I_CONTACT_GAP = 5  # largest |gap| of a loaded constraint
 I_MIN_GAP = 6  # smallest gap of a considered constraint
 I_INVERTED = 7  # fan triangles turned over
-# in: 1.0 asks the solve to polish the contact set of its warm multipliers first (a start
-# from a neighbouring scene's answer, envs.solver.pipeline.solve_led); out: left as given
-I_WARM = 8
-N_INFO = 9
+N_INFO = 8
 
 # constraint kinds
 KIND_FACE, KIND_CORNER, KIND_STOP = 0, 1, 2

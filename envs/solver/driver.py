@@ -22,7 +22,6 @@ from ..model.layout import (
     I_STABLE,
     I_STATIONARITY,
     I_STATUS,
-    I_WARM,
     KIND_CORNER,
     KIND_FACE,
     O_GAUGE,
@@ -155,8 +154,6 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
     """
     x_in = x.copy()
     lam_in = lam_face.copy()
-    lam_corner_in = lam_corner.copy()
-    warm = info[I_WARM]
     fast = opts.copy()
     fast[O_MAXIT] = opts[O_MAXIT] * FAST_BUDGET
     total = 0.0
@@ -167,12 +164,11 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
         if attempt > 0:
             x[:] = x_in
             lam_face[:, :] = lam_in
-            lam_corner[:, :, :] = lam_corner_in
         # flags as runtime values (n < 0 is False, n > 0 True): a literal True/False would
         # compile _solve_attempt and its callees once per value (assembly._spring_terms)
         _solve_attempt(n, prm_in, fast if attempt == 0 else opts, x, lam_face, lam_corner,
                        lam_stop, corner_cand, face_cand, info, float(max(attempt - 1, 0)),
-                       n < 0 if attempt == 0 else n > 0, warm > 0.0 and attempt == 0)
+                       n < 0 if attempt == 0 else n > 0)
         total += info[I_ITERATIONS]
         if attempt == 0:
             if info[I_STATUS] == OK and info[I_STABLE] == 1.0:
@@ -192,26 +188,13 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
         face_cand[:, :] = kept[5]
         info[:] = kept[6]
     info[I_ITERATIONS] = total
-    info[I_WARM] = warm
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _guess(kind, j, idx, n, lam_guess_face, lam_guess_corner):
-    """The warm-start multiplier of one constraint (0: none; the joint stops have none)."""
-    if kind == KIND_FACE:
-        return lam_guess_face[j, idx]
-    if kind == KIND_CORNER:
-        c = idx // n
-        return lam_guess_corner[j, c, idx - c * n]
-    return 0.0
-
-
-@njit(cache=True, error_model="numpy", _nrt=False)
-def _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale, lam_guess_face,
-                 lam_guess_corner, lam, gbuf):
+def _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale, lam_guess_face, lam, gbuf):
     """Initial barrier parameter and multipliers of a round at the start point ``xs``.
 
-    Warm-start face and corner multipliers (when given) set the barrier parameter from their
+    Warm-start face multipliers (when given) set the barrier parameter from their
     complementarity; otherwise a force scale does. Returns ``(mu0, feasible)``: the start must
     be strictly inside every considered constraint.
     """
@@ -221,9 +204,8 @@ def _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale, lam_guess_fa
     acc = 0.0
     cnt = 0
     for m in range(mcount):
-        guess = _guess(kinds[m], fj[m], fidx[m], n, lam_guess_face, lam_guess_corner)
-        if guess > 0.0:
-            acc += guess * gbuf[m]
+        if kinds[m] == KIND_FACE and lam_guess_face[fj[m], fidx[m]] > 0.0:
+            acc += lam_guess_face[fj[m], fidx[m]] * gbuf[m]
             cnt += 1
             have_warm = True
     if have_warm:
@@ -233,9 +215,8 @@ def _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale, lam_guess_fa
         if not gbuf[m] > 0.0:
             feasible = False
         lam[m] = mu0 / gbuf[m]
-        guess = _guess(kinds[m], fj[m], fidx[m], n, lam_guess_face, lam_guess_corner)
-        if guess > 0.0:
-            lam[m] = guess
+        if kinds[m] == KIND_FACE and lam_guess_face[fj[m], fidx[m]] > 0.0:
+            lam[m] = lam_guess_face[fj[m], fidx[m]]
     return mu0, feasible
 
 
@@ -334,43 +315,6 @@ def _finish(xs, n, prm, kinds, fj, fidx, mcount, lam, gbuf, fscale, status, lam_
     info[I_INVERTED] = inverted
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _warm_polish(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, fscale, face_cand,
-                 corner_cand, lam_guess_face, lam_guess_corner, work_it, gbuf, stable_out):
-    """Polish a warm start's contact set (the constraints with a warm multiplier) from
-    ``xs``, without the rotation gauge (the contacts hold the turn, as after its release).
-
-    Why: an interior point does not warm-start well (its barrier starts over from a central
-    path whatever the start), while the primal-dual active-set polish
-    (:func:`envs.solver.polish._polish_set`) from a neighbouring answer needs a few Newton
-    steps. Returns True for a stable polished equilibrium that touches nothing outside the
-    candidate sets (``xs``, ``lam`` then hold it); otherwise ``xs`` is ``x0`` again, the
-    gauge as it was, and the rounds solve it (the polish's iterations still count).
-    """
-    mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
-    active = np.zeros(mcount, dtype=np.bool_)
-    _all_gaps(xs, n, prm, kinds[:mcount], fj, fidx, gbuf)
-    any_active = False
-    for m in range(mcount):
-        guess = _guess(kinds[m], fj[m], fidx[m], n, lam_guess_face, lam_guess_corner)
-        active[m] = guess > 0.0
-        lam[m] = guess if guess > 0.0 else 0.0
-        any_active = any_active or active[m]
-    if not any_active:
-        return False
-    gauge = prm[P_GAUGE]
-    prm[P_GAUGE] = 0.0
-    ok = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
-                     active, work_it, gbuf, stable_out) == OK
-    if ok and stable_out[0] and not _grow_candidates(xs, x0, n, prm, face_cand, corner_cand,
-                                                       False, n < 0):
-        return True
-    prm[P_GAUGE] = gauge
-    for d in range(xs.shape[0]):
-        xs[d] = x0[d]
-    return False
-
-
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face):
     """Keep the face multipliers of a round as the next round's warm start."""
@@ -381,7 +325,7 @@ def _keep_face_guess(lam, kinds, fj, fidx, mcount, lam_guess_face):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
-                   info, policy, plain, warm):
+                   info, policy, plain):
     """Solve one grasp in place.
 
     Parameters
@@ -401,8 +345,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         In: multipliers of the previous solution (warm start) or zeros; out: scaled face contact
         forces.
     lam_corner : float64[2, 4, n]
-        In: multipliers of a previous solution (warm start of the first round) or zeros; out:
-        scaled force of each corner (finger; face tip, face root, back tip, back root) on
+        Out: scaled force of each corner (finger; face tip, face root, back tip, back root) on
         each contour edge k -> k+1.
     lam_stop : float64[2]
         Out: scaled joint-stop torques.
@@ -415,10 +358,6 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     plain : bool
         Start from ``x`` as given, the gauge held at rest until released (no saddle test); else
         the fast attempt's start and gauge (see :func:`solve_one`).
-    warm : bool
-        ``x`` and the multipliers are a neighbouring scene's answer: first polish the contact
-        set of the multipliers from ``x`` (:func:`_warm_polish`); the rounds run only if that
-        does not end on a stable equilibrium with nothing outside the candidate sets touched.
     """
     prm = kernel_copy(prm_in, n)
     # the gauge spring holds the nearly free turn of the polygon about its pin while the
@@ -455,9 +394,6 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     _initial_candidates(x0, n, prm, face_cand, corner_cand, np.zeros((n, 4)),
                         np.zeros((CORNER_SWEEP, 2)))
     lam_guess_face = lam_face.copy()
-    # the corner multipliers of a warm start start its first round only (the later rounds
-    # start from the face multipliers of the round before, as a plain solve's do)
-    lam_guess_corner = lam_corner.copy()
     stable_out = np.ones(1, dtype=np.bool_)
     last_kinds = np.zeros(mmax, dtype=np.int64)
     last_fj = np.zeros(mmax, dtype=np.int64)
@@ -469,24 +405,13 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     rounds = 0
     stable = True
     xs = x0.copy()
-    polished = warm and _warm_polish(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, fscale,
-                                     face_cand, corner_cand, lam_guess_face,
-                                     lam_guess_corner, work_it, gbuf, stable_out)
-    if polished:
-        last_m = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
-        last_kinds[:last_m] = kinds[:last_m]
-        last_fj[:last_m] = fj[:last_m]
-        last_fidx[:last_m] = fidx[:last_m]
-        stable = True
-        rounds = 1
-    for rnd in range(0 if polished else int(opts[O_MAXROUND]) + 3):
+    for rnd in range(int(opts[O_MAXROUND]) + 3):
         rounds = rnd + 1
         mcount = _build_constraints(face_cand, corner_cand, n, kinds, fj, fidx)
         for d in range(xs.shape[0]):
             xs[d] = x0[d]
         mu0, feasible = _start_round(xs, n, prm, opts, kinds, fj, fidx, mcount, fscale,
-                                     lam_guess_face, lam_guess_corner, lam, gbuf)
-        lam_guess_corner[:, :, :] = 0.0
+                                     lam_guess_face, lam, gbuf)
         if not feasible:
             status = INFEASIBLE_START
             break

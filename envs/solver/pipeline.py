@@ -28,7 +28,6 @@ from envs.model.layout import (
     I_ROUNDS,
     I_STABLE,
     I_STATUS,
-    I_WARM,
     N_CORNERS,
     N_INFO,
     P_A0,
@@ -73,12 +72,10 @@ from ..parallel import run_rows
 from . import driver
 from .reaction import holding_one, max_contacts
 from .result import GraspResult
-from .start import WARM_OPENING_RAD, warm_starts
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
 from .warmup import announce_compile
 
-__all__ = ["BatchSolution", "solve_columns", "solve_led", "checked_solution", "row_message",
-           "grasp_result"]
+__all__ = ["BatchSolution", "solve_columns", "checked_solution", "row_message", "grasp_result"]
 
 
 class BatchSolution(NamedTuple):
@@ -113,7 +110,6 @@ class BatchSolution(NamedTuple):
 
 _OPTIONS = default_options()  # shared by every solve: the kernels only read it
 
-
 # per-row columns the finish writes for BatchSolution: counts (int64) and flags (bool)
 C_ITERATIONS, C_ROUNDS, C_INVERTED = range(3)
 N_COUNTS = 3
@@ -129,20 +125,15 @@ def _prepare_kernels() -> None:
     announce_compile()
 
 
-def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
-           lam_corner: np.ndarray | None = None, warm: bool = False):
-    """Run the compiled solver in place; returns the info rows and the corner/stop forces
-    (``lam_corner``: warm-start corner multipliers, overwritten; default none; ``warm``: the
-    starts are neighbouring answers, whose contact sets are polished first)."""
+def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
+    """Run the compiled solver in place; returns the info rows and the corner/stop forces."""
     _prepare_kernels()
     b = prm.shape[0]
-    if lam_corner is None:
-        lam_corner = np.zeros((b, 2, N_CORNERS, n))
+    lam_corner = np.zeros((b, 2, N_CORNERS, n))
     lam_stop = np.zeros((b, 2))
     corner_cand = np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_)
     face_cand = np.zeros((b, 2, n), dtype=np.bool_)
     infos = np.zeros((b, N_INFO))
-    infos[:, I_WARM] = 1.0 if warm else 0.0
     # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
     # between rows (a row hitting the iteration limit); one row runs in the calling thread
     driver.solve_batch(n, prm, _OPTIONS, xs, lam_face, lam_corner, lam_stop, corner_cand,
@@ -289,7 +280,7 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
                   lam0: np.ndarray | None = None, n_rings: int = 1,
-                  element: str = "spring", leads: np.ndarray | None = None) -> BatchSolution:
+                  element: str = "spring") -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -308,10 +299,6 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
         Rings ``M`` of the point mesh (1: the paper's fan).
     element
         ``"spring"``, ``"cst"`` or ``"nhquad"`` (:func:`envs.model.problem.pack_params`).
-    leads
-        (B,) int: for each row the row of this batch whose answer starts its solve (a warm
-        start, :func:`solve_led`), -1 for none; a lead must itself have none. ``None``: every
-        row from ``x0`` (or rest).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
@@ -322,87 +309,9 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3, order="C"))
     t0 = time.perf_counter()
-    if leads is None:
-        infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
-    else:
-        infos, lam_corner, lam_stop = solve_led(n, prm, xs, lam_face, leads)
+    infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
     elapsed = time.perf_counter() - t0
     return checked_solution(scene, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed)
-
-
-def _settled(infos: np.ndarray) -> np.ndarray:
-    """Rows whose solver claims a stable equilibrium (what a warm start may start from, and
-    what it must reach to be kept)."""
-    return (infos[:, I_STATUS] == OK) & (infos[:, I_STABLE] == 1.0)
-
-
-def _solve_subset(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
-                  rows: np.ndarray, infos: np.ndarray, lam_corner: np.ndarray,
-                  lam_stop: np.ndarray, warm: bool = False) -> None:
-    """:func:`_solve` of ``rows`` of the batch, the answers written back in place."""
-    if rows.size == 0:
-        return
-    x, lam = np.ascontiguousarray(xs[rows]), np.ascontiguousarray(lam_face[rows])
-    info, corner, stop = _solve(n, np.ascontiguousarray(prm[rows]), x, lam,
-                                np.ascontiguousarray(lam_corner[rows]), warm)
-    xs[rows], lam_face[rows] = x, lam
-    infos[rows], lam_corner[rows], lam_stop[rows] = info, corner, stop
-
-
-def solve_led(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
-              leads: np.ndarray):
-    """Solve rows that start from another row's answer, in place; returns as :func:`_solve`.
-
-    Why: the scenarios of one design (the object displaced by a few millimetres, or a little
-    larger or stiffer) end close to one another's answers. The rows without a lead are solved
-    first from their given starts; each led row then starts from its lead's answer, fingers
-    opened until strictly clear of the contour (:func:`envs.solver.start.warm_starts`), with
-    its lead's face and corner forces as warm multipliers, and first polishes its lead's
-    contact set (``I_WARM``: :func:`envs.solver.driver._warm_polish`). A led row whose lead
-    has no stable equilibrium, whose start cannot be opened clear, or whose warm solve does
-    not end on a stable equilibrium is solved from its given start after all (its iterations
-    count both), so every row's answer is one the plain solve would accept; a warm start can
-    still end on another stable equilibrium than the plain solve where there are several (the
-    plain solve's arbitration, :func:`envs.solver.driver.solve_one`, is not repeated).
-    """
-    b = prm.shape[0]
-    lead = np.array(leads, dtype=np.int64).reshape(-1)
-    if lead.shape[0] != b:
-        raise ValueError(f"leads must have shape ({b},), got {lead.shape}")
-    if np.any((lead < -1) | (lead >= b)):
-        raise ValueError(f"leads must be row indices in [-1, {b - 1}]")
-    has = lead >= 0
-    if np.any(lead[lead[has]] >= 0):
-        raise ValueError("leads: a lead row must not have a lead itself")
-    infos = np.zeros((b, N_INFO))
-    lam_corner = np.zeros((b, 2, N_CORNERS, n))
-    lam_stop = np.zeros((b, 2))
-    cold_x, cold_lam = xs.copy(), lam_face.copy()
-    _solve_subset(n, prm, xs, lam_face, np.flatnonzero(~has), infos, lam_corner, lam_stop)
-    led = np.flatnonzero(has)
-    led = led[_settled(infos[lead[led]])]
-    usable = np.zeros(led.size, dtype=np.bool_)
-    if led.size:
-        from_x = np.ascontiguousarray(xs[lead[led]])
-        starts = np.ascontiguousarray(xs[led])
-        _prepare_kernels()
-        warm_starts(n, np.ascontiguousarray(prm[led]), starts, from_x, WARM_OPENING_RAD,
-                    usable)
-        xs[led[usable]] = starts[usable]
-        lam_face[led[usable]] = lam_face[lead[led[usable]]]
-        lam_corner[led[usable]] = lam_corner[lead[led[usable]]]
-    warm = led[usable]
-    _solve_subset(n, prm, xs, lam_face, warm, infos, lam_corner, lam_stop, True)
-    spent = np.zeros(b)
-    spent[warm] = infos[warm, I_ITERATIONS]
-    # everything else led (no usable start, or no stable end) from its plain start
-    again = np.flatnonzero(has)
-    again = again[~_settled(infos[again]) | ~np.isin(again, warm)]
-    xs[again], lam_face[again] = cold_x[again], cold_lam[again]
-    lam_corner[again] = 0.0
-    _solve_subset(n, prm, xs, lam_face, again, infos, lam_corner, lam_stop)
-    infos[again, I_ITERATIONS] += spent[again]
-    return infos, lam_corner, lam_stop
 
 
 def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,

@@ -25,11 +25,11 @@ from envs.validation import check_choice, check_range
 
 from .pipeline import BatchSolution, grasp_result, solve_columns
 from .result import GraspResult
-from .start import WARM_OPENING_RAD
 
 __all__ = ["METHODS", "simulate", "simulate_ramp", "check_model"]
 
 METHODS = ("newton", "slsqp", "nelder-mead")
+WARM_OPENING_RAD = 1e-3
 # A prolonged coarse solution's contacts are close to the fine ones: a small opening keeps the
 # barrier parameter (set from the start's complementarity) small. Measured (nh-quad, M = 2,
 # paper-r070, 0.2 N·m): the N = 1000 solve from N = 250 takes 9 iterations instead of 13 at

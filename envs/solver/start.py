@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from ..model.layout import (
@@ -23,7 +22,6 @@ from ..model.layout import (
     P_TH0,
     P_THMIN,
 )
-from ..model.rings import kernel_copy
 from .contact import (
     _corner_gap,
     _crossed_through_sc,
@@ -173,51 +171,3 @@ def _close_to_contact(x, n, prm):
             x[nb + j] = new
             if not _clear_of_finger(x, n, prm, j):
                 x[nb + j] = th
-
-
-# a warm start's first opening of the fingers from the answer it starts from [rad] (doubled
-# until clear, at most WARM_OPENING_MAX times): every gap of that answer strictly positive
-WARM_OPENING_RAD = 1e-3
-WARM_OPENING_MAX = 24
-
-
-@njit(cache=True, error_model="numpy", _nrt=False)
-def _open_to_clear(x, n, prm, opening):
-    """Open each finger of a warm start ``x`` (another scene's answer) by ``opening`` [rad],
-    doubled until the finger is strictly clear of the contour (:func:`_clear_of_finger`), at
-    most to its rest angle. Returns False if a finger is not clear there (then ``x`` is no
-    start: a start must be strictly feasible)."""
-    nb = 2 * n
-    for j in range(2):
-        th = x[nb + j]
-        step = opening
-        clear = False
-        for _ in range(WARM_OPENING_MAX):
-            x[nb + j] = min(th + step, prm[P_TH0])
-            if _clear_of_finger(x, n, prm, j):
-                clear = True
-                break
-            if x[nb + j] >= prm[P_TH0]:
-                break
-            step *= 2.0
-        if not clear:
-            return False
-    return True
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def warm_starts(n, prms, xs, lead_x, opening, usable):
-    """Starts of rows led by another row: row ``b`` starts from ``lead_x[b]`` (its lead's
-    scaled answer: the contour relative to the centre in units of the radius, so it carries
-    over to a displaced or resized object), fingers opened until clear
-    (:func:`_open_to_clear`). ``usable[b]``: whether the start was written into ``xs[b]``
-    (else ``xs[b]`` is left as it was)."""
-    x = np.empty(xs.shape[1])
-    for b in range(prms.shape[0]):
-        prm = kernel_copy(prms[b], n)
-        x[:] = lead_x[b]
-        if _open_to_clear(x, n, prm, opening):
-            xs[b] = x
-            usable[b] = True
-        else:
-            usable[b] = False
