@@ -1,0 +1,154 @@
+"""Throughput of this checkout against a baseline checkout, side by side in one run.
+
+Each repeat starts one measuring process per checkout, interleaved (baseline, this, baseline,
+this, ...), each importing its own ``envs`` (``PYTHONPATH``) with this interpreter; it loads
+(or compiles, the first time) its kernels, warms up, and times:
+
+- ``batch``: one :func:`envs.evaluate.evaluate_designs` call on ``--batch`` random designs of
+  the design box on paper-r070, the default model (designs per second; ``--fan``: the paper's
+  fan too);
+- ``scenarios``: :func:`envs.scenarios.evaluate_scenarios` of ``--scenario-designs`` designs
+  under a 3 x 3 placement grid (``--placement-mm``, both ways, 9 scenarios a design), from
+  rest (``warm_start=False``, as every scenario was solved before) and, where the checkout
+  has it, with the warm start from each design's nominal scenario (seconds).
+
+It prints each measurement, the machine's load, and the ratios of the medians (this checkout
+over the baseline; for the scenarios also warm over independent, both of this checkout)::
+
+    git archive <commit> | (mkdir -p /tmp/base && tar -x -C /tmp/base)
+    python scripts/throughput.py --baseline /tmp/base [--repeats 3]
+
+The baseline's kernels compile on its first run (minutes); later runs load them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+
+
+def _load() -> str:
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "unknown"
+
+
+def _seconds(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def measure(args: argparse.Namespace) -> dict:
+    """One process's measurements (``--worker``): the ``envs`` on ``sys.path`` first."""
+    import numpy as np
+
+    from envs.evaluate import DesignBounds, evaluate_designs
+    from envs.model.defaults import PAPER_TORSION_STIFFNESS_NM_PER_RAD
+    from envs.scenarios import Scenarios, evaluate_scenarios
+    from envs.scene import PRESETS
+
+    disk = PRESETS["paper-r070"][1]
+    rng = np.random.default_rng(args.seed)
+    designs = DesignBounds().sample(rng, args.batch, disk)
+    members = {"default": {}}
+    if args.fan:
+        members["fan"] = {"element": "spring"}
+    out: dict = {"envs": str(Path(sys.modules["envs"].__file__).parent), "load_before": _load()}
+    for name, model in members.items():
+        evaluate_designs(designs[:4], disk, **model)  # load or compile, and warm up
+        out[f"batch_{name}_designs_per_s"] = args.batch / _seconds(
+            lambda model=model: evaluate_designs(designs, disk, **model))
+    grid = Scenarios.of(placement_tolerance_m=args.placement_mm * 1e-3)
+    picked = designs[: args.scenario_designs]
+    common = {"torsion_stiffness_nm_per_rad": PAPER_TORSION_STIFFNESS_NM_PER_RAD,
+              "friction_coefficient": 0.5}
+    modes = {"independent": {}}
+    if "warm_start" in inspect.signature(evaluate_scenarios).parameters:
+        modes = {"independent": {"warm_start": False}, "warm": {"warm_start": True}}
+    for mode, extra in modes.items():
+        evaluate_scenarios(picked[:2], disk, grid, **common, **extra)
+        out[f"scenarios_{mode}_s"] = _seconds(
+            lambda extra=extra: evaluate_scenarios(picked, disk, grid, **common, **extra))
+    out["load_after"] = _load()
+    return out
+
+
+def _run_worker(tree: Path, args: argparse.Namespace) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--batch",
+           str(args.batch), "--scenario-designs", str(args.scenario_designs), "--placement-mm",
+           str(args.placement_mm), "--seed", str(args.seed)] + (["--fan"] if args.fan else [])
+    done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise SystemExit(f"measurement in {tree} failed:\n{done.stderr[-3000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _median(rows: list[dict], key: str) -> float | None:
+    values = [r[key] for r in rows if key in r]
+    return statistics.median(values) if values else None
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--baseline", type=Path, help="a checkout to compare against")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--batch", type=int, default=2048)
+    parser.add_argument("--scenario-designs", type=int, default=128)
+    parser.add_argument("--placement-mm", type=float, default=2.0)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--fan", action="store_true", help="also the paper's fan's batch")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--out", type=Path, default=None, help="write the results as JSON")
+    args = parser.parse_args(argv)
+    if args.worker:
+        print(json.dumps(measure(args)))
+        return
+    if args.baseline is None or not (args.baseline / "envs" / "__init__.py").is_file():
+        parser.error("--baseline must be a checkout of the package (with envs/)")
+    trees = {"baseline": args.baseline.resolve(), "this": HERE}
+    results: dict[str, list[dict]] = {name: [] for name in trees}
+    print(f"cores {os.cpu_count()}, load {_load()}; batch {args.batch}, scenarios "
+          f"{args.scenario_designs} designs x 9 placements (+-{args.placement_mm} mm)",
+          flush=True)
+    for rep in range(args.repeats):
+        for name, tree in trees.items():
+            row = _run_worker(tree, args)
+            results[name].append(row)
+            shown = {k: round(v, 3) for k, v in row.items() if isinstance(v, float)}
+            print(f"repeat {rep} {name}: {shown} load {row['load_before']} -> "
+                  f"{row['load_after']}", flush=True)
+    summary: dict[str, float] = {}
+    for key in sorted({k for rows in results.values() for r in rows for k in r
+                       if k.endswith(("_per_s", "_s"))}):
+        base, this = _median(results["baseline"], key), _median(results["this"], key)
+        if base is None or this is None:
+            continue
+        # designs per second: this over the baseline; seconds: the baseline over this
+        ratio = this / base if key.endswith("_per_s") else base / this
+        summary[f"{key}_ratio"] = ratio
+        print(f"{key}: baseline {base:.3f}, this {this:.3f}: {ratio:.2f}x")
+    indep, warm = (_median(results["this"], "scenarios_independent_s"),
+                   _median(results["this"], "scenarios_warm_s"))
+    if indep and warm:
+        summary["scenarios_warm_over_independent"] = indep / warm
+        print(f"scenarios, this checkout: independent {indep:.3f} s, warm {warm:.3f} s: "
+              f"{indep / warm:.2f}x")
+    if args.out is not None:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps({"results": results, "summary": summary}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

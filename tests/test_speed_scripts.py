@@ -1,0 +1,41 @@
+"""The throughput script (scripts/throughput.py): it refuses a baseline that is no checkout
+before any work, and one measuring process reports every figure the comparison needs."""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_baseline_that_is_no_checkout_is_refused(tmp_path, capsys):
+    throughput = _script("throughput")
+    with pytest.raises(SystemExit) as stop:
+        throughput.main(["--baseline", str(tmp_path)])
+    assert stop.value.code == 2
+    assert "--baseline must be a checkout" in capsys.readouterr().err
+
+
+def test_one_measurement_has_every_figure():
+    throughput = _script("throughput")
+    args = argparse.Namespace(batch=8, scenario_designs=2, placement_mm=2.0, seed=0, fan=True)
+    row = throughput.measure(args)
+    assert Path(row["envs"]) == ROOT / "envs"
+    for key in ("batch_default_designs_per_s", "batch_fan_designs_per_s",
+                "scenarios_independent_s"):
+        assert row[key] > 0.0, key
+    # the medians the printed ratios are taken of (a key a checkout lacks has none)
+    rows = [{"x_per_s": 1.0}, {"x_per_s": 3.0}, {"x_per_s": 2.0}]
+    assert throughput._median(rows, "x_per_s") == 2.0
+    assert throughput._median(rows, "missing") is None
