@@ -207,7 +207,8 @@ def test_the_reading_of_a_reward_in_own_object_md_is_the_evaluator_s():
     from envs.object_file import load_object
 
     page = (ROOT / "docs" / "own-object.md").read_text()
-    assert "reward = min(c, 0.5) - 0.25 min(eps / eps_max, 4)" in page
+    assert "reward = min(c, 0.5) - 0.25 eps / eps_max" in page
+    assert "-0.25 - 0.75 x / (1 + x)" in page
     obj = load_object(ROOT / "examples" / "objects" / "cherry_tomato.toml")
     designs = DesignBounds().sample(np.random.default_rng(0), 64, obj.disk)
     out = evaluate_designs(designs, obj.disk, strain_limits=obj.strain_limit,
@@ -215,9 +216,11 @@ def test_the_reading_of_a_reward_in_own_object_md_is_the_evaluator_s():
                            element="spring", n_triangles=20)
     holds = out["holds"] & out["converged"] & out["valid_at_rest"]
     assert 5 <= holds.sum() < 64  # both kinds among random designs
-    c, eps = out["contact_score"][holds], out["peak_compression"][holds]
-    np.testing.assert_allclose(out["reward"][holds],
-                               np.minimum(c, 0.5) - 0.25 * np.minimum(eps / obj.strain_limit, 4),
-                               rtol=0, atol=1e-12)
+    c, q = out["contact_score"][holds], out["peak_compression"][holds] / obj.strain_limit
+    within = q <= 1.0
+    assert within.any() and (~within).any()  # both kinds of hold among random designs
+    expected = np.where(within, np.minimum(c, 0.5) - 0.25 * q,
+                        -0.25 - 0.75 * (q - 1.0) / q)  # x / (1 + x) with x = q - 1
+    np.testing.assert_allclose(out["reward"][holds], expected, rtol=0, atol=1e-12)
     # the page's bands: a hold scores at least -1, anything else below -1
     assert np.all(out["reward"][holds] >= -1.0) and np.all(out["reward"][~holds] < -1.0)
