@@ -553,7 +553,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
                  distribution: ObjectDistribution | None = None,
                  weights: RewardWeights | None = None, n_triangles: int | None = None,
                  n_rings: int | None = None, element: str | None = None,
-                 progress: bool = True, heldout: list[tuple[SoftDisk, float, float]] | None = None,
+                 progress: bool = True, heldout: list[tuple] | None = None,
                  curve_points: int = 20, torch_threads: int | None = 1, name: str = "policy",
                  **settings: Any) -> DesignPolicy:
     """Train a design policy over an object distribution (stable-baselines3).
@@ -577,8 +577,9 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
     progress
         Show a progress bar.
     heldout
-        Objects ``(disk, strain_limit, friction)`` on which the deterministic policy is scored
-        at every point of the learning curve (its mean reward), or ``None``.
+        Objects (:func:`heldout_objects` tuples: disk, strain limit, friction, payload factor,
+        tolerance over the radius) on which the deterministic policy is scored at every point
+        of the learning curve (its mean env reward, the worst placement's), or ``None``.
     curve_points
         Points of the learning curve.
     torch_threads

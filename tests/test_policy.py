@@ -79,6 +79,28 @@ def test_the_policy_as_a_method_refines_within_its_budget():
     assert alone.extra["grasp_found"] and refined.method == "policy"
 
 
+def test_the_policy_observes_a_problem_s_payload_and_placement_tolerance():
+    """A strawberry placed within 1.5 mm (0.1 of its radius) and lifted with f = 1: the policy
+    designs for what it observes of the problem (its payload factor and its scenarios'
+    tolerance over the radius), and the reward is the worst of the 9 placements."""
+    from optim.rl import problem_tolerance_rel
+
+    spec = load_object(OBJECTS / "strawberry.toml")
+    problem = DesignProblem(spec.disk, spec.strain_limit, spec.friction_coefficient,
+                            payload_factor=1.0, scenarios=spec.scenarios)
+    assert problem_tolerance_rel(problem) == pytest.approx(0.1, rel=1e-12)
+    policy = load_policy()
+    result = policy.run(problem, budget=1)
+    x = policy.normalized(spec.disk, spec.strain_limit, spec.friction_coefficient, 1.0, 0.1)
+    assert result.best_design == pytest.approx(problem.design_dict(x), rel=1e-12)
+    env_reward = evaluate_objects(
+        DesignBounds().scale(x[None, :], spec.disk), [spec.disk],
+        np.array([[spec.strain_limit, spec.friction_coefficient, 1.0, 0.1]]))["reward"][0]
+    assert result.best_reward == pytest.approx(env_reward, rel=1e-9, abs=1e-12)
+    assert policy.normalized(spec.disk, spec.strain_limit, spec.friction_coefficient, 1.0,
+                             0.0) != pytest.approx(x)
+
+
 def test_a_saved_policy_round_trips_and_a_mismatch_is_a_clear_error(tmp_path):
     policy = load_policy()
     folder = policy.save(tmp_path / "copy")
@@ -108,7 +130,10 @@ def test_the_design_command_writes_a_result_like_optimize(tmp_path, capsys):
     data = json.loads((tmp_path / "design_result.json").read_text())
     assert data["method"] == "policy" and data["n_evaluations"] == 31
     assert data["extra"]["grasp_found"] is True and data["object"]["name"] == "cherry tomato"
-    assert data["best_reward"] > 0.02 and set(data["best_design"]) >= {"torque_nm"}
+    # holds within the strain limit, near the optimum: with its payload (f = 2 at 1000 kg/m^3)
+    # CMA-ES's 1000-evaluation optimum of the cherry tomato is 0.005 in the search model, the
+    # policy + 30 reaches about -0.002 as reported by the finer member
+    assert data["best_reward"] > -0.01 and set(data["best_design"]) >= {"torque_nm"}
     assert (tmp_path / "design_drawing.png").stat().st_size > 0
     bad = tmp_path / "nothing"
     bad.mkdir()
