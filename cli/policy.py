@@ -72,7 +72,9 @@ def add_policy_parsers(subparsers: Any) -> None:
         "train-policy", help="train a design policy over objects of real use",
         description="Train a design policy (stable-baselines3) over objects of radius 1 mm - "
                     "0.2 m, modulus 10 kPa - 10 MPa, Poisson ratio 0.25-0.49, strain limit "
-                    "0.03-0.17 and friction 0.2-1.0, and write it to --out (policy.json, "
+                    "0.03-0.17, friction 0.2-1.0, density 20-1200 kg/m^3, payload factor "
+                    "0-2 and placement tolerance 0-0.25 radii (the reward: the worst of the "
+                    "placements), and write it to --out (policy.json, "
                     "policy.npz: what psm-grasp design --policy reads; sb3_model.zip; the "
                     "learning curve). The shipped policy was trained this way.")
     train.add_argument("--method", default="sac", choices=RL_METHODS)

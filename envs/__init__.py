@@ -1,12 +1,12 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v1`` with Gymnasium::
+Importing the package registers ``GripperDesign-v2`` with Gymnasium::
 
     import gymnasium as gym
     import envs
 
-    env = gym.make("GripperDesign-v1")
-    vec = gym.make_vec("GripperDesign-v1", num_envs=64, vectorization_mode="vector_entry_point")
+    env = gym.make("GripperDesign-v2")
+    vec = gym.make_vec("GripperDesign-v2", num_envs=64, vectorization_mode="vector_entry_point")
 """
 
 from __future__ import annotations
@@ -42,11 +42,11 @@ __all__ = [
     "sb3_vec_env",
 ]
 
-ENV_ID = "GripperDesign-v1"
+ENV_ID = "GripperDesign-v2"
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
-    """A stable-baselines3 ``VecEnv`` of ``GripperDesign-v1`` stepped by one batched evaluation.
+    """A stable-baselines3 ``VecEnv`` of ``GripperDesign-v2`` stepped by one batched evaluation.
 
     See :func:`envs.sb3_env.sb3_vec_env` (imported here lazily: stable-baselines3 is the
     optional ``rl`` extra).

@@ -1,4 +1,4 @@
-"""GripperDesign-v1: one step designs a gripper for a soft disk; a thin adapter over physics.
+"""GripperDesign-v2: one step designs a gripper for a soft disk; a thin adapter over physics.
 
 The physics and the reward live in :func:`envs.evaluate.evaluate_designs`; this module only maps
 actions to designs, draws objects, builds observations and ``info``, and renders.
@@ -28,8 +28,14 @@ from .evaluate import (
     RewardWeights,
     evaluate_designs,
 )
-from .model.defaults import DEFAULT_ELEMENT
+from .model.defaults import (
+    DEFAULT_ELEMENT,
+    DEFAULT_PAYLOAD_FACTOR,
+    GRAVITY_M_S2,
+    MAX_PAYLOAD_FACTOR,
+)
 from .model.family import ModelSpec, resolve_model
+from .scenarios import Scenarios, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
 from .validation import check_range
 
@@ -37,6 +43,7 @@ __all__ = [
     "OBS_FIELDS",
     "ObjectDistribution",
     "observe",
+    "payload_ratio",
     "GripperDesignEnv",
     "GripperDesignVectorEnv",
     "check_reset_arguments",
@@ -47,18 +54,32 @@ __all__ = [
 # a relative design's grasp is observed: the model is invariant under the object's size,
 # stiffness and thickness (lengths in radii, torques in s E t r^2, the joint spring with them),
 # so a relative design scores the same on every disk of one Poisson ratio, strain limit,
-# friction coefficient and calibration scale (the Hertz contact width goes as sqrt(s)).
+# friction coefficient, calibration scale (the Hertz contact width goes as sqrt(s)), payload
+# ratio (the payload in the force unit s E t r) and placement tolerance in radii.
 OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
     ("poisson_ratio", "linear", 0.0, 0.5),
     ("strain_limit", "linear", 0.0, 0.5),
     ("friction_coefficient", "linear", 0.0, 2.0),
     ("stiffness_scale", "log10", -2.0, 1.0),
+    ("payload_ratio", "log10", -8.0, 1.0),
+    ("placement_tolerance_rel", "linear", 0.0, 0.5),
 )
+# a payload ratio below the observable range is observed at its lower end: a payload that
+# small changes no grasp (it is 1e-8 of the force unit)
+FLOORED_FIELDS = ("payload_ratio",)
 DISK_INFO_KEYS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
-                  "stiffness_scale")
-NEED_KEYS = ("strain_limit", "friction_coefficient")  # what a design must respect
+                  "stiffness_scale", "density_kg_m3")
+# what a design must respect: the strain limit, the friction of the pads, the payload factor f
+# (the payload W = f rho pi r^2 t g) and the placement tolerance in radii (+- along and across
+# the gripper's axis)
+NEED_KEYS = ("strain_limit", "friction_coefficient", "payload_factor",
+             "placement_tolerance_rel")
+OPEN_LOW_FIELDS = ("strain_limit", "friction_coefficient")
+DEFAULT_NEEDS = {"payload_factor": DEFAULT_PAYLOAD_FACTOR, "placement_tolerance_rel": 0.0}
 OBJECT_INFO_KEYS = DISK_INFO_KEYS + NEED_KEYS
 RENDER_FPS = 4
+# what a step's info holds beyond METRIC_KEYS (dtype, shape per row): evaluate_objects
+ROBUST_KEYS = {"reward_nominal": (np.float64, ()), "worst_scenario": (np.int64, ())}
 
 
 def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
@@ -74,8 +95,10 @@ def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
 class ObjectDistribution:
     """Distribution of the object drawn at reset: a disk and what a design must respect.
 
-    The default covers real use: produce and tissue from 1 mm to 0.2 m, from 10 kPa to 10 MPa.
-    Radius, modulus and thickness are drawn log-uniformly, the rest uniformly.
+    The default covers real use: produce and tissue from 1 mm to 0.2 m, from 10 kPa to 10 MPa,
+    from a foam's 20 kg/m^3 to 1200 kg/m^3, lifted with a payload factor up to 2 (the weight
+    plus a lift at 1 g) and placed within up to a quarter of the radius.
+    Radius, modulus, thickness and density are drawn log-uniformly, the rest uniformly.
 
     Parameters
     ----------
@@ -94,6 +117,16 @@ class ObjectDistribution:
         Coulomb friction coefficient of the fingers on the object [-], inside (0, 2].
     stiffness_scale
         Calibration scale ``s`` of every object [-].
+    density_range_kg_m3
+        Density [kg/m^3] (the payload's mass ``rho pi r^2 t``).
+    payload_factor_range
+        Payload factor ``f`` [-], inside [0, 100]: the grasp carries ``W = f rho pi r^2 t g``.
+    placement_tolerance_range_rel
+        Placement tolerance over the radius [-], inside [0, 0.5] (the observable range): the
+        object's centre may lie anywhere within ``+-`` it along and across the gripper's axis.
+
+    The largest payload ratio of the ranges (:func:`payload_ratio`) must be observable (at
+    most 10).
     """
 
     radius_range_m: tuple[float, float] = (1e-3, 0.2)
@@ -103,6 +136,9 @@ class ObjectDistribution:
     strain_limit_range: tuple[float, float] = (0.03, 0.17)
     friction_range: tuple[float, float] = (0.2, 1.0)
     stiffness_scale: float = 1.0
+    density_range_kg_m3: tuple[float, float] = (20.0, 1200.0)
+    payload_factor_range: tuple[float, float] = (0.0, DEFAULT_PAYLOAD_FACTOR)
+    placement_tolerance_range_rel: tuple[float, float] = (0.0, 0.25)
 
     def __post_init__(self) -> None:
         for name, low, high, low_open, high_open in (
@@ -111,7 +147,10 @@ class ObjectDistribution:
                 ("poisson_ratio_range", 0.0, 0.5, False, True),
                 ("thickness_range_m", 0.0, math.inf, True, False),
                 ("strain_limit_range", 0.0, 0.5, True, False),
-                ("friction_range", 0.0, 2.0, True, False)):
+                ("friction_range", 0.0, 2.0, True, False),
+                ("density_range_kg_m3", 0.0, math.inf, True, False),
+                ("payload_factor_range", 0.0, MAX_PAYLOAD_FACTOR, False, False),
+                ("placement_tolerance_range_rel", 0.0, 0.5, False, False)):
             object.__setattr__(self, name, _pair(name, getattr(self, name), low, high,
                                                  low_open=low_open, high_open=high_open))
         scale = check_range("stiffness_scale", self.stiffness_scale, 10.0**-2, 10.0)
@@ -119,21 +158,36 @@ class ObjectDistribution:
         # a SoftDisk validates the material fields (both ends of every range)
         for end in (0, 1):
             SoftDisk(self.radius_range_m[end], 0.0, self.youngs_modulus_range_pa[end],
-                     self.poisson_ratio_range[end], self.thickness_range_m[end], scale)
+                     self.poisson_ratio_range[end], self.thickness_range_m[end], scale,
+                     density_kg_m3=self.density_range_kg_m3[end])
+        # the heaviest, largest, softest object's payload ratio (it grows with f rho r / E)
+        heaviest = SoftDisk(self.radius_range_m[1], 0.0, self.youngs_modulus_range_pa[0],
+                            self.poisson_ratio_range[0], self.thickness_range_m[0], scale,
+                            density_kg_m3=self.density_range_kg_m3[1])
+        largest = payload_ratio(heaviest, self.payload_factor_range[1])
+        limit = 10.0 ** _OBS_RANGE["payload_ratio"][1]
+        if largest > limit:
+            raise ValueError(f"the ranges reach a payload ratio f rho g pi r / (s E) = "
+                             f"{largest:.3g}, beyond the observable {limit:g}: narrow "
+                             "payload_factor_range, density_range_kg_m3, radius_range_m or "
+                             "youngs_modulus_range_pa")
         object.__setattr__(self, "_template", SoftDisk(
             self.radius_range_m[0], 0.0, self.youngs_modulus_range_pa[0],
-            self.poisson_ratio_range[0], self.thickness_range_m[0], scale))
+            self.poisson_ratio_range[0], self.thickness_range_m[0], scale,
+            density_kg_m3=self.density_range_kg_m3[0]))
 
-    def sample(self, rng: np.random.Generator) -> tuple[SoftDisk, float, float]:
-        """Draw an object, its strain limit and its friction coefficient: six uniform numbers
-        of ``rng`` in one call (radius, modulus, Poisson ratio, thickness, strain limit,
-        friction, in this order).
+    def sample(self, rng: np.random.Generator
+               ) -> tuple[SoftDisk, float, float, float, float]:
+        """Draw an object and what a design must respect (:data:`NEED_KEYS`): the disk, its
+        strain limit, friction coefficient, payload factor and placement tolerance over the
+        radius; nine uniform numbers of ``rng`` in one call (radius, modulus, Poisson ratio,
+        thickness, strain limit, friction, density, payload factor, tolerance, in this order).
 
         The disk's ``distance_m`` is 0: the design's ``distance_m`` replaces it.
         """
-        # one call, not six: a vector env draws hundreds of objects per step and each call of
+        # one call, not nine: a vector env draws hundreds of objects per step and each call of
         # a Generator costs about a microsecond
-        u = rng.random(6).tolist()
+        u = rng.random(9).tolist()
 
         def log_uniform(pair, x):
             return math.exp(math.log(pair[0]) + x * (math.log(pair[1]) - math.log(pair[0])))
@@ -150,26 +204,58 @@ class ObjectDistribution:
                             ("youngs_modulus_pa", log_uniform(self.youngs_modulus_range_pa,
                                                               u[1])),
                             ("poisson_ratio", uniform(self.poisson_ratio_range, u[2])),
-                            ("thickness_m", log_uniform(self.thickness_range_m, u[3]))):
+                            ("thickness_m", log_uniform(self.thickness_range_m, u[3])),
+                            ("density_kg_m3", log_uniform(self.density_range_kg_m3, u[6]))):
             object.__setattr__(disk, name, value)
         return (disk, uniform(self.strain_limit_range, u[4]),
-                uniform(self.friction_range, u[5]))
+                uniform(self.friction_range, u[5]), uniform(self.payload_factor_range, u[7]),
+                uniform(self.placement_tolerance_range_rel, u[8]))
 
 
-def observe(disk: SoftDisk, strain_limit: float, friction_coefficient: float) -> np.ndarray:
-    """Normalized observation of an object, float32 (4,) in [-1, 1] (see :data:`OBS_FIELDS`).
+_OBS_RANGE = {name: (low, high) for name, _, low, high in OBS_FIELDS}
+
+
+def payload_ratio(disk: SoftDisk, payload_factor: float) -> float:
+    """The payload ``W = f rho pi r^2 t g`` in the object's force unit ``s E t r``: ``f rho g
+    pi r / (s E)`` [-], what the payload changes in a relative design's grasp."""
+    return float(_payload_ratios(np.array([[disk.radius_m, disk.youngs_modulus_pa,
+                                            disk.stiffness_scale, disk.density_kg_m3]]),
+                                 np.array([payload_factor], dtype=float))[0])
+
+
+def _payload_ratios(fields: np.ndarray, factors: np.ndarray) -> np.ndarray:
+    """:func:`payload_ratio` of rows (radius, modulus, scale, density) and factors (B,)."""
+    radius, modulus, scale, density = fields.T
+    return factors * density * GRAVITY_M_S2 * math.pi * radius / (scale * modulus)
+
+
+def observe(disk: SoftDisk, strain_limit: float, friction_coefficient: float,
+            payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+            placement_tolerance_rel: float = 0.0) -> np.ndarray:
+    """Normalized observation of an object, float32 (6,) in [-1, 1] (see :data:`OBS_FIELDS`).
+
+    Parameters
+    ----------
+    disk
+        The object (its ``density_kg_m3`` with ``payload_factor`` gives the payload ratio).
+    strain_limit, friction_coefficient
+        What the design must respect [-].
+    payload_factor
+        ``f`` of the payload ``W = f rho pi r^2 t g`` [-] (default 2).
+    placement_tolerance_rel
+        Placement tolerance over the radius [-] (default 0: placed exactly).
 
     Raises
     ------
     ValueError
         If a value lies outside the observable range (the message names it).
     """
-    return observe_rows([disk], np.array([[strain_limit, friction_coefficient]],
-                                         dtype=float))[0]
+    return observe_rows([disk], np.array([[strain_limit, friction_coefficient, payload_factor,
+                                           placement_tolerance_rel]], dtype=float))[0]
 
 
 def observe_rows(disks: list[SoftDisk], needs: np.ndarray) -> np.ndarray:
-    """Normalized observations of B objects, float32 (B, 4) in [-1, 1]: :func:`observe` row by
+    """Normalized observations of B objects, float32 (B, 6) in [-1, 1]: :func:`observe` row by
     row, as array operations (a vector env observes hundreds of new objects per step).
 
     Parameters
@@ -177,7 +263,9 @@ def observe_rows(disks: list[SoftDisk], needs: np.ndarray) -> np.ndarray:
     disks
         The B disks.
     needs
-        Their strain limits and friction coefficients, (B, 2) (:data:`NEED_KEYS`).
+        Their strain limits, friction coefficients, payload factors and placement tolerances
+        over the radius, (B, 4) (:data:`NEED_KEYS`); or only the first two, (B, 2), with the
+        defaults for the others (payload factor 2, no tolerance).
 
     Raises
     ------
@@ -185,30 +273,54 @@ def observe_rows(disks: list[SoftDisk], needs: np.ndarray) -> np.ndarray:
         If a value lies outside the observable range (the message names it, and the row when
         B > 1).
     """
-    return _observe_table(_object_table(disks), np.asarray(needs, dtype=float).reshape(-1, 2))
+    return _observe_table(_object_table(disks), _full_needs(needs))
+
+
+def _full_needs(needs) -> np.ndarray:
+    """Needs (B, 2) or (B, 4) as (B, 4), the missing columns at :data:`DEFAULT_NEEDS`."""
+    needs = np.asarray(needs, dtype=float)
+    needs = needs.reshape(1, -1) if needs.ndim == 1 else needs
+    if needs.ndim != 2 or needs.shape[1] not in (2, len(NEED_KEYS)):
+        raise ValueError(f"needs must have shape (B, 2) or (B, {len(NEED_KEYS)}) (columns "
+                         f"{', '.join(NEED_KEYS)}), got {needs.shape}")
+    if needs.shape[1] == 2:
+        extra = np.array([DEFAULT_NEEDS[k] for k in NEED_KEYS[2:]])
+        needs = np.hstack([needs, np.broadcast_to(extra, (needs.shape[0], extra.size))])
+    return needs
 
 
 _DISK_FIELDS = operator.attrgetter(*DISK_INFO_KEYS)  # one C call per object
 
 
 def _object_table(disks: list[SoftDisk]) -> np.ndarray:
-    """The disks' fields, float (B, 5), columns as :data:`DISK_INFO_KEYS`."""
+    """The disks' fields, float (B, 6), columns as :data:`DISK_INFO_KEYS`."""
     return np.array([_DISK_FIELDS(d) for d in disks],
                     dtype=float).reshape(len(disks), len(DISK_INFO_KEYS))
 
 
 def _observe_table(table: np.ndarray, needs: np.ndarray) -> np.ndarray:
-    """:func:`observe_rows` of a disk table (:func:`_object_table`) and the needs (B, 2)."""
+    """:func:`observe_rows` of a disk table (:func:`_object_table`) and the needs (B, 4)."""
     values = {key: table[:, k] for k, key in enumerate(DISK_INFO_KEYS)}
     values.update({key: needs[:, k] for k, key in enumerate(NEED_KEYS)})
+    factors = values["payload_factor"]
+    bad = np.flatnonzero(~((factors >= 0.0) & (factors <= MAX_PAYLOAD_FACTOR)))
+    if bad.size:  # (the payload ratio would name the factor's mistake less clearly)
+        raise ValueError(f"payload_factor = {float(factors[bad[0]])!r}"
+                         f"{f' (row {int(bad[0])})' if table.shape[0] > 1 else ''} is outside "
+                         f"the allowed range [0, {MAX_PAYLOAD_FACTOR:g}]")
+    columns = [DISK_INFO_KEYS.index(k) for k in ("radius_m", "youngs_modulus_pa",
+                                                  "stiffness_scale", "density_kg_m3")]
+    values["payload_ratio"] = _payload_ratios(table[:, columns], factors)
     n_rows = table.shape[0]
     obs = np.empty((n_rows, len(OBS_FIELDS)), dtype=np.float32)
     for i, (name, transform, low, high) in enumerate(OBS_FIELDS):
         v = values[name]
+        if name in FLOORED_FIELDS:
+            v = np.where(v >= 0.0, np.maximum(v, 10.0**low), v)
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.log10(v) if transform == "log10" else v
         # a strain limit or friction of 0 is no object: the lower end is open for them
-        open_low = name in NEED_KEYS
+        open_low = name in OPEN_LOW_FIELDS
         bad = np.flatnonzero(~(((low < t) if open_low else (low <= t)) & (t <= high)))
         if bad.size:
             row = int(bad[0])
@@ -241,7 +353,8 @@ def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndar
     return np.clip(a, -1.0, 1.0), np.asarray(clipped)
 
 
-RESET_OPTIONS = ("disk", "strain_limit", "friction_coefficient")
+RESET_OPTIONS = ("disk", "strain_limit", "friction_coefficient", "payload_factor",
+                 "placement_tolerance_rel")
 
 
 def _options_dict(options: Any) -> dict[str, Any]:
@@ -271,8 +384,16 @@ def _parse_options(options: dict[str, Any] | None) -> dict[str, Any]:
     if "friction_coefficient" in options:
         options["friction_coefficient"] = check_range(
             "friction_coefficient", options["friction_coefficient"], 0.0, 2.0, low_open=True)
-    if "disk" in options:  # observable (any valid need stands in for one drawn later)
-        _observe_table(_object_table([options["disk"]]), np.array([[0.1, 0.5]]))
+    if "payload_factor" in options:
+        options["payload_factor"] = check_range("payload_factor", options["payload_factor"],
+                                                0.0, MAX_PAYLOAD_FACTOR)
+    if "placement_tolerance_rel" in options:
+        low, high = _OBS_RANGE["placement_tolerance_rel"]
+        options["placement_tolerance_rel"] = check_range(
+            "placement_tolerance_rel", options["placement_tolerance_rel"], low, high)
+    if "disk" in options:  # observable (valid needs stand in for ones drawn later)
+        _observe_table(_object_table([options["disk"]]),
+                       np.array([[0.1, 0.5, options.get("payload_factor", 0.0), 0.0]]))
     return options
 
 
@@ -290,7 +411,8 @@ def check_reset_arguments(seed: int | None, options: dict[str, Any] | None) -> d
     ValueError
         For a seed that is not None or an integer >= 0, an unknown option, a ``disk`` that is
         not an observable :class:`~envs.scene.SoftDisk`, a ``strain_limit`` outside (0, 0.5],
-        a ``friction_coefficient`` outside (0, 2].
+        a ``friction_coefficient`` outside (0, 2], a ``payload_factor`` outside [0, 100], a
+        ``placement_tolerance_rel`` outside [0, 0.5].
     """
     if seed is not None and (isinstance(seed, bool | np.bool_)
                              or not isinstance(seed, int | np.integer) or seed < 0):
@@ -302,15 +424,77 @@ def _draw(rng: np.random.Generator, distribution: ObjectDistribution,
           options: dict[str, Any]) -> tuple[SoftDisk, np.ndarray]:
     # always draw, so the random stream does not depend on the options (validated by
     # _parse_options; the distribution's own draws lie in its validated range)
-    disk, limit, friction = distribution.sample(rng)
-    return options.get("disk", disk), np.array([options.get("strain_limit", limit),
-                                                options.get("friction_coefficient", friction)])
+    disk, *drawn = distribution.sample(rng)
+    return options.get("disk", disk), np.array([options.get(key, value) for key, value
+                                                in zip(NEED_KEYS, drawn, strict=True)])
 
 
 def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
                  options: dict[str, Any]) -> tuple[SoftDisk, np.ndarray, np.ndarray]:
     disk, needs = _draw(rng, distribution, options)
     return disk, needs, observe(disk, *needs)
+
+
+def evaluate_objects(designs: np.ndarray, disks: list[SoftDisk], needs: np.ndarray,
+                     **kwargs: Any) -> dict[str, np.ndarray]:
+    """The env's answer to B designs, each for its own object: the worst grasp over the
+    object's placements, all of them solved in one batch.
+
+    Each object with a placement tolerance ``tau`` (its ``placement_tolerance_rel`` times its
+    radius) is placed at the 9 points of the ``+-tau`` box along and across the gripper's axis
+    (:meth:`envs.scenarios.Scenarios.of`, :func:`envs.scenarios.place`); one without tolerance
+    at its nominal place only. Every row of every object goes through one
+    :func:`~envs.evaluate.evaluate_designs` call.
+
+    Parameters
+    ----------
+    designs
+        (B, 6) SI designs, placed against the nominal object.
+    disks
+        The B objects.
+    needs
+        (B, 4): strain limit, friction coefficient, payload factor, placement tolerance over
+        the radius (:data:`NEED_KEYS`).
+    **kwargs
+        Passed to :func:`~envs.evaluate.evaluate_designs`: the reward weights, the joint
+        spring, the model member (not the per-row objects, friction, payload or offsets).
+
+    Returns
+    -------
+    dict
+        Every key of :data:`~envs.evaluate.METRIC_KEYS` (first axis B) of each object's worst
+        placement (the lowest reward; the first such on ties), whose reward is the robust
+        (worst) reward; ``reward_nominal`` (the nominal placement's reward) and
+        ``worst_scenario`` (the index of the worst placement in
+        :meth:`~envs.scenarios.Scenarios.scenarios`'s order).
+    """
+    limit, friction, factor, tolerance = np.asarray(needs, dtype=float).T  # NEED_KEYS order
+    # each design repeats over its object's placements (place() moves each row to its own)
+    rows, placed, frictions, offsets = [], [], [], []
+    for i, disk in enumerate(disks):
+        cases = Scenarios.of(placement_tolerance_m=float(tolerance[i]) * disk.radius_m
+                             ).scenarios()
+        r, d, f, o = place(np.repeat(designs[i][None, :], len(cases), axis=0), disk,
+                           float(friction[i]), cases)
+        rows.append(r)
+        placed.extend(d)
+        frictions.append(f)
+        offsets.append(o + disk.offset_x_m)  # (a disk placed off the axis stays there)
+    sizes = np.array([r.shape[0] for r in rows])
+    out = evaluate_designs(
+        np.concatenate(rows), placed, strain_limits=np.repeat(limit, sizes),
+        friction_coefficients=np.concatenate(frictions),
+        payload_factors=np.repeat(factor, sizes), offsets_x_m=np.concatenate(offsets),
+        **kwargs)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    worst = np.minimum.reduceat(out["reward"], starts)
+    index = np.arange(out["reward"].size)
+    is_worst = out["reward"] == np.repeat(worst, sizes)
+    pick = np.minimum.reduceat(np.where(is_worst, index, index.size), starts)
+    picked = {key: v[pick] for key, v in out.items()}
+    picked["reward_nominal"] = out["reward"][starts]
+    picked["worst_scenario"] = (pick - starts).astype(np.int64)
+    return picked
 
 
 def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element, calibrated):
@@ -378,8 +562,9 @@ class GripperDesignEnv(gym.Env):
     ## Description
 
     Design an angular two-finger gripper for a soft disk. Each episode presents one object (a
-    soft 2-D disk with a radius, a stiffness, a strain limit and a friction coefficient of the
-    finger pads on it); the agent answers with one
+    soft 2-D disk with a radius, a stiffness, a density, a strain limit, a friction coefficient
+    of the finger pads on it, a payload to lift and a placement tolerance); the agent answers
+    with one
     design (finger length, rest angle, joint offset, finger width, actuation torque and where the
     object sits), the grasp is solved with the point-spring model of the disk (quasi-static,
     frictionless contact, a member of the model family) and the episode ends. It is a
@@ -417,12 +602,14 @@ class GripperDesignEnv(gym.Env):
 
     ## Observation Space
 
-    The observation is a float32 `ndarray` with shape `(4,)` describing the object, each value
+    The observation is a float32 `ndarray` with shape `(6,)` describing the object, each value
     mapped linearly from the range below to `[-1, 1]` (a reset with an object outside these
-    ranges raises `ValueError`). The radius, the modulus and the thickness are not observed:
-    the model is invariant under them (lengths in radii, torques and the joint spring in
-    `s E t r^2`), so an action scores the same on every disk of one Poisson ratio, strain
-    limit, friction coefficient and calibration scale (tested); `info` holds them.
+    ranges raises `ValueError`; a payload ratio below 1e-8 is observed as 1e-8). The radius,
+    the modulus, the thickness and the density are not observed: the model is invariant under
+    them (lengths in radii, torques and the joint spring in `s E t r^2`, forces in `s E t r`),
+    so an action scores the same on every disk of one Poisson ratio, strain limit, friction
+    coefficient, calibration scale, payload ratio and relative placement tolerance (tested);
+    `info` holds them.
 
     | Num | Observation                                   | Transform | Min    | Max   |
     |-----|-----------------------------------------------|-----------|--------|-------|
@@ -430,11 +617,22 @@ class GripperDesignEnv(gym.Env):
     | 1   | strain limit `eps_max` [-]                    | linear    | 0.0    | 0.5   |
     | 2   | friction coefficient `mu` [-]                 | linear    | 0.0    | 2.0   |
     | 3   | calibration scale `s` [-]                     | log10     | 0.01   | 10    |
+    | 4   | payload ratio `W / (s E t r) = f rho g pi r / (s E)` | log10 | 1e-8 | 10  |
+    | 5   | placement tolerance over the radius `tau / r` | linear    | 0.0    | 0.5   |
+
+    The payload is `W = f rho pi r^2 t g` (payload factor `f`, density `rho`): the grasp must
+    carry it by friction (:func:`~envs.evaluate.evaluate_designs` ``payload_factors``).
 
     ## Rewards
 
-    The reward of :func:`~envs.evaluate.evaluate_designs` with the weights `w` of
-    :class:`~envs.evaluate.RewardWeights`, in tiers (defaults in brackets):
+    The robust reward over the object's placements: with a placement tolerance `tau > 0` the
+    object's centre is placed at the 9 points of the `+-tau` box along and across the
+    gripper's axis (its centre, edge midpoints and corners, :class:`envs.scenarios.Scenarios`)
+    and the reward is the worst of the 9 grasps (one batch, :func:`evaluate_objects`); `info`
+    holds that grasp's metrics, `reward_nominal` (the centred placement's reward) and
+    `worst_scenario`. Each grasp's reward is that of :func:`~envs.evaluate.evaluate_designs`
+    with the weights `w` of :class:`~envs.evaluate.RewardWeights`, in tiers (defaults in
+    brackets):
 
     - a grasp that **holds** the object (both fingers touching, the friction it needs to hold
       a free object within `mu`): *w_contact min(c, c_max) - w_deform min(eps / eps_max,
@@ -460,20 +658,22 @@ class GripperDesignEnv(gym.Env):
     ## Starting State
 
     At reset an object is drawn from `distribution` (an :class:`ObjectDistribution`; default,
-    covering real use: radius 1 mm to 0.2 m, Young's modulus 10 kPa to 10 MPa and thickness
-    1 mm to 0.1 m log-uniform, `nu` 0.25 to 0.49, strain limit (admissible compression) 0.03
-    to 0.17 and friction coefficient 0.2 to 1.0 uniform, `s = 1`).
-    `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1, "friction_coefficient": 0.5})`
-    fixes any of them (the disk's `distance_m` is ignored: `d_1` is part of the action).
+    covering real use: radius 1 mm to 0.2 m, Young's modulus 10 kPa to 10 MPa, thickness
+    1 mm to 0.1 m and density 20 to 1200 kg/m^3 log-uniform, `nu` 0.25 to 0.49, strain limit
+    (admissible compression) 0.03 to 0.17, friction coefficient 0.2 to 1.0, payload factor 0
+    to 2 and placement tolerance 0 to 0.25 radii uniform, `s = 1`).
+    `reset(options={"disk": SoftDisk(...), "strain_limit": 0.1, "friction_coefficient": 0.5,
+    "payload_factor": 2.0, "placement_tolerance_rel": 0.1})` fixes any of them (the disk's
+    `distance_m` is ignored: `d_1` is part of the action; its `density_kg_m3` is used).
 
     ## Episode End
 
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
-    `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v1"))`
+    `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v2"))`
     passes. Stepping again without a reset evaluates another design on the same object.
 
-    Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v1", n)`
+    Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v2", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
     default. Gymnasium's `"sync"` and `"async"` modes reset on the *next* step unless told
     otherwise, which would spend every other step on a reset: pass
@@ -507,6 +707,12 @@ class GripperDesignEnv(gym.Env):
 
     ## Version History
 
+    * v2: the payload and the placement tolerance: the object's density, a payload factor
+      and a placement tolerance over the radius are drawn at reset (and reset options); the
+      observation gains the payload ratio `f rho g pi r / (s E)` and the tolerance `tau / r`
+      (shape 6); the reward is the worst over the 9 placements of the tolerance box. The
+      reward tiers gain "crushes" (a hold beyond the strain limit). v1 is no longer
+      registered (its observation space differs).
     * v1: the object's friction coefficient, and holding: a grasp that would let a free object
       slip scores below every grasp that holds; the reward in tiers (a miss below every grasp);
       the observation is what changes a relative design's grasp (Poisson ratio, strain limit,
@@ -542,7 +748,7 @@ class GripperDesignEnv(gym.Env):
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces()
         self._disk: SoftDisk | None = None
-        self._needs = np.zeros(len(NEED_KEYS))  # strain limit, friction coefficient
+        self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
         self._last_design: np.ndarray | None = None
         self._render_cache: dict = {}
@@ -573,11 +779,9 @@ class GripperDesignEnv(gym.Env):
             raise ResetNeeded("call reset() before step()")
         act, clipped = _check_actions(action, (N_DESIGN,))
         design = self.bounds.scale(act, self._disk)
-        out = evaluate_designs(
-            design[None, :], self._disk, strain_limits=self._needs[0],
-            friction_coefficients=self._needs[1],
-            weights=self.weights, **self.joint_spring, **self.model.kwargs(),
-        )
+        out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
+                               weights=self.weights, **self.joint_spring,
+                               **self.model.kwargs())
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
         info["design"] = design
@@ -605,7 +809,7 @@ class GripperDesignEnv(gym.Env):
         import matplotlib.pyplot as plt
 
         if self._figure is None or not plt.fignum_exists(self._figure.number):
-            self._figure = plt.figure("GripperDesign-v1")
+            self._figure = plt.figure("GripperDesign-v2")
             self._image = self._figure.add_subplot().imshow(frame)
             self._figure.axes[0].set_axis_off()
         else:
@@ -705,7 +909,7 @@ class GripperDesignVectorEnv(VectorEnv):
         n = self.num_envs
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._disks: list[SoftDisk | None] = [None] * n
-        self._needs = np.zeros((n, len(NEED_KEYS)))  # strain limits, friction coefficients
+        self._needs = np.zeros((n, len(NEED_KEYS)))  # NEED_KEYS order
         self._objects = np.zeros((n, len(OBJECT_INFO_KEYS)))
         self._obs = np.zeros((n, len(OBS_FIELDS)), dtype=np.float32)
         self._autoreset = np.zeros(n, dtype=np.bool_)
@@ -763,14 +967,12 @@ class GripperDesignVectorEnv(VectorEnv):
     def _evaluate(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, dict]:
         act, clipped = _check_actions(actions[rows], (rows.size, N_DESIGN))
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
-        out = evaluate_designs(
-            designs, [self._disks[i] for i in rows.tolist()],
-            strain_limits=self._needs[rows, 0], friction_coefficients=self._needs[rows, 1],
-            weights=self.weights, **self.joint_spring, **self.model.kwargs(),
-        )
+        out = evaluate_objects(designs, [self._disks[i] for i in rows.tolist()],
+                               self._needs[rows], weights=self.weights, **self.joint_spring,
+                               **self.model.kwargs())
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
-        for key, (dtype, shape) in METRIC_KEYS.items():
+        for key, (dtype, shape) in {**METRIC_KEYS, **ROBUST_KEYS}.items():
             arr = np.zeros((self.num_envs, *shape), dtype=dtype)
             arr[rows] = out[key]
             info[key], info[f"_{key}"] = arr, mask.copy()

@@ -1,4 +1,4 @@
-"""``gym.make("GripperDesign-v1")``: the env inside Gymnasium's passive checker, its reset
+"""``gym.make("GripperDesign-v2")``: the env inside Gymnasium's passive checker, its reset
 arguments checked outside it.
 
 Gymnasium's :class:`~gymnasium.wrappers.PassiveEnvChecker` (which ``gym.make`` puts around every
@@ -52,7 +52,7 @@ class ResetCheck(gym.Wrapper, RecordConstructorArgs):
 
 
 def make_env(**kwargs: Any) -> gym.Env:
-    """The entry point of ``GripperDesign-v1``: :class:`ResetCheck` around Gymnasium's
+    """The entry point of ``GripperDesign-v2``: :class:`ResetCheck` around Gymnasium's
     :class:`~gymnasium.wrappers.PassiveEnvChecker` around a
     :class:`~envs.design_env.GripperDesignEnv` of ``kwargs``."""
     return ResetCheck(PassiveEnvChecker(GripperDesignEnv(**kwargs)))

@@ -1,4 +1,4 @@
-"""GripperDesign-v1 as a stable-baselines3 ``VecEnv`` stepped with ONE batched evaluation.
+"""GripperDesign-v2 as a stable-baselines3 ``VecEnv`` stepped with ONE batched evaluation.
 
 stable-baselines3's own vector envs (``DummyVecEnv``, ``SubprocVecEnv``) step their sub-envs one
 by one, so every design is solved by its own :func:`~envs.evaluate.evaluate_designs` call. Here
@@ -251,7 +251,7 @@ class _BatchedVecEnvMethods:
         return [False for _ in self._indices(indices)]
 
 
-_CLASS_DOC = """A stable-baselines3 ``VecEnv`` of GripperDesign-v1 stepped with one batched call.
+_CLASS_DOC = """A stable-baselines3 ``VecEnv`` of GripperDesign-v2 stepped with one batched call.
 
     Build it with :func:`sb3_vec_env`. Every ``step`` evaluates all sub-envs' designs in a single
     :func:`~envs.evaluate.evaluate_designs` call (through a
@@ -302,7 +302,7 @@ def __getattr__(name: str) -> Any:
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs: Any):
-    """GripperDesign-v1 as a stable-baselines3 ``VecEnv`` stepped with one batched evaluation.
+    """GripperDesign-v2 as a stable-baselines3 ``VecEnv`` stepped with one batched evaluation.
 
     Parameters
     ----------

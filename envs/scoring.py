@@ -1,6 +1,6 @@
 """Compiled row loops of the batch evaluator's metrics and reward.
 
-Why compiled: :func:`envs.evaluate_designs` serves one-row calls (every ``GripperDesign-v1``
+Why compiled: :func:`envs.evaluate_designs` serves one-row calls (every ``GripperDesign-v2``
 step) as well as batches of thousands. As numpy expressions over columns the metrics and the
 reward cost ~30 small array operations each, ~60 us for one row (a fan solve takes ~65 us);
 one loop over the rows costs a few microseconds at any batch size. The definitions are those

@@ -1,6 +1,6 @@
 """A design policy: a gripper for a new object in one forward pass, trained with RL.
 
-GripperDesign-v1 is a contextual bandit: an object, one design, one reward. Trained over an
+GripperDesign-v2 is a contextual bandit: an object, one design, one reward. Trained over an
 object distribution that covers real use (:class:`envs.design_env.ObjectDistribution`), a
 stable-baselines3 agent (SAC by default, or PPO) learns a policy from the object to a design;
 :func:`train_policy` runs the training and returns a :class:`DesignPolicy`, whose
@@ -10,10 +10,11 @@ design for a few evaluations more. A policy trained by ``scripts/train_shipped_p
 ships with the package (:func:`load_policy` with no path).
 
 The observation is what changes a relative design's grasp: the Poisson ratio, the strain
-limit, the friction coefficient and the calibration scale. The model is scale invariant (every
-length in radii, the torque and the joint spring in ``s E t r^2``), so radius, modulus and
-thickness need not be observed; the policy designs in the object-relative box and the design
-is scaled to the object.
+limit, the friction coefficient, the calibration scale, the payload ratio ``f rho g pi r / (s
+E)`` and the placement tolerance over the radius. The model is scale invariant (every length in
+radii, the torque and the joint spring in ``s E t r^2``, forces in ``s E t r``), so radius,
+modulus, thickness and density need not be observed; the policy designs in the
+object-relative box and the design is scaled to the object.
 
 Training settings that learn (measured, see ``scripts/bench_policy.py``): ``gamma = 0`` (one
 step an episode), 64 environments stepped by one batched evaluation, several gradient steps a
@@ -37,8 +38,9 @@ from typing import Any
 
 import numpy as np
 
-from envs.design_env import OBS_FIELDS, ObjectDistribution, observe_rows
+from envs.design_env import OBS_FIELDS, ObjectDistribution, evaluate_objects, observe_rows
 from envs.evaluate import DesignBounds, RewardWeights
+from envs.model.defaults import DEFAULT_PAYLOAD_FACTOR
 from envs.model.family import resolve_model
 from envs.scene import SoftDisk
 
@@ -57,6 +59,7 @@ __all__ = [
     "write_training_outputs",
     "learning_curve_figure",
     "heldout_objects",
+    "heldout_rewards",
     "SHIPPED_POLICY",
 ]
 
@@ -177,7 +180,7 @@ class DesignPolicy:
     # --- the forward pass -------------------------------------------------------------------
 
     def actions(self, observations: np.ndarray) -> np.ndarray:
-        """Normalized designs in [-1, 1] (B, 6) of observations (B, 4): one forward pass."""
+        """Normalized designs in [-1, 1] (B, 6) of observations (B, 6): one forward pass."""
         x = np.asarray(observations, dtype=np.float64)
         for k, (w, b) in enumerate(self.layers):
             x = x @ w.T + b
@@ -200,25 +203,39 @@ class DesignPolicy:
                              weights=RewardWeights(**self.meta["reward_weights"]),
                              **spring, **self.meta["model"], **kwargs)
 
-    def design(self, disk: SoftDisk, strain_limit: float,
-               friction_coefficient: float) -> dict[str, float]:
+    def design(self, disk: SoftDisk, strain_limit: float, friction_coefficient: float,
+               payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+               placement_tolerance_rel: float = 0.0) -> dict[str, float]:
         """The policy's design for one object, in SI units (keys of
         :data:`envs.scene.DESIGN_FIELDS`).
+
+        Parameters
+        ----------
+        disk, strain_limit, friction_coefficient
+            The object and what its grasp must respect.
+        payload_factor
+            ``f`` of the payload ``W = f rho pi r^2 t g`` [-] (default 2).
+        placement_tolerance_rel
+            Placement tolerance over the radius [-], in [0, 0.5] (default 0).
 
         Raises
         ------
         ValueError
             For an object outside the observable range (the message names the field).
         """
-        return self.problem(disk, strain_limit, friction_coefficient).design_dict(
-            self.normalized(disk, strain_limit, friction_coefficient))
+        return self.problem(disk, strain_limit, friction_coefficient,
+                            payload_factor=payload_factor).design_dict(
+            self.normalized(disk, strain_limit, friction_coefficient, payload_factor,
+                            placement_tolerance_rel))
 
-    def normalized(self, disk: SoftDisk, strain_limit: float,
-                   friction_coefficient: float) -> np.ndarray:
-        """The policy's design for one object, normalized (6,)."""
+    def normalized(self, disk: SoftDisk, strain_limit: float, friction_coefficient: float,
+                   payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+                   placement_tolerance_rel: float = 0.0) -> np.ndarray:
+        """The policy's design for one object, normalized (6,) (arguments as :meth:`design`)."""
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
-        obs = observe_rows([disk], np.array([[strain_limit, friction_coefficient]],
+        obs = observe_rows([disk], np.array([[strain_limit, friction_coefficient,
+                                              payload_factor, placement_tolerance_rel]],
                                             dtype=float))
         return self.actions(obs)[0]
 
@@ -232,7 +249,8 @@ class DesignPolicy:
         if problem.bounds != self.bounds:
             raise ValueError(f"the problem's design box {problem.bounds} is not the one the "
                              f"policy designs in, {self.bounds}")
-        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient)
+        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient,
+                             problem.payload_factor, problem_tolerance_rel(problem))
         problem.start(budget)
         problem.evaluate(x0[None, :])
         first = (problem.best_reward, problem.n_evaluations)
@@ -258,6 +276,16 @@ class DesignPolicy:
                 "n_layers": len(self.layers)}
         (folder / "policy.json").write_text(json.dumps(meta, indent=1) + "\n")
         return folder
+
+
+def problem_tolerance_rel(problem: DesignProblem) -> float:
+    """The placement tolerance over the radius the policy observes for a problem: the larger
+    of its scenarios' tolerances along and across the axis over the nominal radius (0 without
+    scenarios). The policy observes the nominal object of a problem with ranges."""
+    s = problem.scenarios
+    if s is None:
+        return 0.0
+    return max(s.placement_along_m, s.placement_across_m) / problem.disk.radius_m
 
 
 class _Continue:
@@ -525,7 +553,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
                  distribution: ObjectDistribution | None = None,
                  weights: RewardWeights | None = None, n_triangles: int | None = None,
                  n_rings: int | None = None, element: str | None = None,
-                 progress: bool = True, heldout: list[tuple[SoftDisk, float, float]] | None = None,
+                 progress: bool = True, heldout: list[tuple] | None = None,
                  curve_points: int = 20, torch_threads: int | None = 1, name: str = "policy",
                  **settings: Any) -> DesignPolicy:
     """Train a design policy over an object distribution (stable-baselines3).
@@ -549,8 +577,9 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
     progress
         Show a progress bar.
     heldout
-        Objects ``(disk, strain_limit, friction)`` on which the deterministic policy is scored
-        at every point of the learning curve (its mean reward), or ``None``.
+        Objects (:func:`heldout_objects` tuples: disk, strain limit, friction, payload factor,
+        tolerance over the radius) on which the deterministic policy is scored at every point
+        of the learning curve (its mean env reward, the worst placement's), or ``None``.
     curve_points
         Points of the learning curve.
     torch_threads
@@ -618,20 +647,22 @@ def _policy_shell(cfg: TrainingSettings, distribution: ObjectDistribution,
     }
 
 
-def _heldout_reward(policy: DesignPolicy, objects: list[tuple[SoftDisk, float, float]]
-                    ) -> float:
-    """Mean reward of the policy's designs on objects (one batched evaluation)."""
-    from envs.evaluate import evaluate_designs
+def _heldout_reward(policy: DesignPolicy, objects: list[tuple]) -> float:
+    """Mean reward of the policy's designs on objects (:func:`heldout_objects` tuples), the
+    env's robust reward over each object's placements (one batched evaluation)."""
+    return float(np.mean(heldout_rewards(policy, objects)))
 
+
+def heldout_rewards(policy: DesignPolicy, objects: list[tuple]) -> np.ndarray:
+    """The env's reward of the policy's designs on objects (:func:`heldout_objects` tuples:
+    disk, strain limit, friction, payload factor, tolerance over the radius), (B,)."""
     disks = [o[0] for o in objects]
-    needs = np.array([[o[1], o[2]] for o in objects])
-    x = policy.actions(observe_rows(disks, needs))
-    designs = policy.bounds.scale(x, disks)
-    out = evaluate_designs(designs, disks, strain_limits=needs[:, 0],
-                           friction_coefficients=needs[:, 1],
+    needs = np.array([o[1:] for o in objects], dtype=float)
+    designs = policy.bounds.scale(policy.actions(observe_rows(disks, needs)), disks)
+    out = evaluate_objects(designs, disks, needs,
                            weights=RewardWeights(**policy.meta["reward_weights"]),
-                           **policy.meta["model"])
-    return float(np.mean(out["reward"]))
+                           **policy.meta["joint_spring"], **policy.meta["model"])
+    return out["reward"]
 
 
 def write_training_outputs(policy: DesignPolicy, out: str | Path) -> dict[str, Path]:
@@ -678,9 +709,11 @@ def learning_curve_figure(curves: dict[str, list[dict[str, Any]]], path: str | P
 
 
 def heldout_objects(n: int, seed: int, distribution: ObjectDistribution | None = None
-                    ) -> list[tuple[SoftDisk, float, float]]:
+                    ) -> list[tuple[SoftDisk, float, float, float, float]]:
     """``n`` objects drawn from the distribution with their own seed (never a training
-    seed's stream: training envs draw from ``seed + i`` of the training seed)."""
+    seed's stream: training envs draw from ``seed + i`` of the training seed): tuples of
+    :meth:`~envs.design_env.ObjectDistribution.sample` (disk, strain limit, friction, payload
+    factor, placement tolerance over the radius)."""
     rng = np.random.default_rng([int(seed), 9173])
     dist = ObjectDistribution() if distribution is None else distribution
     return [dist.sample(rng) for _ in range(int(n))]

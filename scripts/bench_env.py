@@ -1,4 +1,4 @@
-"""Benchmark GripperDesign-v1: the plain step loop against batched ``evaluate_designs``.
+"""Benchmark GripperDesign-v2: the plain step loop against batched ``evaluate_designs``.
 
 Prints a summary and writes ``out/bench_env.json``. All paths draw designs uniformly from the
 default :class:`envs.DesignBounds` (relative to the object: every design is valid at rest, a few

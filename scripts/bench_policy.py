@@ -2,20 +2,24 @@
 against a per-object CMA-ES optimum and cold CMA-ES at the same K.
 
 For ``--objects`` held-out objects (:func:`optim.rl.heldout_objects`: the default distribution,
-a seed no training env draws from) and ``--seeds`` training seeds: each policy is trained
-(``--steps``, SAC; or read from ``out/bench_policy/seed{S}`` when it is there) and scored as a
-share of each object's CMA-ES optimum (1000 evaluations, the 100 %): the policy alone, the
-policy + K evaluations of CMA-ES started at its design, and cold CMA-ES with K evaluations, for
-K in 50, 100, 200. Also: the worst object, the seeds' spread, grasps that do not hold, the
-training time and the policy's time per design. Every score is the default model's reward
-(the search model; ``psm-grasp optimize`` reports a finer member's, the same for both sides).
+with its densities, payload factors and placement tolerances, a seed no training env draws
+from) and ``--seeds`` training seeds: each policy is trained (``--steps``, SAC; or read from
+``out/bench_policy/seed{S}`` when it is there) and scored as a share of each object's CMA-ES
+optimum (1000 evaluations, the 100 %): the policy alone, the policy + K evaluations of CMA-ES
+started at its design, and cold CMA-ES with K evaluations, for K in 50, 100, 200. Every reward
+is the env's: the worst over the object's placements within its tolerance
+(:func:`envs.design_env.evaluate_objects`; the problems carry the payload and the tolerance as
+:class:`envs.scenarios.Scenarios`). Also: the worst object, the seeds' spread, grasps that do
+not hold or miss, the training time and the policy's time per design. Every score is the
+default model's reward (the search model; ``psm-grasp optimize`` reports a finer member's, the
+same for both sides).
 
 ``--ablation`` also trains seed 0 with the env's reward as it is (no bounded tail,
 :func:`optim.rl.bounded_tail`) and draws both learning curves. ``--object-files N`` checks the
 commands as a user runs them: N objects of the distribution written as TOML files (with their
-strain limit and friction), ``psm-grasp design --object F`` (the shipped policy) and ``--refine
-100`` against ``psm-grasp optimize --object F --budget 1000``, each as reported (the finer
-member's reward after the finish).
+strain limit, friction, density, payload factor and placement tolerance), ``psm-grasp design
+--object F`` (the shipped policy) and ``--refine 100`` against ``psm-grasp optimize --object F
+--budget 1000``, each as reported (the finer member's reward after the finish).
 
 Writes ``out/bench_policy.json`` and ``out/bench_policy.png``.
 
@@ -34,38 +38,63 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.design_env import observe_rows
-from envs.evaluate import evaluate_designs
+from envs.design_env import evaluate_objects, observe_rows
+from envs.scenarios import Scenarios
 from optim import DesignProblem, NoGraspWarning, optimize
 from optim.rl import heldout_objects, learning_curve_figure, load_policy, train_policy
 
 HELDOUT_SEED = 12345
 REFERENCE_BUDGET = 1000
 KS = (50, 100, 200)
+REWARD_HOLDS = -1.0  # every reward of a grasp that holds (within the limit or crushing) is above
+
+
+def problem_of(obj) -> DesignProblem:
+    """The design problem of a held-out object (disk, strain limit, friction, payload factor,
+    tolerance over the radius): the env's reward, the worst over its placements."""
+    disk, limit, mu, factor, tolerance = obj
+    return DesignProblem(disk, limit, mu, payload_factor=factor,
+                         scenarios=Scenarios.of(placement_tolerance_m=tolerance * disk.radius_m))
 
 
 def reference_optima(objects, budget: int) -> np.ndarray:
     """Each object's CMA-ES optimum (seed 0), the 100 %."""
-    return np.array([optimize("cmaes", DesignProblem(d, lim, mu), budget=budget,
-                              seed=0).best_reward for d, lim, mu in objects])
+    return np.array([optimize("cmaes", problem_of(o), budget=budget, seed=0).best_reward
+                     for o in objects])
 
 
-def policy_alone(policy, objects) -> tuple[np.ndarray, np.ndarray]:
-    """Reward and holding of the policy's designs (one batched evaluation)."""
+def cached_optima(objects, budget: int, path: Path) -> np.ndarray:
+    """:func:`reference_optima`, read from ``path`` when it holds those of the same objects
+    and budget (they take the longest and do not depend on the policy), else computed and
+    written there."""
+    key = {"objects": len(objects), "heldout_seed": HELDOUT_SEED, "budget": budget,
+           "first_radius_m": objects[0][0].radius_m}
+    if path.is_file():
+        data = json.loads(path.read_text())
+        if data.get("key") == key:
+            return np.array(data["optima"])
+    optima = reference_optima(objects, budget)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"key": key, "optima": optima.tolist()}) + "\n")
+    return optima
+
+
+def policy_alone(policy, objects) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reward, holding and touching (both fingers, every placement) of the policy's designs
+    (one batched evaluation)."""
     disks = [o[0] for o in objects]
-    needs = np.array([[o[1], o[2]] for o in objects])
+    needs = np.array([o[1:] for o in objects], dtype=float)
     designs = policy.bounds.scale(policy.actions(observe_rows(disks, needs)), disks)
-    out = evaluate_designs(designs, disks, strain_limits=needs[:, 0],
-                           friction_coefficients=needs[:, 1])
-    return out["reward"], out["holds"]
+    out = evaluate_objects(designs, disks, needs)
+    return out["reward"], out["holds"], out["touching"].all(axis=1)
 
 
 def with_budget(objects, k: int, policy=None) -> np.ndarray:
     """Best reward after k evaluations: cold CMA-ES, or the policy's design and k - 1
     refining evaluations."""
     rewards = []
-    for d, lim, mu in objects:
-        problem = DesignProblem(d, lim, mu)
+    for obj in objects:
+        problem = problem_of(obj)
         if policy is None:
             rewards.append(optimize("cmaes", problem, budget=k, seed=0).best_reward)
         else:
@@ -75,10 +104,9 @@ def with_budget(objects, k: int, policy=None) -> np.ndarray:
 
 def policy_time_ms(policy, objects, repeat: int = 200) -> float:
     """Policy time of one design [ms]: the observation and the forward pass."""
-    d, lim, mu = objects[0]
     t0 = time.perf_counter()
     for _ in range(repeat):
-        policy.normalized(d, lim, mu)
+        policy.normalized(*objects[0])
     return (time.perf_counter() - t0) / repeat * 1e3
 
 
@@ -101,14 +129,16 @@ def object_file_check(n: int, folder: Path) -> dict:
 
     folder.mkdir(parents=True, exist_ok=True)
     rows = []
-    for k, (disk, limit, mu) in enumerate(heldout_objects(n, HELDOUT_SEED + 1)):
+    for k, (disk, limit, mu, factor, tol) in enumerate(heldout_objects(n, HELDOUT_SEED + 1)):
         path = folder / f"object_{k}.toml"
         path.write_text(
             "[object]\n"
             f"name = \"object {k}\"\nradius_m = {disk.radius_m!r}\n"
             f"youngs_modulus_pa = {disk.youngs_modulus_pa!r}\n"
             f"poisson_ratio = {disk.poisson_ratio!r}\nthickness_m = {disk.thickness_m!r}\n"
-            f"strain_limit = {limit!r}\nfriction_coefficient = {mu!r}\n")
+            f"density_kg_m3 = {disk.density_kg_m3!r}\npayload_factor = {factor!r}\n"
+            f"strain_limit = {limit!r}\nfriction_coefficient = {mu!r}\n"
+            f"placement_tolerance_m = {tol * disk.radius_m!r}\n")
         row = {"file": str(path)}
         for key, argv in (("optimize", ["optimize", "--budget", "1000"]),
                           ("design", ["design"]), ("design_refine_100", ["design", "--refine",
@@ -142,7 +172,7 @@ def chart(report: dict, path: Path) -> None:
 
     fig = Figure(figsize=(10, 4.2), dpi=110)
     ax, ax2 = fig.subplots(1, 2)
-    ks = list(KS)
+    ks = list(report["ks"])
     cold = [report["cold_cmaes"][str(k)]["mean"] for k in ks]
     ax.plot(ks, cold, "o-", color="tab:gray", label="cold CMA-ES, K evaluations")
     for seed, row in report["seeds"].items():
@@ -186,43 +216,58 @@ def main() -> None:
                         help="also train seed 0 without the bounded tail (learning curves)")
     parser.add_argument("--object-files", type=int, default=0, metavar="N",
                         help="check design against optimize on N object files")
+    parser.add_argument("--ks", type=int, nargs="+", default=list(KS),
+                        help="refining budgets K (default %(default)s)")
+    parser.add_argument("--reference-only", action="store_true",
+                        help="only compute the per-object optima (cached in --out)")
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
     warnings.simplefilter("ignore", NoGraspWarning)
     objects = heldout_objects(args.objects, HELDOUT_SEED)
-    optima = reference_optima(objects, REFERENCE_BUDGET)
-    report: dict = {"objects": len(objects), "reference_budget": REFERENCE_BUDGET,
+    optima = cached_optima(objects, REFERENCE_BUDGET, args.out / "bench_policy_optima.json")
+    if args.reference_only:
+        print(f"optima of {len(objects)} objects: mean {optima.mean():.4f}")
+        return
+    ks = tuple(args.ks)
+    report: dict = {"objects": len(objects), "reference_budget": REFERENCE_BUDGET, "ks": ks,
                     "optimum_mean_reward": float(optima.mean()),
                     "optima": optima.tolist(), "steps": args.steps, "seeds": {},
                     "cold_cmaes": {}}
-    for k in KS:
+    for k in ks:
         share = with_budget(objects, k) / optima
         report["cold_cmaes"][str(k)] = {"mean": float(share.mean()), "min": float(share.min())}
     policies = ({"shipped": load_policy()} if args.shipped else
                 {str(s): get_policy(s, args.steps, args.out / "bench_policy", objects)
                  for s in args.seeds})
     for name, policy in policies.items():
-        reward, holds = policy_alone(policy, objects)
+        reward, holds, touching = policy_alone(policy, objects)
         share = reward / optima
         row = {"alone": {"mean": float(share.mean()), "min": float(share.min()),
                          "worst_object": int(np.argmin(share)),
-                         "not_holding": int((~holds).sum())},
+                         "not_holding": int((~holds).sum()),
+                         "missed": int((~touching).sum()),
+                         "mean_reward": float(reward.mean())},
                "refined": {},
                "training_s": policy.meta.get("training", {}).get("wall_time_s"),
                "policy_ms": policy_time_ms(policy, objects),
                "curve": policy.meta.get("training", {}).get("curve", [])}
-        for k in KS:
-            s = with_budget(objects, k, policy) / optima
-            row["refined"][str(k)] = {"mean": float(s.mean()), "min": float(s.min())}
+        for k in ks:
+            refined = with_budget(objects, k, policy)
+            s = refined / optima
+            row["refined"][str(k)] = {"mean": float(s.mean()), "min": float(s.min()),
+                                      "not_holding": int((refined < REWARD_HOLDS).sum())}
         report["seeds"][name] = row
+        kp = "100" if 100 in ks else str(ks[-1])
         print(f"policy {name}: alone {row['alone']['mean']:.3f} (worst {row['alone']['min']:.3f},"
-              f" {row['alone']['not_holding']} not holding), + 100: "
-              f"{row['refined']['100']['mean']:.3f} (worst {row['refined']['100']['min']:.3f}); "
+              f" {row['alone']['not_holding']} not holding, {row['alone']['missed']} missed), "
+              f"+ {kp}: {row['refined'][kp]['mean']:.3f} (worst "
+              f"{row['refined'][kp]['min']:.3f}, {row['refined'][kp]['not_holding']} not "
+              "holding); "
               f"trained in {row['training_s'] or 0:.0f} s; {row['policy_ms']:.3f} ms a design",
               flush=True)
     if args.ablation:
         plain = get_policy(0, args.steps, args.out / "bench_policy", objects, tail_scale=0.0)
-        reward, holds = policy_alone(plain, objects)
+        reward, holds, _ = policy_alone(plain, objects)
         report["ablation_no_tail"] = {
             "alone": {"mean": float((reward / optima).mean()),
                       "min": float((reward / optima).min()), "not_holding": int((~holds).sum())},
@@ -244,7 +289,7 @@ def main() -> None:
     alone = [r["alone"]["mean"] for r in report["seeds"].values()]
     report["alone_spread"] = [min(alone), max(alone)]
     print("cold CMA-ES: " + ", ".join(f"K = {k}: {report['cold_cmaes'][str(k)]['mean']:.3f}"
-                                       for k in KS))
+                                       for k in ks))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_policy.json").write_text(json.dumps(report, indent=1) + "\n")
     chart(report, args.out / "bench_policy.png")

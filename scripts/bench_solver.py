@@ -48,7 +48,7 @@ def user_speed(scene, repeats: int, model: dict | None = None) -> dict:
 
     ``simulate`` of a member (default: the paper's fan, N = 20; target: wall <= 2x its compiled
     solve), ``simulate_ramp`` of 10 torques (wall <= 2x the sum of its solves) and one
-    ``GripperDesign-v1`` reset + step of the same design and member (a step <= 2x a
+    ``GripperDesign-v2`` reset + step of the same design and member (a step <= 2x a
     ``simulate``; the reset is reported beside it).
     """
     import envs

@@ -87,7 +87,7 @@ def test_every_public_entry_refuses_n_triangles_that_is_not_an_integer(entry, va
         "simulate": lambda: simulate(SCENE, 0.2, value),
         "evaluate_designs": lambda: evaluate_designs(np.zeros((1, 6)), DISK, n_triangles=value),
         "env": lambda: envs.GripperDesignEnv(n_triangles=value),
-        "gym.make": lambda: gym.make("GripperDesign-v1", n_triangles=value),
+        "gym.make": lambda: gym.make("GripperDesign-v2", n_triangles=value),
         "vector env": lambda: GripperDesignVectorEnv(2, n_triangles=value),
         "problem": lambda: DesignProblem(DISK, n_triangles=value),
         "resolve_model": lambda: resolve_model(value, element="spring"),
@@ -254,13 +254,13 @@ def test_an_unreachable_dask_scheduler_is_one_line_within_seconds(tmp_path, caps
     {"seed": -1},
 ], ids=["limit", "string-limit", "unknown", "disk", "seed"])
 def test_a_made_env_works_after_a_refused_first_reset(bad):
-    env = gym.make("GripperDesign-v1", element="spring")
+    env = gym.make("GripperDesign-v2", element="spring")
     with pytest.raises(ValueError):
         env.reset(**bad)
     obs, _ = env.reset(seed=3)
     _, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
     assert terminated and not truncated and np.isfinite(reward) and info["converged"]
-    fresh = gym.make("GripperDesign-v1", element="spring")
+    fresh = gym.make("GripperDesign-v2", element="spring")
     np.testing.assert_array_equal(obs, fresh.reset(seed=3)[0])
     env.close()
     fresh.close()
@@ -282,12 +282,12 @@ def test_a_refused_reset_leaves_the_random_stream_as_it_was():
 
 
 def test_the_made_env_keeps_one_checker_inside_the_reset_check():
-    env = gym.make("GripperDesign-v1")
-    stack = "OrderEnforcing<ResetCheck<PassiveEnvChecker<GripperDesignEnv<GripperDesign-v1>>>>"
+    env = gym.make("GripperDesign-v2")
+    stack = "OrderEnforcing<ResetCheck<PassiveEnvChecker<GripperDesignEnv<GripperDesign-v2>>>>"
     assert str(env) == f"<{stack}>"
     again = gym.make(env.spec)  # the spec builds the same stack, not a second checker outside
     assert str(again) == str(env) and again.unwrapped is not env.unwrapped
-    vec = gym.make_vec("GripperDesign-v1", num_envs=2, vectorization_mode="vector_entry_point")
+    vec = gym.make_vec("GripperDesign-v2", num_envs=2, vectorization_mode="vector_entry_point")
     assert isinstance(vec, GripperDesignVectorEnv)
 
 
@@ -519,11 +519,13 @@ def test_an_object_file_with_a_byte_order_mark_is_read(tmp_path):
 @pytest.mark.parametrize("make", ["env", "gym.make", "vector env"])
 def test_reset_options_of_the_wrong_type_are_a_named_error(make, options):
     env = {"env": lambda: envs.GripperDesignEnv(element="spring"),
-           "gym.make": lambda: gym.make("GripperDesign-v1", element="spring"),
+           "gym.make": lambda: gym.make("GripperDesign-v2", element="spring"),
            "vector env": lambda: GripperDesignVectorEnv(2, element="spring")}[make]()
     with pytest.raises(ValueError, match=r"^options must be None or a dict of reset options "
                                          r"\(allowed keys: disk, strain_limit, "
-                                         rf"friction_coefficient\), got {type(options).__name__}"):
+                                         r"friction_coefficient, payload_factor, "
+                                         r"placement_tolerance_rel\), got "
+                                         rf"{type(options).__name__}"):
         env.reset(options=options)
     obs, _ = env.reset(seed=1, options={"strain_limit": 0.1})  # and the env still works
     assert np.all(np.isfinite(obs))

@@ -1,4 +1,4 @@
-"""GripperDesign-v1 and evaluate_designs: API checkers, determinism, batching, reward order."""
+"""GripperDesign-v2 and evaluate_designs: API checkers, determinism, batching, reward order."""
 
 from __future__ import annotations
 
@@ -324,7 +324,9 @@ def test_every_default_scores_relative_designs_alike_on_objects_far_apart():
         # (the nominal payload: the search's evaluate judges it SEARCH_PAYLOAD_MARGIN heavier)
         by_problem = problem.evaluate_physical(problem.to_physical(a))["reward"]
         env = GripperDesignEnv()
-        fixed = {"disk": disk, "strain_limit": 0.1, "friction_coefficient": 0.5}
+        # evaluate_designs' defaults: payload factor 2, placed exactly
+        fixed = {"disk": disk, "strain_limit": 0.1, "friction_coefficient": 0.5,
+                 "payload_factor": 2.0, "placement_tolerance_rel": 0.0}
         env.reset(seed=0, options=fixed)
         by_env = np.array([env.step(row)[1] for row in a[:4]])
         vec = GripperDesignVectorEnv(4)
@@ -382,12 +384,12 @@ def test_every_invalid_design_scores_below_every_valid_one():
 
 def test_gymnasium_check_env():
     check_env(GripperDesignEnv(), skip_render_check=True)
-    check_env(gym.make("GripperDesign-v1", render_mode="rgb_array").unwrapped)
+    check_env(gym.make("GripperDesign-v2", render_mode="rgb_array").unwrapped)
 
 
 def test_gymnasium_check_env_as_registered():
     # as a user makes it: with the wrappers of make (no TimeLimit: one step terminates)
-    env = gym.make("GripperDesign-v1")
+    env = gym.make("GripperDesign-v2")
     assert env.spec.max_episode_steps is None
     with pytest.warns(UserWarning, match="different from the unwrapped"):
         check_env(env, skip_render_check=True)
@@ -458,7 +460,8 @@ def test_clipping_is_reported():
 def test_reset_options_fix_the_object_and_invalid_actions_are_penalized():
     env = GripperDesignEnv()
     obs, info = env.reset(seed=0, options={"disk": DISK, "strain_limit": 0.1,
-                                           "friction_coefficient": 0.9})
+                                           "friction_coefficient": 0.9, "payload_factor": 2.0,
+                                           "placement_tolerance_rel": 0.0})
     assert info["radius_m"] == DISK.radius_m and info["strain_limit"] == 0.1
     assert info["friction_coefficient"] == 0.9
     action = env.bounds.unscale(PAPER, DISK)
@@ -566,7 +569,7 @@ SAME_STEP = {"autoreset_mode": AutoresetMode.SAME_STEP}
     ("async", {"vector_kwargs": SAME_STEP}),
 ])
 def test_make_vec_evaluates_a_design_on_every_step(mode, kwargs):
-    env = gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode=mode, **kwargs)
+    env = gym.make_vec("GripperDesign-v2", num_envs=3, vectorization_mode=mode, **kwargs)
     assert env.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
     env.reset(seed=11)
     for _ in range(3):
@@ -581,13 +584,13 @@ def test_make_vec_evaluates_a_design_on_every_step(mode, kwargs):
 
 def test_make_vec_modes_agree():
     traces = {
-        mode: _run_vec(gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode=mode,
+        mode: _run_vec(gym.make_vec("GripperDesign-v2", num_envs=3, vectorization_mode=mode,
                                     **kwargs))
         for mode, kwargs in (("sync", {"vector_kwargs": SAME_STEP}),
                              ("async", {"vector_kwargs": SAME_STEP}),
                              ("vector_entry_point", {}))
     }
-    vec = gym.make_vec("GripperDesign-v1", num_envs=3)
+    vec = gym.make_vec("GripperDesign-v2", num_envs=3)
     assert isinstance(vec.unwrapped, GripperDesignVectorEnv)
     for mode in ("sync", "async"):
         _assert_same_trace(traces[mode], traces["vector_entry_point"],
@@ -603,7 +606,7 @@ def test_next_step_autoreset_is_still_available():
 
 def test_same_step_autoreset_agrees_with_sync():
     same = AutoresetMode.SAME_STEP
-    sync = _run_vec(gym.make_vec("GripperDesign-v1", num_envs=3, vectorization_mode="sync",
+    sync = _run_vec(gym.make_vec("GripperDesign-v2", num_envs=3, vectorization_mode="sync",
                                  vector_kwargs={"autoreset_mode": same}))
     ours = _run_vec(GripperDesignVectorEnv(3, autoreset_mode=same))
     _assert_same_trace(sync, ours, info_keys=("radius_m", "_radius_m", "_final_obs"))
@@ -706,9 +709,9 @@ def test_fingers_that_merely_touch_score_no_contact():
 
 
 def test_object_draws_follow_the_stated_distribution():
-    """Radius, modulus and thickness log-uniform, Poisson ratio, strain limit and friction
-    uniform (KS tests at 4000 draws), independent, every draw inside its range; a degenerate
-    range gives its value."""
+    """Radius, modulus, thickness and density log-uniform, Poisson ratio, strain limit,
+    friction, payload factor and placement tolerance uniform (KS tests at 4000 draws),
+    independent, every draw inside its range; a degenerate range gives its value."""
     from scipy import stats
 
     from envs.design_env import ObjectDistribution
@@ -716,13 +719,17 @@ def test_object_draws_follow_the_stated_distribution():
     dist = ObjectDistribution()
     rng = np.random.default_rng(5)
     draws = [dist.sample(rng) for _ in range(4000)]
+    disks = [d[0] for d in draws]
     columns = {
-        "radius_range_m": (np.array([d.radius_m for d, _, _ in draws]), True),
-        "youngs_modulus_range_pa": (np.array([d.youngs_modulus_pa for d, _, _ in draws]), True),
-        "thickness_range_m": (np.array([d.thickness_m for d, _, _ in draws]), True),
-        "poisson_ratio_range": (np.array([d.poisson_ratio for d, _, _ in draws]), False),
-        "strain_limit_range": (np.array([lim for _, lim, _ in draws]), False),
-        "friction_range": (np.array([mu for _, _, mu in draws]), False),
+        "radius_range_m": (np.array([d.radius_m for d in disks]), True),
+        "youngs_modulus_range_pa": (np.array([d.youngs_modulus_pa for d in disks]), True),
+        "thickness_range_m": (np.array([d.thickness_m for d in disks]), True),
+        "density_range_kg_m3": (np.array([d.density_kg_m3 for d in disks]), True),
+        "poisson_ratio_range": (np.array([d.poisson_ratio for d in disks]), False),
+        "strain_limit_range": (np.array([d[1] for d in draws]), False),
+        "friction_range": (np.array([d[2] for d in draws]), False),
+        "payload_factor_range": (np.array([d[3] for d in draws]), False),
+        "placement_tolerance_range_rel": (np.array([d[4] for d in draws]), False),
     }
     unit = []
     for name, (values, log) in columns.items():
@@ -732,13 +739,81 @@ def test_object_draws_follow_the_stated_distribution():
              else (values - low) / (high - low))
         assert stats.kstest(u, "uniform").pvalue > 1e-3, name
         unit.append(u)
-    # six independent draws, not one number reused (|r| ~ 0.016 for independent ones)
+    # nine independent draws, not one number reused (|r| ~ 0.016 for independent ones)
     corr = np.corrcoef(np.array(unit))
-    assert np.max(np.abs(corr - np.eye(6))) < 0.08
-    disk, _, _ = draws[0]
+    assert np.max(np.abs(corr - np.eye(len(columns)))) < 0.08
+    disk = draws[0][0]
     assert disk.distance_m == 0.0 and disk.stiffness_scale == 1.0
     fixed = ObjectDistribution(radius_range_m=(0.07, 0.07), youngs_modulus_range_pa=(5e4, 5e4),
                                strain_limit_range=(0.1, 0.1), friction_range=(0.4, 0.4))
-    disk, limit, mu = fixed.sample(rng)
+    disk, limit, mu, _, _ = fixed.sample(rng)
     assert disk.youngs_modulus_pa == pytest.approx(5e4, rel=1e-12) and limit == 0.1
     assert mu == 0.4 and disk.radius_m == pytest.approx(0.07, rel=1e-12)
+
+
+def test_a_placement_tolerance_scores_the_worst_of_the_nine_placements():
+    """With a tolerance the env's reward is the worst of the 9 placements of the +-tau box,
+    as envs.scenarios.evaluate_scenarios scores the same designs (one physical spring, the
+    nominal object's); never above the centred placement's reward, and below it for some
+    design; without a tolerance it is the one grasp of evaluate_designs."""
+    from envs.design_env import GripperDesignEnv
+    from envs.model.defaults import PAPER_TORSION_STIFFNESS_REL
+    from envs.scenarios import Scenarios, evaluate_scenarios
+
+    disk = Scene.preset("paper-r070").disk
+    a = np.random.default_rng(4).uniform(-1, 1, (6, 6))
+    env = GripperDesignEnv()
+    options = {"disk": disk, "strain_limit": 0.1, "friction_coefficient": 0.5,
+               "payload_factor": 2.0, "placement_tolerance_rel": 0.1}
+    env.reset(seed=0, options=options)
+    steps = [env.step(row) for row in a]
+    rewards = np.array([s[1] for s in steps])
+    nominal = np.array([s[4]["reward_nominal"] for s in steps])
+    table = evaluate_scenarios(
+        env.bounds.scale(a, disk), disk, Scenarios.of(placement_tolerance_m=0.1 * disk.radius_m),
+        torsion_stiffness_nm_per_rad=PAPER_TORSION_STIFFNESS_REL * disk.torque_unit_nm,
+        friction_coefficient=0.5, strain_limits=0.1, payload_factors=2.0)
+    assert len(table.scenarios) == 9
+    np.testing.assert_allclose(rewards, table.summary["reward"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(nominal, table.summary["reward_nominal"], rtol=1e-9, atol=1e-12)
+    assert np.all(rewards <= nominal) and np.any(rewards < nominal - 1e-3)
+    env.reset(seed=0, options={**options, "placement_tolerance_rel": 0.0})
+    exact = np.array([env.step(row)[1] for row in a])
+    np.testing.assert_array_equal(exact, nominal)
+
+
+def test_payload_and_tolerance_are_observed_as_ratios():
+    """The payload ratio f rho g pi r / (s E) and the tolerance over the radius are observed:
+    a 20x smaller, 50x softer disk 2.5x lighter, with the same relative tolerance, looks the
+    same and scores the same relative designs alike; a heavier payload is observed higher;
+    no payload is observed at the range's floor; bad options and distributions are named."""
+    from envs.design_env import GripperDesignEnv, ObjectDistribution, observe, payload_ratio
+
+    paper = Scene.preset("paper-r070").disk
+    small = SoftDisk(0.0035, 0.0, youngs_modulus_pa=2e3, poisson_ratio=0.45, thickness_m=0.01,
+                     density_kg_m3=paper.density_kg_m3 * 20.0 / 50.0)
+    # the payload W = f m g in the force unit s E t r (the torque unit over r)
+    assert payload_ratio(paper, 2.0) == pytest.approx(
+        paper.payload_n(2.0) / (paper.torque_unit_nm / paper.radius_m), rel=1e-12)
+    a = np.random.default_rng(9).uniform(-1, 1, (4, 6))
+    seen, scored = [], []
+    for disk in (paper, small):
+        env = GripperDesignEnv()
+        obs, _ = env.reset(seed=0, options={"disk": disk, "strain_limit": 0.1,
+                                            "friction_coefficient": 0.5,
+                                            "payload_factor": 2.0,
+                                            "placement_tolerance_rel": 0.15})
+        seen.append(obs)
+        scored.append([env.step(row)[1] for row in a])
+    np.testing.assert_allclose(seen[0], seen[1], atol=1e-6)
+    np.testing.assert_allclose(scored[0], scored[1], atol=1e-6)
+    light, heavy, none = (observe(paper, 0.1, 0.5, f, 0.1) for f in (0.5, 2.0, 0.0))
+    assert light[4] < heavy[4] and none[4] == -1.0
+    assert observe(paper, 0.1, 0.5, 2.0, 0.5)[5] == 1.0
+    env = GripperDesignEnv()
+    with pytest.raises(ValueError, match="payload_factor"):
+        env.reset(options={"payload_factor": -1.0})
+    with pytest.raises(ValueError, match="placement_tolerance_rel"):
+        env.reset(options={"placement_tolerance_rel": 0.6})
+    with pytest.raises(ValueError, match="payload ratio"):
+        ObjectDistribution(payload_factor_range=(0.0, 100.0))

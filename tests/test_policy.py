@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from cli.main import main
-from envs import DesignBounds, evaluate_designs
+from envs import DesignBounds
+from envs.design_env import evaluate_objects
 from envs.object_file import load_object
 from optim import DesignProblem, optimize
 from optim.rl import (
@@ -25,6 +26,7 @@ from optim.rl import (
 
 ROOT = Path(__file__).resolve().parents[1]
 OBJECTS = ROOT / "examples" / "objects"
+HOLDS_SHARE = 1.0  # of the held-out objects the shipped policy's design holds at every placement
 
 
 def test_the_bounded_tail_keeps_every_tier_in_order():
@@ -38,26 +40,32 @@ def test_the_bounded_tail_keeps_every_tier_in_order():
 
 
 def test_the_shipped_policy_designs_for_objects_it_never_saw():
+    """Objects of the distribution with their payloads and placement tolerances: the policy's
+    design touches every one with both fingers at every placement and holds them (the env's
+    worst placement); the design is relative."""
     policy = load_policy()
     assert policy.meta["name"] == "shipped" and policy.meta["method"] == "sac"
     objects = heldout_objects(12, seed=777)  # not the benchmark's
+    assert max(o[4] for o in objects) > 0.1 and max(o[3] for o in objects) > 1.0
     disks = [o[0] for o in objects]
-    needs = np.array([[o[1], o[2]] for o in objects])
+    needs = np.array([o[1:] for o in objects])
     x = np.array([policy.normalized(*o) for o in objects])
     assert np.all(np.abs(x) <= 1.0)
-    out = evaluate_designs(DesignBounds().scale(x, disks), disks, strain_limits=needs[:, 0],
-                           friction_coefficients=needs[:, 1])
-    assert out["holds"].all()  # no object missed, none slips
-    # the relative design is the same for two objects that differ only in size and stiffness
-    d, lim, mu = objects[0]
+    out = evaluate_objects(DesignBounds().scale(x, disks), disks, needs)
+    assert out["touching"].all()  # no object missed at any placement
+    assert out["holds"].mean() >= HOLDS_SHARE
+    # the relative design is the same for two objects of one payload ratio and relative
+    # tolerance that differ in size, stiffness and density
+    d, *rest = objects[0]
     from dataclasses import replace
 
-    small = replace(d, radius_m=d.radius_m / 20, youngs_modulus_pa=d.youngs_modulus_pa * 50)
-    np.testing.assert_array_equal(policy.normalized(d, lim, mu),
-                                  policy.normalized(small, lim, mu))
+    small = replace(d, radius_m=d.radius_m / 4, youngs_modulus_pa=d.youngs_modulus_pa / 10,
+                    density_kg_m3=d.density_kg_m3 / 2.5)
+    np.testing.assert_allclose(policy.normalized(d, *rest), policy.normalized(small, *rest),
+                               atol=1e-6)
     t0 = time.perf_counter()
     for _ in range(100):
-        policy.normalized(d, lim, mu)
+        policy.normalized(d, *rest)
     assert (time.perf_counter() - t0) / 100 < 5e-3  # a design in well under 5 ms
 
 
@@ -71,11 +79,33 @@ def test_the_policy_as_a_method_refines_within_its_budget():
     assert alone.extra["grasp_found"] and refined.method == "policy"
 
 
+def test_the_policy_observes_a_problem_s_payload_and_placement_tolerance():
+    """A strawberry placed within 1.5 mm (0.1 of its radius) and lifted with f = 1: the policy
+    designs for what it observes of the problem (its payload factor and its scenarios'
+    tolerance over the radius), and the reward is the worst of the 9 placements."""
+    from optim.rl import problem_tolerance_rel
+
+    spec = load_object(OBJECTS / "strawberry.toml")
+    problem = DesignProblem(spec.disk, spec.strain_limit, spec.friction_coefficient,
+                            payload_factor=1.0, scenarios=spec.scenarios)
+    assert problem_tolerance_rel(problem) == pytest.approx(0.1, rel=1e-12)
+    policy = load_policy()
+    result = policy.run(problem, budget=1)
+    x = policy.normalized(spec.disk, spec.strain_limit, spec.friction_coefficient, 1.0, 0.1)
+    assert result.best_design == pytest.approx(problem.design_dict(x), rel=1e-12)
+    env_reward = evaluate_objects(
+        DesignBounds().scale(x[None, :], spec.disk), [spec.disk],
+        np.array([[spec.strain_limit, spec.friction_coefficient, 1.0, 0.1]]))["reward"][0]
+    assert result.best_reward == pytest.approx(env_reward, rel=1e-9, abs=1e-12)
+    assert policy.normalized(spec.disk, spec.strain_limit, spec.friction_coefficient, 1.0,
+                             0.0) != pytest.approx(x)
+
+
 def test_a_saved_policy_round_trips_and_a_mismatch_is_a_clear_error(tmp_path):
     policy = load_policy()
     folder = policy.save(tmp_path / "copy")
     again = load_policy(folder)
-    obs = np.random.default_rng(0).uniform(-1, 1, (5, 4))
+    obs = np.random.default_rng(0).uniform(-1, 1, (5, 6))
     np.testing.assert_allclose(again.actions(obs), policy.actions(obs), rtol=0, atol=1e-6)
     meta = json.loads((folder / "policy.json").read_text())
     for key, value, match in (
@@ -100,7 +130,10 @@ def test_the_design_command_writes_a_result_like_optimize(tmp_path, capsys):
     data = json.loads((tmp_path / "design_result.json").read_text())
     assert data["method"] == "policy" and data["n_evaluations"] == 31
     assert data["extra"]["grasp_found"] is True and data["object"]["name"] == "cherry tomato"
-    assert data["best_reward"] > 0.02 and set(data["best_design"]) >= {"torque_nm"}
+    # holds within the strain limit, near the optimum: with its payload (f = 2 at 1000 kg/m^3)
+    # CMA-ES's 1000-evaluation optimum of the cherry tomato is 0.005 in the search model, the
+    # policy + 30 reaches about -0.002 as reported by the finer member
+    assert data["best_reward"] > -0.01 and set(data["best_design"]) >= {"torque_nm"}
     assert (tmp_path / "design_drawing.png").stat().st_size > 0
     bad = tmp_path / "nothing"
     bad.mkdir()
@@ -133,7 +166,7 @@ def test_a_short_training_run_extracts_the_sb3_actor():
                           heldout=objects, curve_points=2)
     curve = policy.meta["training"]["curve"]
     assert len(curve) >= 2 and all(np.isfinite(p["heldout_reward"]) for p in curve)
-    obs = np.random.default_rng(1).uniform(-1, 1, (6, 4)).astype(np.float32)
+    obs = np.random.default_rng(1).uniform(-1, 1, (6, 6)).astype(np.float32)
     sb3, _ = policy.agent.predict(obs, deterministic=True)
     np.testing.assert_allclose(policy.actions(obs), sb3, atol=1e-5)
 

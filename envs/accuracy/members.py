@@ -85,7 +85,7 @@ class Member:
         return f"N={self.n_triangles} M={self.n_rings} {self.element} {self.scales}"
 
 
-#: The default model of ``simulate``, ``evaluate_designs`` and ``GripperDesign-v1``
+#: The default model of ``simulate``, ``evaluate_designs`` and ``GripperDesign-v2``
 #: (:mod:`envs.model.defaults`): the cheapest of :data:`DEFAULT_MEMBERS` within 2 % RMS and 4 %
 #: max on the held-out disks (``choose_model(list(heldout_scenes().values()), 0.04,
 #: rms_tolerance=0.02)``, tested).
