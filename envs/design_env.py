@@ -224,7 +224,9 @@ def payload_ratio(disk: SoftDisk, payload_factor: float) -> float:
 
 
 def _payload_ratios(fields: np.ndarray, factors: np.ndarray) -> np.ndarray:
-    """:func:`payload_ratio` of rows (radius, modulus, scale, density) and factors (B,)."""
+    """:func:`payload_ratio` of rows (radius, modulus, scale, density) and factors (B,), as
+    array operations: ``SoftDisk.payload_n(f)`` over ``SoftDisk.torque_unit_nm / r`` row by
+    row (tested), without a Python call per object (a vector env observes hundreds a step)."""
     radius, modulus, scale, density = fields.T
     return factors * density * GRAVITY_M_S2 * math.pi * radius / (scale * modulus)
 
