@@ -217,3 +217,38 @@ def test_one_design_serves_tomatoes_of_a_range():
     assert out["holds"].all()
     assert (out["peak_compression"] <= limit).all()
     assert math.isfinite(problem.best_reward)
+
+
+def test_verify_solves_each_design_with_the_fem_in_its_worst_scenario():
+    """A run with a placement tolerance: verify puts each kept design, with the FEM, in the
+    scenario where the ranking member scores it worst, and confirms the reward model's reward
+    there (a coarse FEM mesh, ~seconds)."""
+    pytest.importorskip("skfem")
+    from envs.scenarios import place
+    from optim.finish import RANKING_MEMBER, finish_result
+    from optim.verify import verify_result
+
+    disk = Scene.preset("paper-r070").disk
+    sc = Scenarios.of(placement_tolerance_m=0.002)
+    problem = DesignProblem(disk, scenarios=sc, torsion_stiffness_nm_per_rad=KF)
+    result = finish_result(problem, _optimize(problem, 120))
+    report = verify_result(result, top=2, fem_rings=4)
+    designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in result.top_designs[:2]])
+    fine = problem.evaluate_scenarios(designs, RANKING_MEMBER)
+    worst = fine.summary["worst_scenario"]
+    for i, row in enumerate(report["designs"]):
+        case = fine.scenarios[int(worst[i])]
+        assert row["fem_scenario"] == case.label
+        assert row["reward_model_at_fem_scenario"] == pytest.approx(
+            fine.per_scenario["reward"][i, worst[i]], abs=1e-12)
+        # the FEM's answer is that scenario's grasp, placed and displaced like the model's
+        rows, disks, frictions, offsets = place(designs[i : i + 1], problem.disk, 0.5, [case])
+        alone = evaluate_designs(rows, disks, friction_coefficients=frictions,
+                                 offsets_x_m=offsets, torsion_stiffness_nm_per_rad=KF,
+                                 fidelity="fem", fem_rings=4)
+        assert row["fem"]["reward"] == pytest.approx(float(alone["reward"][0]), abs=1e-12)
+    s = report["summary"]
+    best = s["reported_row"]
+    assert s["best_confirmed"] == (
+        abs(report["designs"][best]["reward_model_at_fem_scenario"] - s["fem_reward_of_reported"])
+        <= s["confirm_margin"])
