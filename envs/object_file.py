@@ -52,7 +52,7 @@ from .model.defaults import (
 )
 from .scenarios import RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
-from .validation import check_range, unit_slip
+from .validation import check_range, read_text_file, unit_slip
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -307,14 +307,8 @@ def load_object(path: str | Path) -> ObjectSpec:
         value: one line naming the file, the table and the key.
     """
     p = Path(path)
-    try:
-        # "utf-8-sig": a byte-order mark, which some editors write first, is not TOML
-        text = p.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise ValueError(f"{str(p)!r}: cannot read the object file ({exc.strerror or exc})"
-                         ) from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{str(p)!r}: not a text (TOML) file") from None
+    # "utf-8-sig": a byte-order mark, which some editors write first, is not TOML
+    text = read_text_file(p, "object", "TOML", encoding="utf-8-sig")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -25,6 +25,7 @@ __all__ = [
     "check_output_file",
     "check_output_dir",
     "unit_slip",
+    "read_text_file",
     "UnitSlipWarning",
 ]
 
@@ -274,3 +275,18 @@ def unit_slip(name: str, value: float) -> str | None:
             break
     return (f"{name} = {value:g} is outside the plausible range [{low:g}, {high:g}] of a "
             f"graspable object (SI units){guess}")
+
+
+def read_text_file(path, kind: str, fmt: str, encoding: str = "utf-8") -> str:
+    """The text of a file the user named, or one ``ValueError`` line naming it: ``cannot read
+    the {kind} file (...)`` or ``not a text ({fmt}) file``."""
+    from pathlib import Path
+
+    p = Path(path)
+    try:
+        return p.read_text(encoding=encoding)
+    except OSError as exc:
+        raise ValueError(f"{str(p)!r}: cannot read the {kind} file ({exc.strerror or exc})"
+                         ) from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{str(p)!r}: not a text ({fmt}) file") from None

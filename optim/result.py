@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from envs.validation import read_text_file
+
 __all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable"]
 
 RESULT_VERSION = 1
@@ -219,13 +221,7 @@ class OptimResult:
             line and column), or not a result (a missing or unknown field, a bad value).
         """
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ValueError(f"{str(path)!r}: cannot read the result file "
-                             f"({exc.strerror or exc})") from None
-        except UnicodeDecodeError:
-            raise ValueError(f"{str(path)!r}: not a text (JSON) file") from None
+        text = read_text_file(path, "result", "JSON")
         try:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
