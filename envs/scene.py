@@ -30,6 +30,7 @@ from .model.defaults import (
 )
 from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
+from .model.jaw import STRAIGHT, JawProfile, jaw_row
 from .model.problem import (
     REST_MESSAGES,
     REST_OFFSET,
@@ -102,6 +103,12 @@ class Gripper:
     torsion_stiffness_nm_per_rad
         Torsion spring ``k_f`` at each joint [N·m/rad]; must be positive so that the jaw position
         is unique before contact.
+    jaw
+        The groove cut into the gripping faces (:class:`envs.model.jaw.JawProfile`: a cradle,
+        a V-groove; default the straight bar), both fingers alike.
+    left_jaw
+        The left finger's groove where it differs from the right one's (default ``None``: the
+        same as ``jaw``).
     """
 
     finger_length_m: float
@@ -109,6 +116,8 @@ class Gripper:
     joint_offset_m: float
     finger_width_m: float
     torsion_stiffness_nm_per_rad: float
+    jaw: JawProfile = STRAIGHT
+    left_jaw: JawProfile | None = None
 
     def __post_init__(self) -> None:
         check_range("finger_length_m", self.finger_length_m, 0.0, math.inf, low_open=True)
@@ -128,7 +137,20 @@ class Gripper:
             low_open=True,
         )
         for f in fields(self):
-            object.__setattr__(self, f.name, float(getattr(self, f.name)))
+            if f.name not in ("jaw", "left_jaw"):
+                object.__setattr__(self, f.name, float(getattr(self, f.name)))
+        for name in ("jaw", "left_jaw"):
+            value = getattr(self, name)
+            if value is None and name == "left_jaw":
+                continue
+            if not isinstance(value, JawProfile):
+                raise ValueError(f"{name} must be a JawProfile, got {type(value).__name__}")
+            value.check_fits(self.finger_length_m, self.finger_width_m)
+
+    @property
+    def jaws(self) -> tuple[JawProfile, JawProfile]:
+        """The right and the left finger's jaw profiles."""
+        return self.jaw, self.jaw if self.left_jaw is None else self.left_jaw
 
 
 @dataclass(frozen=True)
@@ -313,7 +335,8 @@ class Scene:
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                           d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
-                          float(torque_nm), d.offset_x_m]])
+                          float(torque_nm), d.offset_x_m,
+                          *(v for jaw in g.jaws for v in jaw_row(jaw))]])
 
     @property
     def reachable(self) -> bool:

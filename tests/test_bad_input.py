@@ -25,6 +25,7 @@ from envs import Design, DesignBounds, GripperDesignVectorEnv, Scene, SoftDisk, 
 from envs.design_env import ObjectDistribution
 from envs.evaluate import RewardWeights, evaluate_designs
 from envs.model.family import resolve_model
+from envs.model.jaw import JawProfile
 from envs.scene import PRESETS
 from envs.validation import check_integer, check_output_dir, check_output_file, check_range
 from optim import DesignProblem, optimize
@@ -108,13 +109,21 @@ def test_the_fan_range_check_survives_a_string():
 
 def _instances():
     design = Design.from_scene(SCENE, 0.2)
-    return [GRIPPER, DISK, design]
+    return [GRIPPER, DISK, design, JawProfile.cradle(0.07, 0.004, 0.1)]
+
+
+# the fields that hold a profile, not a number
+_PROFILE_FIELDS = ("jaw", "left_jaw")
 
 
 @pytest.mark.parametrize("value", ["0.01", True], ids=repr)
 @pytest.mark.parametrize("instance", _instances(), ids=lambda d: type(d).__name__)
 def test_every_numeric_field_of_the_dataclasses_refuses_strings_and_bools(instance, value):
     for f in dataclasses.fields(instance):
+        if f.name in _PROFILE_FIELDS:
+            with pytest.raises(ValueError, match=rf"^{f.name} must be a JawProfile, got"):
+                dataclasses.replace(instance, **{f.name: value})
+            continue
         with pytest.raises(ValueError, match=rf"^{f.name} must be a real number"):
             dataclasses.replace(instance, **{f.name: value})
 

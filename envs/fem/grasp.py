@@ -15,6 +15,7 @@ from dataclasses import fields, replace
 import numpy as np
 
 from envs.model.geometry import closed_angle_rad
+from envs.model.jaw import jaw_row
 from envs.model.holding import (
     H_GRIP,
     H_LIMIT,
@@ -141,7 +142,8 @@ def fem_grasp(
 
     inputs = {
         "version": FEM_VERSION,
-        "gripper": {f.name: getattr(grip, f.name) for f in fields(grip)},
+        "gripper": {f.name: getattr(grip, f.name) for f in fields(grip)
+                    if f.name not in ("jaw", "left_jaw")},
         "disk": {
             f.name: getattr(disk, f.name) for f in fields(disk)
             if f.name not in ("stiffness_scale", "contour_stiffness_ratio", "density_kg_m3")
@@ -153,6 +155,8 @@ def fem_grasp(
         "penalty_pa_per_m": eps,
         "al_iterations": int(al_iterations),
     }
+    if any(jaw.depth_m > 0.0 for jaw in grip.jaws):  # (straight jaws keep their keys)
+        inputs["jaws"] = [jaw_row(jaw) for jaw in grip.jaws]
     if payload > 0.0:  # (keys of results without a payload stay as they were)
         inputs["payload_n"] = payload
     path = _cache_dir() / f"{_cache_key(inputs)}.json"

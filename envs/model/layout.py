@@ -30,6 +30,8 @@ P_LAM     its Lame modulus ``lambda / E`` (plane strain; 0 for the nh-quad eleme
 P_QUAD    volumetric stiffness ``lambda / E`` of the area energy per quad of a ring mesh (the
           nh-quad element; 0: none)
 P_SPACING ring spacing of a ring mesh: 0 geometric from the hub, 1 even (:mod:`envs.model.rings`)
+P_GROOVE0 the right finger's jaw groove, ``N_GROOVE`` slots ``G_*`` (:mod:`envs.model.jaw`)
+P_GROOVE1 the left finger's
 ========  ==================================================================================
 
 The kernels keep a longer private copy: the solver's slots P_GAUGE (stiffness of the rotation
@@ -47,13 +49,19 @@ import numpy as np
 P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
 P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0, P_RINGS = range(9, 18)
 P_MU, P_LAM, P_QUAD, P_SPACING = 18, 19, 20, 21
-N_PARAMS = 22
-P_GAUGE = 22  # solver copy only: gauge spring stiffness
-P_POLICY = 23  # solver copy only: contact policy of this attempt
-P_GREF = 24  # solver copy only: the gauge spring's anchor (point 0's tangential displacement)
-P_GMAX = 25  # solver copy only: the gauge stiffness at the start of the attempt
-P_GPROX = 26  # solver copy only: the gauge's mode (GAUGE_* below)
-N_KERNEL_PARAMS = 27  # the ring table follows
+# the groove of each finger's jaw, N_GROOVE slots a finger (envs.model.jaw.pack_groove, G_*)
+G_POSITION, G_DEPTH, G_CENTRE, G_RADIUS, G_COS, G_SIN, G_MOUTH = range(7)
+N_GROOVE = 7
+P_GROOVE0 = 22  # right finger's groove (P_GROOVE0 + G_*)
+P_GROOVE1 = P_GROOVE0 + N_GROOVE  # left finger's
+N_PARAMS = P_GROOVE1 + N_GROOVE
+P_GAUGE = N_PARAMS  # solver copy only: gauge spring stiffness
+P_POLICY = N_PARAMS + 1  # solver copy only: contact policy of this attempt
+P_GREF = N_PARAMS + 2  # solver copy only: the gauge spring's anchor (point 0's tangential
+# displacement)
+P_GMAX = N_PARAMS + 3  # solver copy only: the gauge stiffness at the start of the attempt
+P_GPROX = N_PARAMS + 4  # solver copy only: the gauge's mode (GAUGE_* below)
+N_KERNEL_PARAMS = N_PARAMS + 5  # the ring table follows
 
 # ring spacing of a ring mesh (slot P_SPACING)
 SPACING_GEOMETRIC = 0.0
@@ -69,7 +77,13 @@ GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
  S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_AREA_SCALE, S_TORQUE) = range(14)
 S_OFFSET_X = 14
-N_SCENE = 15
+# the jaw profile of each finger (envs.model.jaw.JawProfile), SI: J_* slots from S_JAW0 (right
+# finger) and S_JAW1 (left finger); depth 0 is the straight bar
+J_DEPTH, J_BOTTOM_RADIUS, J_OPENING, J_POSITION = range(4)
+N_JAW = 4
+S_JAW0 = 15
+S_JAW1 = S_JAW0 + N_JAW
+N_SCENE = S_JAW1 + N_JAW
 
 # solver options
 O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)

@@ -21,7 +21,13 @@ from .defaults import CORNER_ROUNDING, DEFAULT_PHASE_RAD
 from .energy import bulk_modulus_2d, lame_per_e
 from .family import ELEMENTS
 from .geometry import bar_distance, closed_angle_of, rest_points_into
+from .jaw import MAX_DEPTH_OF_WIDTH, MAX_OPENING_RAD, groove_mouth, pack_groove
 from .layout import (
+    J_BOTTOM_RADIUS,
+    J_DEPTH,
+    J_OPENING,
+    J_POSITION,
+    N_JAW,
     N_KERNEL_PARAMS,
     N_PARAMS,
     N_SCENE,
@@ -30,6 +36,8 @@ from .layout import (
     P_C0Y,
     P_C1X,
     P_C1Y,
+    P_GROOVE0,
+    P_GROOVE1,
     P_H,
     P_HW,
     P_KA,
@@ -50,6 +58,8 @@ from .layout import (
     S_AREA_SCALE,
     S_CONTOUR_RATIO,
     S_DISTANCE,
+    S_JAW0,
+    S_JAW1,
     S_JOINT_OFFSET,
     S_LENGTH,
     S_OFFSET_X,
@@ -86,6 +96,7 @@ __all__ = [
     "REST_BEHIND_FACE",
     "REST_OVERLAP",
     "REST_OFFSET",
+    "REST_JAW",
     "REST_MESSAGES",
     "rest_codes",
     "pack_params",
@@ -99,6 +110,7 @@ __all__ = [
 # (the centred disk would be clear)
 REST_OK, REST_NOT_FINITE, REST_GRIPPER, REST_WIDTH, REST_BEHIND_FACE, REST_OVERLAP = range(6)
 REST_OFFSET = 6
+REST_JAW = 7
 REST_MESSAGES = {
     REST_OK: "valid",
     REST_NOT_FINITE: "a design value is not a finite number",
@@ -109,6 +121,8 @@ REST_MESSAGES = {
                       "decrease joint_offset_m or increase rest_angle_rad/distance_m",
     REST_OVERLAP: "the fingers overlap the disk at rest: increase rest_angle_rad or distance_m "
                   "(allowed: clearance > 0)",
+    REST_JAW: "a jaw's groove does not fit its finger (depth <= 0.75 finger_width_m, its mouth "
+              "on the gripping face, a cradle's depth <= its radius, opening angle <= 170 deg)",
     REST_OFFSET: "the disk, displaced across the gripper's axis by offset_x_m, overlaps a finger "
                  "or lies behind its gripping face at rest (the centred disk would be clear): "
                  "decrease |offset_x_m| (allowed: clearance > 0 to both fingers)",
@@ -133,10 +147,15 @@ class SceneColumns(NamedTuple):
     area_stiffness_scale: np.ndarray
     torque_nm: np.ndarray
     offset_x_m: np.ndarray
+    # the jaw profile of each finger (envs.model.jaw.JawProfile); None: straight bars
+    jaw_depth_m: np.ndarray | None = None  # (B, 2): right, left finger
+    jaw_bottom_radius_m: np.ndarray | None = None  # (B, 2)
+    jaw_opening_angle_rad: np.ndarray | None = None  # (B, 2)
+    jaw_position_m: np.ndarray | None = None  # (B, 2)
 
     def take(self, rows) -> SceneColumns:
         """The scenes of some rows."""
-        return SceneColumns(*(c[rows] for c in self))
+        return SceneColumns(*(None if c is None else c[rows] for c in self))
 
     @property
     def size(self) -> int:
@@ -144,15 +163,22 @@ class SceneColumns(NamedTuple):
 
     def rows(self) -> np.ndarray:
         """The scenes as a (B, N_SCENE) float64 matrix (layout ``S_*``)."""
-        out = np.empty((self.size, N_SCENE))
-        for k, column in enumerate(self):
+        out = np.zeros((self.size, N_SCENE))
+        for k, column in enumerate(self[:S_JAW0]):
             out[:, k] = column
+        for k, column in enumerate(self[S_JAW0:]):
+            if column is not None:
+                out[:, S_JAW0 + k] = column[:, 0]
+                out[:, S_JAW1 + k] = column[:, 1]
         return out
 
     @classmethod
     def from_rows(cls, rows: np.ndarray) -> SceneColumns:
-        """Columns (views) of a (B, N_SCENE) scene matrix."""
-        return cls(*np.asarray(rows, dtype=np.float64).T)
+        """Columns of a (B, N_SCENE) scene matrix (views, the jaws' copies)."""
+        table = np.asarray(rows, dtype=np.float64)
+        jaws = (np.stack([table[:, S_JAW0 + k], table[:, S_JAW1 + k]], axis=1)
+                for k in range(N_JAW))
+        return cls(*table[:, :S_JAW0].T, *jaws)
 
 
 @vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
@@ -220,8 +246,28 @@ def _rest_codes_into(table, codes):
             codes[i] = REST_GRIPPER
         elif not w < 2 * r:
             codes[i] = REST_WIDTH
+        elif not (_jaw_fits(table[i], S_JAW0, ln, w, r) and _jaw_fits(table[i], S_JAW1, ln, w, r)):
+            codes[i] = REST_JAW
         else:
             codes[i] = _placement_code(ln, th0, d3, w, r, d1, xc)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _jaw_fits(row, base, ln, w, r):
+    """Whether the jaw groove at ``row[base + J_*]`` fits its finger (the rules of
+    :meth:`envs.model.jaw.JawProfile.check_fits`)."""
+    depth = row[base + J_DEPTH]
+    if depth == 0.0:
+        return True
+    radius, opening = row[base + J_BOTTOM_RADIUS], row[base + J_OPENING]
+    if not (depth > 0.0 and radius >= 0.0 and 0.0 <= opening <= MAX_OPENING_RAD
+            and (radius > 0.0 or opening > 0.0) and (opening > 0.0 or depth <= radius)
+            and depth <= MAX_DEPTH_OF_WIDTH * w):
+        return False
+    half = 0.5 * opening
+    mouth = groove_mouth(depth, depth - radius, radius, math.cos(half), math.sin(half), 0.0)
+    margin = mouth + min(CORNER_ROUNDING * r, 0.05 * w)
+    return margin <= row[base + J_POSITION] <= ln - margin
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -384,6 +430,9 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_KA] = s[S_AREA_SCALE] * bulk_modulus_2d(s[S_YOUNG], s[S_POISSON]) * s[S_THICKNESS] / (
         stiffness_unit(s))
     p[P_A0] = 0.5 * math.sin(2 * math.pi / n)
+    for base, slot in ((S_JAW0, P_GROOVE0), (S_JAW1, P_GROOVE1)):
+        pack_groove(s[base + J_DEPTH], s[base + J_BOTTOM_RADIUS], s[base + J_OPENING],
+                    s[base + J_POSITION], p[P_RHO] * r, r, p, slot)
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
