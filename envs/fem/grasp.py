@@ -15,7 +15,6 @@ from dataclasses import fields, replace
 import numpy as np
 
 from envs.model.geometry import closed_angle_rad
-from envs.model.jaw import jaw_row
 from envs.model.holding import (
     H_GRIP,
     H_LIMIT,
@@ -28,6 +27,7 @@ from envs.model.holding import (
     hertz_half_width,
     holding_row,
 )
+from envs.model.jaw import jaw_row
 from envs.scene import Scene
 from envs.validation import check_range
 
