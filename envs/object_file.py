@@ -211,12 +211,14 @@ def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bo
     return value
 
 
-def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = ()
-           ) -> dict[str, float]:
-    unknown = sorted(set(data) - set(rules) - set(extra))
+def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = (),
+           after: tuple[str, ...] = ()) -> dict[str, float]:
+    """The numbers of a table by key, checked (``extra`` and ``after``: its other keys,
+    read elsewhere, named before and after the numbers' keys where a key is unknown)."""
+    unknown = sorted(set(data) - set(rules) - set(extra) - set(after))
     if unknown:
         raise ValueError(f"{where}: unknown key {unknown[0]!r}; allowed: "
-                         f"{', '.join([*extra, *rules])}")
+                         f"{', '.join([*extra, *rules, *after])}")
     missing = [k for k, rule in rules.items() if rule[-1] and k not in data]
     if missing:
         raise ValueError(f"{where}: missing key {missing[0]!r} (required: "
@@ -257,8 +259,8 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     jaw, per_finger = _jaws(f"{where}: [object]", table.pop(JAW_KEY, None),
                             table.pop(JAW_PER_FINGER_KEY, None))
     table, ranges = _ranges(f"{where}: [object]", table)
-    values = _table(f"{where}: [object]", table, OBJECT_KEYS,
-                    extra=("name", TOLERANCE_KEY, JAW_KEY, JAW_PER_FINGER_KEY))
+    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
+                    after=(JAW_KEY, JAW_PER_FINGER_KEY))
     scenarios = None
     if ranges or tolerance is not None:
         try:

@@ -483,8 +483,8 @@ class Design:
         if not isinstance(self.jaw, JawProfile):
             raise ValueError(f"jaw must be a JawProfile, got {type(self.jaw).__name__}")
         if self.left_jaw is not None and not isinstance(self.left_jaw, JawProfile):
-            raise ValueError(f"left_jaw must be None or a JawProfile, got "
-                             f"{type(self.left_jaw).__name__}")
+            raise ValueError(f"left_jaw must be a JawProfile, got "
+                             f"{type(self.left_jaw).__name__} (None: the same as jaw)")
 
     @property
     def width(self) -> int:
