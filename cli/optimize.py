@@ -58,6 +58,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
     if args.joints_apart and args.method == "policy":
         raise ValueError("--joints-apart: the design policy designs in the default design "
                          "space and cannot keep the joints apart; use another --method")
+    jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
+                      args.jaw_per_finger)
+    cli_option("--jaw", run.check_policy_jaw, args.method, jaws)
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
                                             obj, args.strain_limit, args.friction,
@@ -80,7 +83,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  element=args.element, progress=not args.no_progress,
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
-                                 robust=args.robust, joints_apart=args.joints_apart)
+                                 robust=args.robust, joints_apart=args.joints_apart,
+                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -120,8 +124,11 @@ def _verify_command(args: argparse.Namespace) -> int:
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
     path = find_result(args.out_dir, args.result)
     check_output_dir("OUT_DIR", args.out_dir)
+    recorded = OptimResult.from_json(path)
     if args.object is not None:
-        _check_same_object(args.object, OptimResult.from_json(path).object, path)
+        _check_same_object(args.object, recorded.object, path)
+    if args.jaw is not None or args.jaw_per_finger is not None:
+        _check_same_jaws(args.jaw, args.jaw_per_finger, recorded.extra, path)
     report = run.verify_outputs(args.out_dir, args.result, args.top)
     return verify_exit_code(report)
 
@@ -139,6 +146,31 @@ def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
         raise ValueError(f"--object {object_file!r}: the run in {str(result_path)!r} was for "
                          f"another object ({differ[0]} {recorded.get(differ[0])!r}, the file's "
                          f"{spec.info()[differ[0]]!r})")
+
+
+def _check_same_jaws(jaw: str | None, per_finger: bool | None, extra: dict,
+                     result_path) -> None:
+    """``verify --jaw KIND [--jaw-per-finger]``: the run in OUT_DIR must have designed those
+    jaws (a run recorded before shaped jaws designed straight bars)."""
+    ran = (extra.get("jaw", "straight"), bool(extra.get("jaw_per_finger", False)))
+    asked = (ran[0] if jaw is None else jaw, ran[1] if per_finger is None else per_finger)
+    if asked != ran:
+        def words(kind, each):
+            return f"jaw {kind!r}" + (" per finger" if each else "")
+
+        raise ValueError(f"--jaw: the run in {str(result_path)!r} designed {words(*ran)}, not "
+                         f"{words(*asked)}")
+
+
+def add_jaw_options(p: argparse.ArgumentParser, verb: str, default: str) -> None:
+    """``--jaw KIND`` and ``--jaw-per-finger`` of a command (``verb``: what they do there)."""
+    from envs.design_space import JAW_KINDS
+
+    p.add_argument("--jaw", default=None, choices=JAW_KINDS,
+                   help=f"{verb} jaws: straight bars, a circular cradle, a V-groove, or any "
+                   f"rounded V between them cut into the gripping faces (default: {default})")
+    p.add_argument("--jaw-per-finger", action="store_const", const=True, default=None,
+                   help=f"{verb} each finger's own groove (with --jaw cradle, vee or any)")
 
 
 def _demo_command(args: argparse.Namespace) -> int:
@@ -179,6 +211,8 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="the result file in OUT_DIR when it holds several")
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="check that the run was for this object file's object")
+    add_jaw_options(p, "check that the run designed these", "no check; the FEM always "
+                    "solves each design with its own jaws")
     p.set_defaults(func=_verify_command)
     return p
 
@@ -210,7 +244,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
                    "stiffness_scale, strain_limit, friction_coefficient, density_kg_m3, "
-                   "payload_factor); see examples/objects")
+                   "payload_factor, jaw, jaw_per_finger); see examples/objects")
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
@@ -272,6 +306,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    "w/2), for a gripper whose fingers cannot be stacked at the joints like "
                    "forceps jaws (default: any d3 in the box; the build sheet says when the "
                    "fingers must be stacked)")
+    add_jaw_options(p, "design", "the object file's jaw, else straight")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from .optimize import add_jaw_options
 from .options import cli_option
 
 __all__ = ["add_policy_parsers"]
@@ -51,6 +52,16 @@ def _design_command(args: argparse.Namespace) -> int:
     from optim.rl import load_policy
 
     obj = load_object(args.object)
+    # the policy designs straight jaws only: shaped jaws (asked for here or by the object
+    # file) are refused before any work, with the command that designs them
+    jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
+                      args.jaw_per_finger)
+    if jaws["jaw"] != "straight":
+        raise ValueError(
+            f"--jaw: the design policy designs straight jaws only, not jaw {jaws['jaw']!r}"
+            + (" (the object file's)" if args.jaw is None else "") + f": run psm-grasp "
+            f"optimize --object {args.object} --jaw {jaws['jaw']}"
+            + (" --jaw-per-finger" if jaws["jaw_per_finger"] else "") + " for shaped jaws")
     # a bad or mismatched policy before any work, named as typed
     policy = load_policy() if args.policy is None else cli_option("--policy", load_policy,
                                                                    args.policy)
@@ -60,7 +71,7 @@ def _design_command(args: argparse.Namespace) -> int:
     announce_compile()
     result, _ = run.run_optimize("policy", obj=obj, budget=1 + refine, seed=args.seed,
                                  out=args.out, prefix="design", policy=policy,
-                                 progress=not args.no_progress)
+                                 progress=not args.no_progress, **jaws)
     return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
 
 
@@ -101,6 +112,8 @@ def add_policy_parsers(subparsers: Any) -> None:
     design.add_argument("--refine", type=int, default=0, metavar="K",
                         help="CMA-ES evaluations around the policy's design (default 0)")
     design.add_argument("--seed", type=int, default=0)
+    add_jaw_options(design, "design", "the object file's jaw, else straight; the policy "
+                    "designs straight jaws only and refuses others")
     design.add_argument("--no-progress", action="store_true", help="no progress bar")
     design.add_argument("--out", default="out",
                         help="output folder, created if its parent exists (default %(default)s)")

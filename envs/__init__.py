@@ -1,12 +1,14 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2`` with Gymnasium::
+Importing the package registers ``GripperDesign-v2`` and ``GripperDesign-v3`` (v2 with shaped
+jaws in the action) with Gymnasium::
 
     import gymnasium as gym
     import envs
 
     env = gym.make("GripperDesign-v2")
     vec = gym.make_vec("GripperDesign-v2", num_envs=64, vectorization_mode="vector_entry_point")
+    jaws = gym.make("GripperDesign-v3", jaw="cradle")
 """
 
 from __future__ import annotations
@@ -39,10 +41,12 @@ __all__ = [
     "GripperDesignEnv",
     "GripperDesignVectorEnv",
     "ENV_ID",
+    "JAW_ENV_ID",
     "sb3_vec_env",
 ]
 
 ENV_ID = "GripperDesign-v2"
+JAW_ENV_ID = "GripperDesign-v3"  # with shaped jaws (envs.design_env.make_vector_env_v3)
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
@@ -65,4 +69,14 @@ if ENV_ID not in gymnasium.registry:
         vector_entry_point="envs.design_env:GripperDesignVectorEnv",
         # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
         # would also flag that step as truncated (Gymnasium's checker rejects it)
+    )
+
+if JAW_ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        id=JAW_ENV_ID,
+        # as v2 (reset arguments checked outside the checker, no TimeLimit); the jaws of the
+        # action chosen at make (jaw=..., jaw_per_finger=...)
+        entry_point="envs.reset_check:make_env_v3",
+        disable_env_checker=True,
+        vector_entry_point="envs.design_env:make_vector_env_v3",
     )

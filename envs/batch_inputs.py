@@ -14,6 +14,7 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
     PAPER_TORSION_STIFFNESS_REL,
 )
+from .model.jaw import DESIGN_WIDTHS, JAW_FIELDS, LEFT_JAW_FIELDS
 from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
@@ -28,20 +29,26 @@ from .validation import check_integer, check_range
 
 
 def _design_table(designs) -> np.ndarray:
+    """The design rows as a float64 table (B, 6), (B, 10) or (B, 14) (columns
+    :data:`~envs.scene.ALL_DESIGN_FIELDS`); a sequence of :class:`Design` objects as wide as
+    its widest one."""
     if isinstance(designs, Design):
         return designs.to_array()[None, :]
     if isinstance(designs, Sequence) and len(designs) > 0 and isinstance(designs[0], Design):
         if not all(isinstance(d, Design) for d in designs):
             raise ValueError("designs mixes Design objects and other values")
-        return np.stack([d.to_array() for d in designs])
+        width = max(d.width for d in designs)
+        return np.stack([d.to_array(width) for d in designs])
     try:
         arr = np.array(designs, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"designs must be a (B, {N_DESIGN}) array of numbers: {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != N_DESIGN:
+    if arr.ndim != 2 or arr.shape[1] not in DESIGN_WIDTHS:
         raise ValueError(
-            f"designs must have shape (B, {N_DESIGN}) with columns {DESIGN_FIELDS}, "
-            f"got {arr.shape} (use designs[None] for a single row)"
+            f"designs must have shape (B, {N_DESIGN}) with columns {DESIGN_FIELDS}, or (B, 10) "
+            f"or (B, 14) with the jaw columns {JAW_FIELDS} (both fingers) and "
+            f"{LEFT_JAW_FIELDS} (the left finger's) after them, got {arr.shape} (use "
+            "designs[None] for a single row)"
         )
     return arr
 

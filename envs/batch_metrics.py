@@ -28,6 +28,7 @@ from .model.holding import (
     H_PIN_Y,
     N_HOLD,
 )
+from .model.jaw import JAW_FIELDS
 from .model.problem import SceneColumns, _clearance
 from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
@@ -85,12 +86,26 @@ METRIC_KEYS: dict[str, tuple[type, tuple[int, ...]]] = {
 def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
     """Scene columns of design rows (the one Design -> Scene mapping, see
     :meth:`Design.to_scene`): the design's ``distance_m`` replaces the disk's; the disk keeps
-    its lateral offset (a placement of the object, not part of the design)."""
-    ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des.T)
+    its lateral offset (a placement of the object, not part of the design). Rows 10 or 14
+    wide carry the jaws (:data:`~envs.model.jaw.JAW_FIELDS`, both fingers or the right one's,
+    then the left one's) as the (B, 2) jaw columns; 6 wide, straight bars (``None``)."""
+    ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des[:, :N_DESIGN].T)
     radius, young, nu, thick, scale, ratio, area, offset = (np.ascontiguousarray(c)
                                                             for c in disk.T)
     return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, area,
-                        torque, offset)
+                        torque, offset, *_jaw_columns(des))
+
+
+def _jaw_columns(des: np.ndarray) -> tuple[np.ndarray | None, ...]:
+    """The jaw columns of :class:`SceneColumns` (each (B, 2): right, left finger) of design
+    rows, in the ``J_*`` order of :mod:`envs.model.layout`; ``None`` each for 6-wide rows."""
+    n_jaw = len(JAW_FIELDS)
+    if des.shape[1] == N_DESIGN:
+        return (None,) * n_jaw
+    right = des[:, N_DESIGN : N_DESIGN + n_jaw]
+    left = des[:, N_DESIGN + n_jaw :] if des.shape[1] > N_DESIGN + n_jaw else right
+    return tuple(np.ascontiguousarray(np.stack([right[:, k], left[:, k]], axis=1))
+                 for k in range(n_jaw))
 
 
 def _empty_output(batch: int) -> dict[str, np.ndarray]:

@@ -1,7 +1,9 @@
-"""GripperDesign-v2: one step designs a gripper for a soft disk; a thin adapter over physics.
+"""GripperDesign-v2 and -v3: one step designs a gripper for a soft disk; a thin adapter over
+physics.
 
 The physics and the reward live in :func:`envs.evaluate.evaluate_designs`; this module only maps
-actions to designs, draws objects, builds observations and ``info``, and renders.
+actions to designs, draws objects, builds observations and ``info``, and renders. v3 designs
+shaped jaws too (:func:`make_vector_env_v3`; its single env: :func:`envs.reset_check.make_env_v3`).
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ import math
 import operator
 import textwrap
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import gymnasium as gym
@@ -514,8 +516,10 @@ def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element
                                     DEFAULT_ELEMENT if element is None else element, calibrated))
 
 
-def _spaces() -> tuple[spaces.Box, spaces.Box]:
-    action = spaces.Box(-1.0, 1.0, shape=(N_DESIGN,), dtype=np.float32)
+def _spaces(bounds: DesignBounds) -> tuple[spaces.Box, spaces.Box]:
+    """The action space (one coordinate per column of the bounds: 6, plus the jaw columns)
+    and the observation space."""
+    action = spaces.Box(-1.0, 1.0, shape=(bounds.n_var,), dtype=np.float32)
     obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
     return action, obs
 
@@ -547,7 +551,7 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
         scene = chosen.to_scene(disk, **spring)
     except ValueError as exc:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
-        draw_design(fig.add_subplot(), design, disk.radius_m,
+        draw_design(fig.add_subplot(), design[:N_DESIGN], disk.radius_m,
                     title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
         return figure_rgb_array(fig)
     key = (tuple(design.tolist()), disk, model, tuple(spring.items()))
@@ -705,9 +709,16 @@ class GripperDesignEnv(gym.Env):
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
     `clipped`, the physical `design` (6 values in SI units, :data:`envs.scene.DESIGN_FIELDS`
-    order) and the object.
+    order; 10 or 14 with shaped jaws, :data:`envs.scene.ALL_DESIGN_FIELDS`) and the object.
 
     ## Version History
+
+    * v3: shaped jaws. The action gains the jaw columns of the design space
+      (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``): a groove cut into the
+      gripping faces, chosen at make, `gym.make("GripperDesign-v3", jaw="cradle")` (default
+      `"any"`: depth, bottom radius, opening angle and position, shape 10; `"cradle"` and
+      `"vee"` 9; `jaw_per_finger=True` doubles the jaw columns). The observation, the
+      objects and the reward are v2's; `bounds` may be given too (its jaw is replaced).
 
     * v2: the payload and the placement tolerance: the object's density, a payload factor
       and a placement tolerance over the radius are drawn at reset (and reset options); the
@@ -748,7 +759,7 @@ class GripperDesignEnv(gym.Env):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
-        self.action_space, self.observation_space = _spaces()
+        self.action_space, self.observation_space = _spaces(self.bounds)
         self._disk: SoftDisk | None = None
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
@@ -779,7 +790,7 @@ class GripperDesignEnv(gym.Env):
     def step(self, action):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
-        act, clipped = _check_actions(action, (N_DESIGN,))
+        act, clipped = _check_actions(action, (self.bounds.n_var,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
                                weights=self.weights, **self.joint_spring,
@@ -905,7 +916,7 @@ class GripperDesignVectorEnv(VectorEnv):
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.max_episode_steps = max_episode_steps
-        self.single_action_space, self.single_observation_space = _spaces()
+        self.single_action_space, self.single_observation_space = _spaces(self.bounds)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs
@@ -967,7 +978,7 @@ class GripperDesignVectorEnv(VectorEnv):
         return mask
 
     def _evaluate(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, dict]:
-        act, clipped = _check_actions(actions[rows], (rows.size, N_DESIGN))
+        act, clipped = _check_actions(actions[rows], (rows.size, self.bounds.n_var))
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_objects(designs, [self._disks[i] for i in rows.tolist()],
                                self._needs[rows], weights=self.weights, **self.joint_spring,
@@ -1016,8 +1027,9 @@ class GripperDesignVectorEnv(VectorEnv):
         if any(d is None for d in self._disks):
             raise ResetNeeded("call reset() before step()")
         actions = np.asarray(actions)
-        if actions.shape != (n, N_DESIGN):
-            raise ValueError(f"actions must have shape ({n}, {N_DESIGN}), got {actions.shape}")
+        if actions.shape != (n, self.bounds.n_var):
+            raise ValueError(f"actions must have shape ({n}, {self.bounds.n_var}), got "
+                             f"{actions.shape}")
         rewards = np.zeros(n)
         terminated = np.zeros(n, dtype=np.bool_)
         truncated = np.zeros(n, dtype=np.bool_)
@@ -1063,3 +1075,23 @@ class GripperDesignVectorEnv(VectorEnv):
                           self._render_caches[i])
             for i in range(self.num_envs)
         )
+
+
+def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
+               bounds: DesignBounds | None = None) -> DesignBounds:
+    """The design space of ``GripperDesign-v3``: ``bounds`` (default the default box) with
+    the jaws ``jaw`` (one of :data:`envs.design_space.JAW_KINDS`, default ``"any"``) and
+    ``jaw_per_finger``, at their kind's default ranges."""
+    if bounds is not None and not isinstance(bounds, DesignBounds):
+        raise ValueError(f"bounds must be None or a DesignBounds, got {type(bounds).__name__}")
+    base = DesignBounds() if bounds is None else bounds
+    return replace(base, jaw=jaw, jaw_per_finger=jaw_per_finger, jaw_low=None, jaw_high=None)
+
+
+def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,
+                       bounds: DesignBounds | None = None, **kwargs: Any
+                       ) -> GripperDesignVectorEnv:
+    """The vector entry point of ``GripperDesign-v3``: a :class:`GripperDesignVectorEnv`
+    whose actions carry the jaw columns (:func:`jaw_bounds`); ``kwargs`` as for the class."""
+    return GripperDesignVectorEnv(num_envs, bounds=jaw_bounds(jaw, jaw_per_finger, bounds),
+                                  **kwargs)

@@ -17,6 +17,17 @@ A design is six numbers in SI units, in the column order of :data:`DESIGN_FIELDS
 | 3 | ``finger_width_m`` | finger width ``w`` | m |
 | 4 | ``torque_nm`` | actuation torque ``T_a`` on each finger | N·m |
 | 5 | ``distance_m`` | object placement ``d_1`` (joints' line to disk) | m |
+
+Shaped jaws (:mod:`envs.model.jaw`) add four columns per groove: a row 10 wide cuts the same
+groove into both fingers, a row 14 wide gives the left finger its own (columns 10-13, the same
+fields prefixed ``left_``). A depth of 0 is the straight bar.
+
+| col | field | meaning | unit |
+|---|---|---|---|
+| 6 | ``jaw_depth_m`` | groove depth ``h`` below the gripping face (0: straight) | m |
+| 7 | ``jaw_bottom_radius_m`` | radius ``R_b`` of the groove's rounded bottom (a cradle's) | m |
+| 8 | ``jaw_opening_angle_rad`` | full angle between the flanks (0: a cradle) | rad |
+| 9 | ``jaw_position_m`` | the groove's centre along the finger from the joint | m |
 """
 
 from __future__ import annotations
@@ -194,7 +205,11 @@ def evaluate_designs(
     ----------
     designs
         Array of shape (B, 6) in SI units with the columns of :data:`DESIGN_FIELDS`, a sequence
-        of :class:`Design`, or one :class:`Design`.
+        of :class:`Design`, or one :class:`Design`. Shaped jaws: (B, 10) with the four
+        :data:`~envs.model.jaw.JAW_FIELDS` after the six (both fingers alike), or (B, 14) with
+        the left finger's four :data:`~envs.model.jaw.LEFT_JAW_FIELDS` after those (the
+        module's table). A groove that does not fit its finger makes its row invalid at rest
+        (:data:`~envs.model.problem.REST_JAW`), the other rows are answered.
     disks
         One :class:`~envs.scene.SoftDisk` for all rows or a sequence of B disks. Their radius,
         material, thickness and lateral offset ``offset_x_m`` are used; their ``distance_m`` is

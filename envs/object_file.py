@@ -15,6 +15,9 @@ A designer's own object is four numbers and, optionally, what the design must re
                                     # [along, across] the gripper's axis
     density_kg_m3 = 1000          # optional: its density (default 1000, water-like)
     payload_factor = 2            # optional: payload W = f m g to lift (default 2; 0: none)
+    jaw = "cradle"                # optional: the jaws to design, "straight" (default),
+                                  # "cradle", "vee" or "any" (envs.design_space.DesignBounds)
+    jaw_per_finger = false        # optional: each finger its own groove (default false)
 
 A range instead of a number, e.g. ``radius_m = [0.010, 0.015]``, asks for one design that
 serves every object in it (radius, modulus, Poisson ratio, thickness, density, friction): the
@@ -44,6 +47,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from .design_space import JAW_KINDS
 from .model.defaults import (
     DEFAULT_STIFFNESS_SCALE,
     MAX_FRICTION_COEFFICIENT,
@@ -88,6 +92,8 @@ TABLES = ("object", "gripper")
 # the placement tolerance: one number (both ways) or [along, across] the gripper's axis [m]
 TOLERANCE_KEY = "placement_tolerance_m"
 TOLERANCE_RULE = (0.0, math.inf, False, False, False)
+# the jaws a design problem designs (envs.design_space.DesignBounds): a word and a flag
+JAW_KEY, JAW_PER_FINGER_KEY = "jaw", "jaw_per_finger"
 
 
 @dataclass(frozen=True)
@@ -131,6 +137,11 @@ class ObjectSpec:
         The object's ranges and placement tolerance (:class:`envs.scenarios.Scenarios`), or
         ``None`` when the file gives neither; ``disk`` and ``friction_coefficient`` are then
         the ranges' centre.
+    payload_factor
+        ``f`` of the payload to lift, or ``None``.
+    jaw, jaw_per_finger
+        The jaws to design (one of :data:`envs.design_space.JAW_KINDS`) and whether each
+        finger has its own groove, or ``None`` (the caller's default: straight bars).
     """
 
     name: str
@@ -141,6 +152,8 @@ class ObjectSpec:
     path: Path | None = None
     scenarios: Scenarios | None = None
     payload_factor: float | None = None
+    jaw: str | None = None
+    jaw_per_finger: bool | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -173,7 +186,10 @@ class ObjectSpec:
                 "friction_coefficient": self.friction_coefficient,
                 "payload_factor": self.payload_factor,
                 "file": None if self.path is None else str(self.path),
-                **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()})}
+                **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()}),
+                **{k: v for k, v in ((JAW_KEY, self.jaw),
+                                     (JAW_PER_FINGER_KEY, self.jaw_per_finger))
+                   if v is not None}}
 
     def _where(self) -> str:
         return str(self.path) if self.path is not None else self.name
@@ -195,12 +211,14 @@ def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bo
     return value
 
 
-def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = ()
-           ) -> dict[str, float]:
-    unknown = sorted(set(data) - set(rules) - set(extra))
+def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = (),
+           after: tuple[str, ...] = ()) -> dict[str, float]:
+    """The numbers of a table by key, checked (``extra`` and ``after``: its other keys,
+    read elsewhere, named before and after the numbers' keys where a key is unknown)."""
+    unknown = sorted(set(data) - set(rules) - set(extra) - set(after))
     if unknown:
         raise ValueError(f"{where}: unknown key {unknown[0]!r}; allowed: "
-                         f"{', '.join([*extra, *rules])}")
+                         f"{', '.join([*extra, *rules, *after])}")
     missing = [k for k, rule in rules.items() if rule[-1] and k not in data]
     if missing:
         raise ValueError(f"{where}: missing key {missing[0]!r} (required: "
@@ -238,8 +256,11 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
         raise ValueError(f"{where}: [object] name must be a non-empty string, got {name!r}")
     table = dict(table)
     tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
+    jaw, per_finger = _jaws(f"{where}: [object]", table.pop(JAW_KEY, None),
+                            table.pop(JAW_PER_FINGER_KEY, None))
     table, ranges = _ranges(f"{where}: [object]", table)
-    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY))
+    values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
+                    after=(JAW_KEY, JAW_PER_FINGER_KEY))
     scenarios = None
     if ranges or tolerance is not None:
         try:
@@ -253,7 +274,24 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
                       values.get("friction_coefficient"), gripper, path, scenarios,
-                      values.get("payload_factor"))
+                      values.get("payload_factor"), jaw, per_finger)
+
+
+def _jaws(where: str, jaw: Any, per_finger: Any) -> tuple[str | None, bool | None]:
+    """``jaw`` (one of :data:`~envs.design_space.JAW_KINDS`) and ``jaw_per_finger`` (true or
+    false, with a groove only), each ``None`` when the file does not set it."""
+    if jaw is not None and (not isinstance(jaw, str) or jaw not in JAW_KINDS):
+        raise ValueError(f"{where}: {JAW_KEY} must be one of "
+                         f"{', '.join(repr(k) for k in JAW_KINDS)}, got {jaw!r}")
+    if per_finger is not None:
+        if not isinstance(per_finger, bool):
+            raise ValueError(f"{where}: {JAW_PER_FINGER_KEY} must be true or false, got "
+                             f"{per_finger!r}")
+        if per_finger and jaw in (None, "straight"):
+            raise ValueError(f"{where}: {JAW_PER_FINGER_KEY} = true needs {JAW_KEY} = "
+                             + ", ".join(repr(k) for k in JAW_KINDS[1:])
+                             + f" (a groove to cut into each finger), got {JAW_KEY} = {jaw!r}")
+    return jaw, per_finger
 
 
 def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str, tuple]]:

@@ -22,9 +22,9 @@ import gymnasium as gym
 from gymnasium.utils import RecordConstructorArgs
 from gymnasium.wrappers import PassiveEnvChecker
 
-from .design_env import GripperDesignEnv, check_reset_arguments
+from .design_env import GripperDesignEnv, check_reset_arguments, jaw_bounds
 
-__all__ = ["ResetCheck", "make_env"]
+__all__ = ["ResetCheck", "make_env", "make_env_v3"]
 
 
 class ResetCheck(gym.Wrapper, RecordConstructorArgs):
@@ -58,5 +58,14 @@ def make_env(**kwargs: Any) -> gym.Env:
     return ResetCheck(PassiveEnvChecker(GripperDesignEnv(**kwargs)))
 
 
+def make_env_v3(*, jaw: str = "any", jaw_per_finger: bool = False, bounds=None,
+                **kwargs: Any) -> gym.Env:
+    """The entry point of ``GripperDesign-v3``: :func:`make_env` with the jaw columns in the
+    action (:func:`envs.design_env.jaw_bounds`: ``jaw`` one of ``"straight"``, ``"cradle"``,
+    ``"vee"``, ``"any"`` (default), ``jaw_per_finger``)."""
+    return make_env(bounds=jaw_bounds(jaw, jaw_per_finger, bounds), **kwargs)
+
+
 # gym.make reads the render modes from its entry point
 make_env.metadata = GripperDesignEnv.metadata  # type: ignore[attr-defined]
+make_env_v3.metadata = GripperDesignEnv.metadata  # type: ignore[attr-defined]

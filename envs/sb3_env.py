@@ -147,7 +147,8 @@ class _BatchedVecEnvMethods:
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
-        """Store the actions (float (num_envs, 6) in [-1, 1]) for :meth:`step_wait`."""
+        """Store the actions (float (num_envs, n) in [-1, 1], n the action space's width: 6,
+        more with shaped jaws) for :meth:`step_wait`."""
         self._actions = np.asarray(actions)
 
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
@@ -317,7 +318,9 @@ def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs: Any):
         ``render_mode`` (``None`` or ``"rgb_array"``), ``bounds``, ``distribution``,
         ``weights``, ``n_triangles``, ``torsion_stiffness_rel`` (the joint spring relative to
         each object, the default) or ``torsion_stiffness_nm_per_rad`` (absolute), ...: as for
-        :class:`~envs.design_env.GripperDesignVectorEnv`.
+        :class:`~envs.design_env.GripperDesignVectorEnv`. Shaped jaws (GripperDesign-v3's
+        actions): ``bounds=envs.design_env.jaw_bounds("cradle")``; the action space is as wide
+        as the bounds' columns.
 
     Returns
     -------

@@ -34,6 +34,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .evaluate import METRIC_KEYS, evaluate_designs
+from .model.jaw import DESIGN_WIDTHS
 from .scene import DESIGN_FIELDS, SoftDisk
 from .validation import check_range
 
@@ -345,7 +346,9 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
     ----------
     designs
         Array (B, 6) of SI designs (columns :data:`~envs.scene.DESIGN_FIELDS`) placed against
-        the nominal object: its ``distance_m`` is the nominal disk's ``d_1``.
+        the nominal object: its ``distance_m`` is the nominal disk's ``d_1``; or (B, 10) or
+        (B, 14) with the jaw columns (:data:`~envs.scene.ALL_DESIGN_FIELDS`), absolute like
+        every other column: one physical gripper in every scenario.
     disk
         The nominal object (:meth:`Scenarios.nominal_disk`).
     scenarios
@@ -372,9 +375,9 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
         if name in kwargs:
             raise ValueError(f"{name} is set by the scenarios; do not pass it")
     designs = np.asarray(designs, dtype=np.float64)
-    if designs.ndim != 2 or designs.shape[1] != len(DESIGN_FIELDS):
-        raise ValueError(f"designs must have shape (B, {len(DESIGN_FIELDS)}), got "
-                         f"{designs.shape}")
+    if designs.ndim != 2 or designs.shape[1] not in DESIGN_WIDTHS:
+        raise ValueError(f"designs must have shape (B, n) with n in {DESIGN_WIDTHS} (the "
+                         f"columns of envs.scene.ALL_DESIGN_FIELDS), got {designs.shape}")
     cases = scenarios.scenarios()
     # design-major: row b K + k is design b in scenario k
     rows, disks, frictions, offsets = place(np.repeat(designs, len(cases), axis=0), disk,

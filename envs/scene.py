@@ -30,7 +30,15 @@ from .model.defaults import (
 )
 from .model.energy import bulk_modulus_2d
 from .model.geometry import closed_angle_rad, distance_to_finger_bar
-from .model.jaw import STRAIGHT, JawProfile, jaw_row
+from .model.jaw import (
+    DESIGN_WIDTHS,
+    JAW_FIELDS,
+    LEFT_JAW_FIELDS,
+    STRAIGHT,
+    JawProfile,
+    jaw_row,
+    jaws_of_row,
+)
 from .model.problem import (
     REST_MESSAGES,
     REST_OFFSET,
@@ -50,6 +58,10 @@ __all__ = [
     "Design",
     "DESIGN_FIELDS",
     "RELATIVE_FIELDS",
+    "ALL_DESIGN_FIELDS",
+    "design_fields",
+    "design_row",
+    "design_mapping",
     "PRESETS",
     "design_from_relative",
     "relative_from_design",
@@ -68,6 +80,61 @@ DESIGN_FIELDS = (
     "distance_m",
 )
 N_DESIGN = len(DESIGN_FIELDS)
+# A design row may carry jaw profiles after those six (envs.model.jaw.DESIGN_WIDTHS): 6 wide
+# (straight bars), 10 (+ JAW_FIELDS: both fingers alike) or 14 (+ LEFT_JAW_FIELDS: the left
+# finger's own); the fields of the widest row, in order.
+ALL_DESIGN_FIELDS = (*DESIGN_FIELDS, *JAW_FIELDS, *LEFT_JAW_FIELDS)
+
+
+def design_fields(width: int) -> tuple[str, ...]:
+    """The column names of a design row ``width`` wide (one of
+    :data:`~envs.model.jaw.DESIGN_WIDTHS`: 6, 10 or 14); ``ValueError`` for another width."""
+    if isinstance(width, bool) or width not in DESIGN_WIDTHS:
+        raise ValueError(f"a design row has {' or '.join(map(str, DESIGN_WIDTHS))} columns "
+                         f"({N_DESIGN} of DESIGN_FIELDS, then JAW_FIELDS, then "
+                         f"LEFT_JAW_FIELDS), got {width!r}")
+    return ALL_DESIGN_FIELDS[:width]
+
+
+def design_row(design) -> np.ndarray:
+    """A design given by name (``{field: value}``, SI: a result JSON's ``design``) as a row
+    6, 10 or 14 wide: the six :data:`DESIGN_FIELDS`, then the jaw fields it has
+    (:data:`~envs.model.jaw.JAW_FIELDS`, and :data:`~envs.model.jaw.LEFT_JAW_FIELDS` after
+    them).
+
+    Raises
+    ------
+    ValueError
+        A missing design field, left-finger jaw fields without the jaw fields, a partial set
+        of jaw fields, or a value that is not a number.
+    """
+    if not hasattr(design, "keys"):
+        raise ValueError(f"a design must be a mapping of its fields, got {type(design).__name__}")
+    names = list(DESIGN_FIELDS)
+    for group in (JAW_FIELDS, LEFT_JAW_FIELDS):
+        present = [k for k in group if k in design]
+        if not present:
+            break
+        if len(present) != len(group):
+            missing = [k for k in group if k not in design]
+            raise ValueError(f"a design with {present[0]!r} needs all of {group}, missing "
+                             f"{missing[0]!r}")
+        names.extend(group)
+    missing = [k for k in ALL_DESIGN_FIELDS if k not in names and k in design]
+    if missing:
+        raise ValueError(f"a design with {missing[0]!r} needs the jaw fields {JAW_FIELDS}")
+    absent = [k for k in DESIGN_FIELDS if k not in design]
+    if absent:
+        raise ValueError(f"a design needs the fields {DESIGN_FIELDS}, missing {absent[0]!r}")
+    return np.array([check_real(k, design[k]) for k in names], dtype=np.float64)
+
+
+def design_mapping(row) -> dict[str, float]:
+    """A design row 6, 10 or 14 wide as ``{field: value}`` (the inverse of
+    :func:`design_row`)."""
+    values = np.asarray(row, dtype=np.float64).reshape(-1)
+    return dict(zip(design_fields(values.size), values.tolist(), strict=True))
+
 
 # The same design relative to its object, in this column order: lengths in disk radii, the
 # torque in the disk's torque unit ``s E t r^2`` and, instead of the placement ``d_1``, the
@@ -375,8 +442,9 @@ class Design:
     """One gripper design and object placement, in SI units.
 
     A design may be physically impossible (fingers overlapping the disk, width larger than the
-    length, ...): :func:`evaluate_designs` reports it with ``valid_at_rest=False`` and the invalid
-    penalty instead of raising, so that optimizers can explore freely.
+    length, a groove that does not fit its finger, ...): :func:`evaluate_designs` reports it
+    with ``valid_at_rest=False`` and the invalid penalty instead of raising, so that optimizers
+    can explore freely.
 
     Parameters
     ----------
@@ -392,6 +460,11 @@ class Design:
         Actuation torque ``T_a`` on each finger [N·m].
     distance_m
         Distance ``d_1`` from the joints' line to the nearest point of the undeformed disk [m].
+    jaw
+        The groove cut into the gripping faces (:class:`~envs.model.jaw.JawProfile`; default
+        the straight bar), both fingers alike.
+    left_jaw
+        The left finger's groove where it differs (default ``None``: the same as ``jaw``).
     """
 
     finger_length_m: float
@@ -400,11 +473,26 @@ class Design:
     finger_width_m: float
     torque_nm: float
     distance_m: float
+    jaw: JawProfile = STRAIGHT
+    left_jaw: JawProfile | None = None
 
     def __post_init__(self) -> None:
         # any number (an impossible design is the evaluator's to report), but a number
-        for f in fields(self):
-            object.__setattr__(self, f.name, check_real(f.name, getattr(self, f.name)))
+        for name in DESIGN_FIELDS:
+            object.__setattr__(self, name, check_real(name, getattr(self, name)))
+        if not isinstance(self.jaw, JawProfile):
+            raise ValueError(f"jaw must be a JawProfile, got {type(self.jaw).__name__}")
+        if self.left_jaw is not None and not isinstance(self.left_jaw, JawProfile):
+            raise ValueError(f"left_jaw must be a JawProfile, got "
+                             f"{type(self.left_jaw).__name__} (None: the same as jaw)")
+
+    @property
+    def width(self) -> int:
+        """Columns of :meth:`to_array`: 6 with straight bars, 10 with one jaw profile for both
+        fingers, 14 with the left finger's own."""
+        if self.left_jaw is not None:
+            return DESIGN_WIDTHS[2]
+        return DESIGN_WIDTHS[0] if self.jaw == STRAIGHT else DESIGN_WIDTHS[1]
 
     def to_scene(self, disk: SoftDisk, torsion_stiffness_nm_per_rad: float | None = None, *,
                  torsion_stiffness_rel: float | None = None) -> Scene:
@@ -412,33 +500,48 @@ class Design:
 
         The joint spring is relative to the disk unless given in N·m/rad
         (:func:`joint_spring`; default: the paper gripper's ratio to its r = 0.07 m disk's
-        torque unit). The batch evaluator maps design rows to scenes the same way
-        (:func:`envs.evaluate.evaluate_designs`); raises ``ValueError`` for a design invalid at
-        rest, as :class:`Scene` does.
+        torque unit). The gripper carries the design's jaws. The batch evaluator maps design
+        rows to scenes the same way (:func:`envs.evaluate.evaluate_designs`); raises
+        ``ValueError`` for a design invalid at rest, as :class:`Scene` does.
         """
         kf = joint_spring_nm_per_rad(disk, torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         gripper = Gripper(self.finger_length_m, self.rest_angle_rad, self.joint_offset_m,
-                          self.finger_width_m, kf)
+                          self.finger_width_m, kf, jaw=self.jaw, left_jaw=self.left_jaw)
         return Scene(gripper, replace(disk, distance_m=self.distance_m))
 
     @classmethod
     def from_scene(cls, scene: Scene, torque_nm: float) -> Design:
-        """The design of a scene's gripper and disk placement at an actuation torque."""
+        """The design of a scene's gripper (its jaws included) and disk placement at an
+        actuation torque."""
         g = scene.gripper
         return cls(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
-                   torque_nm, scene.disk.distance_m)
+                   torque_nm, scene.disk.distance_m, g.jaw, g.left_jaw)
 
-    def to_array(self) -> np.ndarray:
-        """The design as a float64 array of shape (6,) in :data:`DESIGN_FIELDS` order."""
-        return np.array([getattr(self, name) for name in DESIGN_FIELDS], dtype=np.float64)
+    def to_array(self, width: int | None = None) -> np.ndarray:
+        """The design as a float64 row in :data:`ALL_DESIGN_FIELDS` order, :attr:`width`
+        wide (6, 10 or 14), or ``width`` wide when given and at least :attr:`width` (a
+        straight design as 10 columns has depth 0; the left jaw repeats the jaw)."""
+        width = self.width if width is None else width
+        design_fields(width)
+        if width < self.width:
+            raise ValueError(f"this design needs {self.width} columns, got width={width!r}")
+        jaws = [self.jaw, self.jaw if self.left_jaw is None else self.left_jaw]
+        values = [getattr(self, name) for name in DESIGN_FIELDS]
+        for jaw in jaws[: (width - N_DESIGN) // len(JAW_FIELDS)]:
+            values.extend(jaw_row(jaw))
+        return np.array(values, dtype=np.float64)
 
     @classmethod
     def from_array(cls, values) -> Design:
-        """Build a design from 6 numbers in :data:`DESIGN_FIELDS` order."""
+        """Build a design from a row of 6, 10 or 14 numbers in :data:`ALL_DESIGN_FIELDS`
+        order (``ValueError`` for another shape or a groove out of the ranges of
+        :class:`~envs.model.jaw.JawProfile`)."""
         arr = np.asarray(values, dtype=np.float64)
-        if arr.shape != (N_DESIGN,):
-            raise ValueError(f"a design needs shape ({N_DESIGN},), got {arr.shape}")
-        return cls(*arr.tolist())
+        if arr.ndim != 1 or arr.size not in DESIGN_WIDTHS:
+            raise ValueError(f"a design needs shape (n,) with n in {DESIGN_WIDTHS}, got "
+                             f"{arr.shape}")
+        jaw, left = jaws_of_row(arr)
+        return cls(*arr[:N_DESIGN].tolist(), jaw, left)
 
 
 SPRING_TWICE = ("give the joint spring once: torsion_stiffness_rel (relative to the object) or "

@@ -14,15 +14,16 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from envs.evaluate import DESIGN_FIELDS
+from envs.evaluate import N_DESIGN
 from envs.model.defaults import (
     DEFAULT_CONTOUR_STIFFNESS_RATIO,
     DEFAULT_DENSITY_KG_M3,
     PAPER_N_TRIANGLES,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from envs.model.jaw import jaws_of_row
 from envs.render import draw_design, draw_grasp, grasp_figure
-from envs.scene import Design, Scene, SoftDisk
+from envs.scene import Design, Scene, SoftDisk, design_row
 
 from .build_sheet import assembly_of
 from .result import OptimResult
@@ -61,7 +62,30 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
     disk = disk_of(obj, design["distance_m"])
     torsion = obj.get("torsion_stiffness_nm_per_rad", PAPER_TORSION_STIFFNESS_NM_PER_RAD)
     # the one Design -> Scene mapping, the one evaluate_designs scored
-    return Design(**{k: design[k] for k in DESIGN_FIELDS}).to_scene(disk, torsion)
+    return Design.from_array(design_row(design)).to_scene(disk, torsion)
+
+
+def jaw_label(design: dict[str, float]) -> str:
+    """The jaws of a design (dict in SI units) for a chart's title, in millimetres: ``""``
+    for straight bars, else a line per distinct groove (``"; jaws: cradle R = ..."``)."""
+    row = design_row(design)
+    if row.size == N_DESIGN:
+        return ""
+    try:
+        jaws = jaws_of_row(row)
+    except ValueError:  # (an impossible groove: the chart shows the bare design)
+        return "\njaws: out of range"
+    parts = []
+    for side, jaw in zip(("", "left "), jaws, strict=True):
+        if jaw is None or (side and jaw == jaws[0]):
+            continue
+        text = f"{side}{jaw.kind}"
+        if jaw.depth_m > 0.0:
+            text += (f" h = {jaw.depth_m * 1e3:.3g} mm, R = {jaw.bottom_radius_m * 1e3:.3g} mm, "
+                     f"{math.degrees(jaw.opening_angle_rad):.0f}°, at "
+                     f"{jaw.position_m * 1e3:.3g} mm")
+        parts.append(text)
+    return "\njaws: " + "; ".join(parts)
 
 
 def model_of(obj: dict[str, Any]) -> dict[str, Any]:
@@ -80,7 +104,7 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
     try:
         scene = scene_of(design, obj)
     except ValueError:
-        row = np.array([design[k] for k in DESIGN_FIELDS])
+        row = design_row(design)[:N_DESIGN]  # (the bars at rest, without their grooves)
         draw_design(ax, row, obj["radius_m"], title=title + " (invalid)", length_unit="mm")
         return
     res = simulate(scene, design["torque_nm"], **model_of(obj))
@@ -140,12 +164,13 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
              f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
              f"θ0 = {math.degrees(d['rest_angle_rad']):.1f}°, "
              f"d3 = {d['joint_offset_m'] * 1e3:.3g} mm, w = {d['finger_width_m'] * 1e3:.3g} mm\n"
-             f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m")
+             f"d1 = {d['distance_m'] * 1e3:.3g} mm, T = {d['torque_nm']:.3g} N·m"
+             + jaw_label(d))
     try:
         scene = scene_of(result.best_design, obj)
     except ValueError:
         fig = Figure(figsize=(5.5, 5.5), dpi=100)
-        row = np.array([result.best_design[k] for k in DESIGN_FIELDS])
+        row = design_row(result.best_design)[:N_DESIGN]
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)",
                     length_unit="mm")
         return _save(fig, path)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from envs.model.family import resolve_model
-from envs.scene import DESIGN_FIELDS
+from envs.scene import design_row
 
 from .result import OptimResult, to_jsonable
 
@@ -78,7 +78,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     if not picks or not _finer(member, own):
         return replace(result, extra={**result.extra, "reward_model": to_jsonable(own)})
     t0 = time.perf_counter()
-    designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in picks])
+    designs = np.array([design_row(p["design"]) for p in picks])
     out = problem.evaluate_physical(designs, member)
     order = np.argsort(-out["reward"], kind="stable")
     best = int(order[0])

@@ -1,4 +1,5 @@
-"""The design problem every optimizer solves: one fixed object, designs in [-1, 1]^6.
+"""The design problem every optimizer solves: one fixed object, designs in [-1, 1]^n (n = 6,
+plus the jaw columns of a design space with shaped jaws).
 
 :class:`DesignProblem` wraps :func:`envs.evaluate.evaluate_designs` for a fixed object (a soft
 disk and its strain limit). Like pymoo's ``Problem`` it evaluates a whole population per call;
@@ -20,9 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.evaluate import (
-    DESIGN_FIELDS,
     METRIC_KEYS,
-    N_DESIGN,
     DesignBounds,
     RewardWeights,
     evaluate_designs,
@@ -42,6 +41,8 @@ from envs.scene import (
     Scene,
     SoftDisk,
     design_from_relative,
+    design_mapping,
+    design_row,
     joint_spring,
     joint_spring_kwargs,
     relative_from_design,
@@ -190,10 +191,12 @@ def _describe_executor(executor: Any) -> str:
 
 
 class DesignProblem:
-    """Gripper design for one fixed object, in the normalized space [-1, 1]^6.
+    """Gripper design for one fixed object, in the normalized space [-1, 1]^n.
 
-    Row ``x`` maps to the physical design ``bounds.scale(x, disk)`` (columns of
-    :data:`envs.evaluate.DESIGN_FIELDS`; the box is relative to the object, see
+    Row ``x`` (:attr:`n_var` wide: 6, plus the jaw columns of the bounds' ``jaw``) maps to the
+    physical design ``bounds.scale(x, disk)`` (columns of
+    :data:`envs.evaluate.DESIGN_FIELDS`, then the jaw fields of
+    :data:`envs.model.jaw.JAW_FIELDS` with shaped jaws; the box is relative to the object, see
     :class:`~envs.evaluate.DesignBounds`); values outside [-1, 1] are clipped. The objective of
     the single-objective methods is the reward of :func:`envs.evaluate.evaluate_designs`
     (maximized). A design is *feasible* (for NSGA-II) when its grasp converged, both fingers
@@ -228,7 +231,7 @@ class DesignProblem:
         (default: the default model; ``element="spring"``: the paper's fan). ``self.model``
         holds the resolved member.
     bounds
-        Box mapping [-1, 1]^6 to physical designs (default :class:`~envs.evaluate.DesignBounds`).
+        Box mapping [-1, 1]^n to physical designs (default :class:`~envs.evaluate.DesignBounds`).
     weights
         Reward weights (default :class:`~envs.evaluate.RewardWeights`).
     executor
@@ -257,9 +260,11 @@ class DesignProblem:
         2``), for a gripper whose fingers cannot be stacked at the joints
         (:class:`~envs.evaluate.DesignBounds` ``joints_apart``: ``bounds`` with it set).
         Default ``False``: the bounds as given.
+    jaw, jaw_per_finger
+        Shaped jaws (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``):
+        ``"straight"``, ``"cradle"``, ``"vee"`` or ``"any"``, and whether each finger has its
+        own groove; ``None`` (default): the bounds' own (straight bars by default).
     """
-
-    n_var = N_DESIGN
 
     def __init__(
         self,
@@ -283,6 +288,8 @@ class DesignProblem:
         scenarios: Scenarios | None = None,
         robust: str = "worst",
         joints_apart: bool = False,
+        jaw: str | None = None,
+        jaw_per_finger: bool | None = None,
     ) -> None:
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
@@ -313,6 +320,13 @@ class DesignProblem:
         self.bounds = DesignBounds() if bounds is None else bounds
         if joints_apart:
             self.bounds = replace(self.bounds, joints_apart=True)
+        if jaw is not None or jaw_per_finger is not None:
+            # (DesignBounds validates them; its jaw bounds are the new kind's defaults)
+            self.bounds = replace(
+                self.bounds, jaw=self.bounds.jaw if jaw is None else jaw,
+                jaw_per_finger=(self.bounds.jaw_per_finger if jaw_per_finger is None
+                                else jaw_per_finger),
+                jaw_low=None, jaw_high=None)
         self.weights = RewardWeights() if weights is None else weights
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")
@@ -323,6 +337,11 @@ class DesignProblem:
         self.progress = progress
         self.name = name
         self.start(None)
+
+    @property
+    def n_var(self) -> int:
+        """Width of a normalized design: 6, plus the jaw columns of :attr:`bounds`."""
+        return self.bounds.n_var
 
     @property
     def torsion_stiffness_nm_per_rad(self) -> float:
@@ -401,17 +420,21 @@ class DesignProblem:
     # --- evaluation ---------------------------------------------------------------------------
 
     def to_physical(self, x: Any) -> np.ndarray:
-        """Normalized rows (..., 6), clipped to [-1, 1], in physical units (SI)."""
+        """Normalized rows (..., :attr:`n_var`), clipped to [-1, 1], in physical units (SI:
+        6, 10 or 14 columns, :attr:`DesignBounds.design_width
+        <envs.evaluate.DesignBounds.design_width>`)."""
         return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
-        """One normalized row as ``{field: value}`` in physical units."""
-        row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(N_DESIGN))
-        return dict(zip(DESIGN_FIELDS, row.tolist(), strict=True))
+        """One normalized row as ``{field: value}`` in physical units (the jaw fields of
+        :data:`~envs.model.jaw.JAW_FIELDS` included with shaped jaws)."""
+        row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(self.n_var))
+        return design_mapping(row)
 
     def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None, *,
                           margin: float = 1.0) -> dict[str, np.ndarray]:
-        """Evaluate physical designs (B, 6) on this object without counting them.
+        """Evaluate physical designs (B, 6), (B, 10) or (B, 14) on this object without
+        counting them.
 
         With scenarios, one row per design: the robust reward and the worst case of each metric
         over the scenarios (:class:`envs.scenarios.ScenarioTable` ``summary``). ``member``: a
@@ -433,7 +456,7 @@ class DesignProblem:
 
     def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None, *,
                            margin: float = 1.0) -> ScenarioTable:
-        """Physical designs (B, 6) under every scenario of the problem (the one nominal
+        """Physical designs (B, 6/10/14) under every scenario of the problem (the one nominal
         scenario without scenarios), one batch, not counted; ``margin`` as in
         :meth:`evaluate_physical`."""
         designs = np.asarray(designs, dtype=np.float64)
@@ -452,7 +475,7 @@ class DesignProblem:
                       member: dict[str, Any] | None = None) -> list[dict[str, Any]]:
         """One design (``{field: value}``, SI) under every scenario: a row per scenario with
         the scenario and its grasp's metrics (what a result JSON records)."""
-        row = np.array([[design[k] for k in DESIGN_FIELDS]])
+        row = design_row(design)[None, :]
         table = self.evaluate_scenarios(row, member)
         return [{"scenario": sc.as_dict(),
                  **{k: to_jsonable(table.per_scenario[k][0, j]) for k in BEST_METRIC_KEYS}}
@@ -465,7 +488,7 @@ class DesignProblem:
         Parameters
         ----------
         x
-            Array (B, 6) of normalized designs (clipped to [-1, 1]).
+            Array (B, :attr:`n_var`) of normalized designs (clipped to [-1, 1]).
 
         Returns
         -------
@@ -478,8 +501,8 @@ class DesignProblem:
             If B exceeds :attr:`remaining` (drivers truncate their last population).
         """
         x = np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0)
-        if x.ndim != 2 or x.shape[1] != N_DESIGN:
-            raise ValueError(f"x must have shape (B, {N_DESIGN}), got {x.shape}")
+        if x.ndim != 2 or x.shape[1] != self.n_var:
+            raise ValueError(f"x must have shape (B, {self.n_var}), got {x.shape}")
         if x.shape[0] > self.remaining:
             raise BudgetExhaustedError(
                 f"{x.shape[0]} evaluations asked, {self.remaining} left in the budget")
@@ -526,11 +549,11 @@ class DesignProblem:
         return out["holds"] & (out["peak_compression"] <= self.strain_limit)
 
     def archive(self) -> dict[str, np.ndarray]:
-        """Every evaluated point: ``x`` (n, 6), ``reward``, ``contact_score``,
+        """Every evaluated point: ``x`` (n, :attr:`n_var`), ``reward``, ``contact_score``,
         ``peak_compression``, ``feasible`` (n,), in evaluation order."""
         keys = ("x", "reward", "contact_score", "peak_compression", "feasible")
         if not self._archive:
-            return {k: np.zeros((0, N_DESIGN) if k == "x" else (0,)) for k in keys}
+            return {k: np.zeros((0, self.n_var) if k == "x" else (0,)) for k in keys}
         return {k: np.concatenate([a[k] for a in self._archive]) for k in keys}
 
     def top_designs(self, k: int = TOP_DESIGNS_KEPT) -> list[dict[str, Any]]:
@@ -628,6 +651,8 @@ class DesignProblem:
             executor=_describe_executor(self.executor),
             extra=to_jsonable({**(extra or {}), "grasp_found": found,
                                "joints_apart": self.bounds.joints_apart,
+                               "jaw": self.bounds.jaw,
+                               "jaw_per_finger": self.bounds.jaw_per_finger,
                                **self.scenario_extra(best_design)}),
         )
 

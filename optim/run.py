@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from envs.design_space import JAW_KINDS
 from envs.object_file import ObjectSpec
 from envs.scenarios import ROBUST_MEASURES, Scenarios
 from envs.scene import PRESETS, Scene
@@ -49,7 +50,8 @@ from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
 
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
            "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
-           "check_observable", "NO_GRASP_EXIT", "DEMO_SCENE"]
+           "check_observable", "jaw_settings", "check_policy_jaw", "NO_GRASP_EXIT",
+           "DEMO_SCENE"]
 
 # the demo's placement tolerance, +- both ways [m] (3 % of the disk's radius)
 DEMO_TOLERANCE_M = 0.002
@@ -169,13 +171,15 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
                     spring_rel, spring_nm, placement_tolerance_m=None,
-                    robust: str | None = None, payload_factor=None
-                    ) -> tuple[Any, dict[str, Any]]:
+                    robust: str | None = None, payload_factor=None, jaw: str | None = None,
+                    jaw_per_finger: bool | None = None) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults.
 
     The scenarios: the object file's ranges, with the placement tolerance given here (one
-    number for both ways, or ``(along, across)`` [m]) or else the file's."""
+    number for both ways, or ``(along, across)`` [m]) or else the file's. The jaws (``jaw``,
+    ``jaw_per_finger``, always in the keyword arguments): as given, else the object file's,
+    else straight bars."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
     from envs.scene import joint_spring_kwargs
 
@@ -201,6 +205,7 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
                               "payload_factor": check_payload_factor(factor)}
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
+    kwargs.update(jaw_settings(own, jaw, jaw_per_finger))
     scenarios = scenarios_of(own, placement_tolerance_m)
     if scenarios is not None:
         kwargs["scenarios"] = scenarios
@@ -209,6 +214,37 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
             raise ValueError(f"robust must be one of {ROBUST_MEASURES}, got {robust!r}")
         kwargs["robust"] = robust
     return (obj.disk if obj is not None else scene), kwargs
+
+
+def jaw_settings(obj: ObjectSpec | None, jaw: str | None = None,
+                 jaw_per_finger: bool | None = None) -> dict[str, Any]:
+    """The jaws a run designs, ``{"jaw": ..., "jaw_per_finger": ...}``, validated: as given,
+    else the object file's, else ``"straight"`` and ``False``
+    (:class:`~envs.evaluate.DesignBounds`)."""
+    from envs.design_space import DesignBounds
+
+    if jaw is None:
+        jaw = obj.jaw if obj is not None and obj.jaw is not None else "straight"
+    if jaw_per_finger is None:
+        # (a file's per-finger flag goes with its groove, not with straight bars asked for)
+        jaw_per_finger = (obj.jaw_per_finger if obj is not None and jaw != "straight"
+                          and obj.jaw_per_finger is not None else False)
+    if not isinstance(jaw, str) or jaw not in JAW_KINDS:
+        raise ValueError(f"jaw must be one of {JAW_KINDS}, got {jaw!r}")
+    if not isinstance(jaw_per_finger, bool):
+        raise ValueError(f"jaw_per_finger must be True or False, got {jaw_per_finger!r}")
+    # its rules (a jaw per finger needs a groove)
+    bounds = DesignBounds(jaw=jaw, jaw_per_finger=jaw_per_finger)
+    return {"jaw": bounds.jaw, "jaw_per_finger": bounds.jaw_per_finger}
+
+
+def check_policy_jaw(method: str, settings: dict[str, Any]) -> None:
+    """The design policy designs straight jaws only (it was trained with six actions):
+    refuse it for shaped jaws, before any work."""
+    if method == "policy" and settings.get("jaw", "straight") != "straight":
+        raise ValueError(
+            f"the design policy designs straight jaws only, not jaw {settings['jaw']!r}: use "
+            "another method for shaped jaws (psm-grasp optimize --jaw ...)")
 
 
 def scenarios_of(obj: ObjectSpec | None, placement_tolerance_m=None) -> Scenarios | None:
@@ -267,6 +303,8 @@ def run_optimize(
     placement_tolerance_m: float | tuple[float, float] | None = None,
     robust: str | None = None,
     joints_apart: bool = False,
+    jaw: str | None = None,
+    jaw_per_finger: bool | None = None,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -288,6 +326,12 @@ def run_optimize(
     ``joints_apart``: every design keeps its joints at least half a finger width from the axis
     (``d_3 >= w / 2``), for fingers that cannot be stacked at the joints
     (:class:`~envs.evaluate.DesignBounds`); the result JSON records it (``extra["joints_apart"]``).
+
+    ``jaw`` (``"straight"``, ``"cradle"``, ``"vee"`` or ``"any"``) and ``jaw_per_finger``: the
+    jaws designed (:class:`~envs.evaluate.DesignBounds`); ``None``: the object file's, else
+    straight bars. The result's designs then carry the jaw fields by name
+    (:data:`envs.model.jaw.JAW_FIELDS`, ``left_...`` per finger) and its extra records both.
+    The design policy designs straight jaws only.
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -319,9 +363,11 @@ def run_optimize(
     target, settings = problem_kwargs(scene, obj, strain_limit, friction_coefficient,
                                       torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
                                       placement_tolerance_m, robust,
-                                      payload_factor=payload_factor)
+                                      payload_factor=payload_factor, jaw=jaw,
+                                      jaw_per_finger=jaw_per_finger)
     budget, seed = check_budget(budget), check_seed(seed)
     check_joints_apart(method, joints_apart)
+    check_policy_jaw(method, settings)
     if method == "policy":
         check_observable(target, settings)
     model = resolve_model(n_triangles, n_rings, element or DEFAULT_ELEMENT)

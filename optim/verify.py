@@ -25,7 +25,7 @@ from envs.model.defaults import (
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
 from envs.scenarios import Scenarios, evaluate_scenarios, place
-from envs.scene import DESIGN_FIELDS
+from envs.scene import DESIGN_FIELDS, design_row
 from envs.validation import check_integer
 
 from .charts import disk_of, model_of
@@ -127,7 +127,7 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
     if not picks:
         raise ValueError("the run has no evaluated design to verify")
     obj = result.object
-    designs = np.array([[p["design"][k] for k in DESIGN_FIELDS] for p in picks])
+    designs = np.array([design_row(p["design"]) for p in picks])
     common = {"strain_limits": obj["strain_limit"],
               "friction_coefficients": obj.get("friction_coefficient",
                                                DEFAULT_FRICTION_COEFFICIENT),
@@ -294,8 +294,9 @@ OBJECT_FIELDS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m"
 
 def _check_verifiable(result: OptimResult, path: Path) -> None:
     """What :func:`verify_result` reads of a result file is there: the object's fields and
-    each kept design's six fields and reward; ``ValueError`` naming the file and the first
-    missing field otherwise (a hand-edited or truncated result)."""
+    each kept design's six fields (and its jaw fields, all four of each finger) and reward;
+    ``ValueError`` naming the file and the first missing field otherwise (a hand-edited or
+    truncated result)."""
     where = f"{str(path)!r}: not a result written by psm-grasp optimize"
     missing = [k for k in OBJECT_FIELDS if k not in result.object]
     if missing:
@@ -308,6 +309,10 @@ def _check_verifiable(result: OptimResult, path: Path) -> None:
         if absent or "reward" not in pick:
             raise ValueError(f"{where} (top_designs[{i}] has no "
                              f"{(absent or ['reward'])[0]!r})")
+        try:
+            design_row(design)
+        except ValueError as exc:
+            raise ValueError(f"{where} (top_designs[{i}]: {exc})") from None
 
 
 def verify_run(out_dir: str | Path, top: int = DEFAULT_TOP, *, result: str | None = None,
