@@ -1,8 +1,9 @@
 """Drawings of a grasp shared by the design environment, the CLI and the scripts.
 
 :func:`draw_grasp` draws on a matplotlib ``Axes``: the fingers at rest (dashed) and at the grasp
-angles, the rest and the deformed disk, the springs coloured by strain (with a labelled colour
-bar) and the contact points, with a legend for each mark.
+angles, each with the groove of its jaw profile (:func:`finger_polygon`), the rest and the
+deformed disk, the springs coloured by strain (with a labelled colour bar) and the contact
+points, with a legend for each mark.
 :func:`grasp_figure` makes a stand-alone figure (saved as PNG when given a path) and
 :func:`grasp_rgb_array` renders one off-screen with the Agg canvas, so no pyplot state or GUI
 backend is involved.
@@ -20,7 +21,8 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
-from .scene import Gripper, Scene, SoftDisk
+from .model.jaw import STRAIGHT, JawProfile, jaws_of_row
+from .scene import N_DESIGN, Gripper, Scene, SoftDisk
 
 __all__ = [
     "draw_grasp",
@@ -29,6 +31,11 @@ __all__ = [
     "grasp_rgb_array",
     "figure_rgb_array",
     "finger_polygon",
+    "finger_outline",
+    "finger_to_drawing",
+    "groove_vertices",
+    "outline_polygon",
+    "OUTLINE_COLUMNS",
     "spring_segments",
     "unit_scale",
     "LENGTH_UNITS",
@@ -42,6 +49,11 @@ STRAIN_LABEL = "spring strain [-] (blue: compressed, red: stretched)"
 REST_STYLE = {"fill": False, "linestyle": "--", "linewidth": 0.8, "edgecolor": "0.55"}
 CONTACT_STYLE = ({"color": "limegreen", "label": "contact, right"},
                  {"color": "gold", "label": "contact, left"})
+# the columns of an outline's vertices (finger_outline: x, y in the drawing's frame;
+# groove_vertices: s, m in the finger's): two coordinates, then the bulge tan(theta / 4) of the
+# segment to the next vertex, as a DXF polyline has it (0 a straight line)
+OUTLINE_COLUMNS = ("x", "y", "bulge")
+V_X, V_Y, V_BULGE = range(len(OUTLINE_COLUMNS))
 # the length units a drawing may use, and metres in each
 LENGTH_UNITS = {"m": 1.0, "mm": 1e3}
 
@@ -60,17 +72,130 @@ def unit_scale(length_unit: str) -> float:
     return LENGTH_UNITS[length_unit]
 
 
-def finger_polygon(length: float, angle: float, offset: float, width: float, side: int
-                    ) -> np.ndarray:
-    """Corners of one finger bar [m], side 0 right, 1 left (conventions of scene.finger_frame):
-    joint end back, tip end back, tip end face, joint end face."""
+def groove_vertices(jaw: JawProfile, width: float) -> np.ndarray:
+    """The cutout of a jaw's groove in finger coordinates [m], mouth edges drawn sharp.
+
+    Parameters
+    ----------
+    jaw
+        The finger's jaw profile (:class:`envs.model.jaw.JawProfile`).
+    width
+        Finger width ``w`` [m]: the gripping face lies at ``m = w/2``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (K, 3), columns :data:`OUTLINE_COLUMNS` (``s`` along the finger from the joint,
+        ``m`` along the face's inward normal, and the bulge of the segment to the next vertex,
+        see :func:`outline_polygon`): the groove's vertices from its tip-side mouth edge to
+        its joint-side one (K = 0 for a straight jaw, 2 for a cradle, 3 for a V, 4 for a
+        rounded V whose flanks carry the bottom arc). The last vertex's bulge is 0.
+    """
+    if jaw.depth_m == 0.0:
+        return np.zeros((0, len(OUTLINE_COLUMNS)))
+    hw, a, depth, radius = width / 2, jaw.position_m, jaw.depth_m, jaw.bottom_radius_m
+    half = jaw.opening_angle_rad / 2
+    mouth = jaw.mouth_half_width_m
+    if radius == 0.0:
+        # a sharp V: two flanks meeting at the bottom
+        return np.array([[a + mouth, hw, 0.0], [a, hw - depth, 0.0], [a - mouth, hw, 0.0]])
+    centre = depth - radius  # the bottom arc's centre, as a depth below the face
+    # the arc turns from the tip side through the bottom (deeper, smaller m) to the joint
+    # side: clockwise in (s, m), a negative bulge
+    if jaw.kind == "cradle":
+        # the arc reaches the face before its flanks begin: it spans the whole mouth
+        swing = math.acos(min(max(-centre / radius, -1.0), 1.0))
+        return np.array([[a + mouth, hw, -math.tan(swing / 2)], [a - mouth, hw, 0.0]])
+    # flanks from the mouth to the arc's tangent points, half the opening angle off the depth
+    swing = math.pi / 2 - half
+    tan_u, tan_v = radius * math.cos(half), centre + radius * math.sin(half)
+    return np.array([[a + mouth, hw, 0.0], [a + tan_u, hw - tan_v, -math.tan(swing / 2)],
+                     [a - tan_u, hw - tan_v, 0.0], [a - mouth, hw, 0.0]])
+
+
+def finger_outline(length: float, angle: float, offset: float, width: float, side: int,
+                   jaw: JawProfile = STRAIGHT) -> np.ndarray:
+    """The exact outline of one finger [m]: its vertices and the bulges of the arcs between.
+
+    Side 0 right, 1 left (conventions of scene.finger_frame). The vertices run joint end back,
+    tip end back, tip end face, the groove's (:func:`groove_vertices`, from the tip side), joint
+    end face; rows of :data:`OUTLINE_COLUMNS` (``x``, ``y`` and the bulge of the segment to the
+    next vertex, counterclockwise positive in the drawing's frame, as a DXF polyline has it).
+    """
+    hw = width / 2
+    local = np.concatenate([
+        np.array([[0.0, -hw, 0.0], [length, -hw, 0.0], [length, hw, 0.0]]),
+        groove_vertices(jaw, width),
+        np.array([[0.0, hw, 0.0]]),
+    ])
+    # the left finger's frame is mirrored: its arcs turn the other way in the drawing
+    handed = 1.0 if side == 0 else -1.0
+    return np.column_stack([finger_to_drawing(local[:, [V_X, V_Y]], angle, offset, side),
+                            handed * local[:, V_BULGE]])
+
+
+def finger_to_drawing(points: np.ndarray, angle: float, offset: float, side: int
+                      ) -> np.ndarray:
+    """Points in a finger's coordinates (``s`` along it from its joint, ``m`` along its face's
+    inward normal; shape (K, 2)) in the drawing's frame [m], side 0 right, 1 left, the finger at
+    ``angle`` from the +y axis with its joint ``offset`` from the symmetry axis."""
     s, c = math.sin(angle), math.cos(angle)
     joint = np.array([offset, 0.0]) if side == 0 else np.array([-offset, 0.0])
     axis = np.array([s, c]) if side == 0 else np.array([-s, c])
     normal = np.array([-c, s]) if side == 0 else np.array([c, s])
-    hw = width / 2
-    return np.array([joint + a * axis + m * normal
-                     for a, m in ((0.0, -hw), (length, -hw), (length, hw), (0.0, hw))])
+    local = np.asarray(points, dtype=float).reshape(-1, 2)
+    return joint + local[:, [V_X]] * axis + local[:, [V_Y]] * normal
+
+
+def outline_polygon(vertices: np.ndarray, arc_step_rad: float = math.radians(5.0)
+                    ) -> np.ndarray:
+    """A closed outline of vertices and bulges as a polygon, its arcs sampled.
+
+    Parameters
+    ----------
+    vertices
+        Shape (K, 3): ``x``, ``y`` and the bulge ``tan(theta / 4)`` of the segment to the next
+        vertex (the last one's closes the outline): 0 a straight line, else an arc of
+        included angle ``theta``, counterclockwise when positive.
+    arc_step_rad
+        Largest angle between two samples of an arc [rad].
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (M, 2): the vertices with the arcs' inner points between them, each arc's
+        midpoint among them.
+    """
+    verts = np.asarray(vertices, dtype=float)
+    out = []
+    for k, vertex in enumerate(verts):
+        start, bulge = vertex[[V_X, V_Y]], float(vertex[V_BULGE])
+        out.append(start)
+        if bulge == 0.0:
+            continue
+        end = verts[(k + 1) % len(verts)][[V_X, V_Y]]
+        theta = 4.0 * math.atan(bulge)
+        chord = end - start
+        length = float(np.hypot(*chord))
+        # the centre lies on the chord's left (counterclockwise arcs) at this signed distance
+        left = np.array([-chord[V_Y], chord[V_X]]) / length
+        centre = (start + end) / 2 + left * (length / 2) * (1.0 - bulge * bulge) / (2.0 * bulge)
+        radius = float(np.hypot(*(start - centre)))
+        begin = math.atan2(start[V_Y] - centre[V_Y], start[V_X] - centre[V_X])
+        # an even count: the arc's midpoint (a groove's bottom) is a sample
+        n = 2 * max(1, math.ceil(abs(theta) / (2 * arc_step_rad)))
+        for t in np.linspace(0.0, 1.0, n + 1)[1:-1]:
+            out.append(centre + radius * np.array([math.cos(begin + t * theta),
+                                                   math.sin(begin + t * theta)]))
+    return np.array(out)
+
+
+def finger_polygon(length: float, angle: float, offset: float, width: float, side: int,
+                   jaw: JawProfile = STRAIGHT) -> np.ndarray:
+    """Outline of one finger bar [m] as a polygon, side 0 right, 1 left (conventions of
+    scene.finger_frame): joint end back, tip end back, tip end face, the groove of ``jaw``
+    (arcs sampled, mouth edges sharp; none for a straight jaw), joint end face."""
+    return outline_polygon(finger_outline(length, angle, offset, width, side, jaw))
 
 
 def spring_segments(points_m: np.ndarray, center_m: np.ndarray, radius_m: float):
@@ -180,7 +305,9 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None,
     ax
         Matplotlib axes.
     design
-        Six numbers in :data:`envs.evaluate.DESIGN_FIELDS` order (SI units).
+        Six numbers in :data:`envs.evaluate.DESIGN_FIELDS` order (SI units), optionally
+        followed by the jaw columns (:data:`envs.model.jaw.JAW_FIELDS`, 10 or 14 wide); a jaw
+        out of range is drawn straight.
     radius_m
         Disk radius [m].
     title
@@ -189,9 +316,15 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None,
         Units of the drawing's axes, ``"m"`` (default) or ``"mm"``.
     """
     k = unit_scale(length_unit)
-    ln, th0, d3, w, _, d1 = (float(v) for v in np.asarray(design, dtype=float))
+    row = np.asarray(design, dtype=float)
+    ln, th0, d3, w, _, d1 = (float(v) for v in row[:N_DESIGN])
+    try:
+        right, left = jaws_of_row(row)
+        jaws = (right, right if left is None else left)
+    except ValueError:
+        jaws = (STRAIGHT, STRAIGHT)
     center = k * np.array([0.0, d1 + radius_m])
-    fingers = [k * finger_polygon(ln, th0, d3, w, side) for side in (0, 1)]
+    fingers = [k * finger_polygon(ln, th0, d3, w, side, jaws[side]) for side in (0, 1)]
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.8))
     ax.add_patch(Circle(center, k * radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
@@ -251,10 +384,11 @@ def draw_grasp(
     k = unit_scale(length_unit)  # every position is drawn k times its value in metres
     center, radius = k * np.asarray(d.center_m, dtype=float), k * d.radius_m
     rest_fingers = [k * finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
-                                        g.finger_width_m, side) for side in (0, 1)]
+                                        g.finger_width_m, side, g.jaws[side])
+                    for side in (0, 1)]
     angles = (g.rest_angle_rad, g.rest_angle_rad) if result is None else result.jaw_angles_rad
     fingers = [k * finger_polygon(g.finger_length_m, float(angles[side]), g.joint_offset_m,
-                                   g.finger_width_m, side) for side in (0, 1)]
+                                   g.finger_width_m, side, g.jaws[side]) for side in (0, 1)]
     if show_rest and result is not None:
         for poly in rest_fingers:
             ax.add_patch(Polygon(poly, closed=True, **REST_STYLE))

@@ -14,6 +14,14 @@ radius ``w / 2`` about its joint as the finger turns. When the joints are closer
 finger width to the axis (``d_3 < w / 2``) the two circles overlap, and so do the fingers at
 the joints: they can only be built **stacked**, one above the other at the joints, like the
 jaws of forceps. Otherwise they can be built **side by side** in one plane.
+
+Jaws: a finger's gripping face may carry a groove (:class:`envs.model.jaw.JawProfile`: a
+cradle, a V-groove or a rounded V between). The sheet states each finger's profile (kind, depth,
+bottom radius, opening angle, the groove centre's distance from the joint axis, mouth width; one
+set for both fingers when they are alike) and "straight" for a flat face; the outlines carry the
+cutout (its arcs as DXF bulges) and the drawing dimensions it in a detail per profile. The jaws
+are read from the design by the names of :data:`envs.model.jaw.JAW_FIELDS` and
+:data:`~envs.model.jaw.LEFT_JAW_FIELDS`; a design without them has straight jaws.
 :func:`write_build_sheet` writes the sheet as JSON and CSV (the scenarios in a CSV of their own)
 with a dimensioned drawing.
 """
@@ -30,11 +38,13 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Arc, Circle, Polygon
 
-from envs.render import finger_polygon
+from envs.model.geometry import corner_radius
+from envs.model.jaw import JAW_FIELDS, LEFT_JAW_FIELDS, STRAIGHT, JawProfile, jaws_of_row
+from envs.render import V_BULGE, V_X, V_Y, finger_outline, finger_to_drawing, outline_polygon
 from envs.scene import DESIGN_FIELDS
 
 __all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of", "write_dxf",
-           "dxf_available", "DXF_LAYERS",
+           "dxf_available", "DXF_LAYERS", "jaws_of_design", "jaw_rows", "JAW_ROWS",
            "ASSEMBLY_STACKED", "ASSEMBLY_SIDE_BY_SIDE", "FIXED_CENTRE_NOTE"]
 
 MM = 1e3
@@ -83,6 +93,21 @@ CONDITION_ROWS: tuple[tuple[str, str, str], ...] = (
     ("payload_n", "N", "payload W = f m g the grasp must carry"),
     ("grip_force_n", "N", "grip force of the grasp"),
 )
+# (key, unit, description) of the rows of a grooved jaw, after a prefix naming the finger(s)
+JAW_ROWS: tuple[tuple[str, str, str], ...] = (
+    ("kind", "-", "jaw profile: cradle (circular arc), vee (sharp V-groove) or rounded vee"),
+    ("depth_mm", "mm", "groove depth h below the gripping face"),
+    ("bottom_radius_mm", "mm", "radius R of the groove's bottom arc (a cradle's radius; 0: a "
+                               "sharp V)"),
+    ("opening_angle_deg", "deg", "full angle between the groove's flanks (0: a cradle, no "
+                                 "flanks)"),
+    ("position_mm", "mm", "groove centre line from the joint axis, along the finger"),
+    ("mouth_width_mm", "mm", "width of the groove's mouth in the gripping face (sharp edges)"),
+    ("mouth_edge_radius_mm", "mm", "the model rounds the mouth edges with this radius, as the "
+                                   "finger's end corners"),
+)
+STRAIGHT_JAW_TEXT = "straight"
+FINGERS = ("right", "left")  # the sheet's names of side 0 and 1
 # a scenario row's columns: (key in the sheet, key in the result's row, scale to the sheet)
 SCENARIO_COLUMNS: tuple[tuple[str, str, float], ...] = (
     ("dx_mm", "dx_m", MM), ("dy_mm", "dy_m", MM), ("reward", "reward", 1.0),
@@ -131,14 +156,112 @@ def assembly_of(joint_offset_m: float, finger_width_m: float) -> tuple[str, str]
         "the fingers can be built side by side in one plane.")
 
 
+def _sheet_outline(vertices: np.ndarray) -> np.ndarray:
+    """An outline of :func:`envs.render.finger_outline` (joint end back, tip end back, tip face,
+    groove, joint end face) in the sheet's order, joint end back, joint end face, groove, tip
+    face, tip back: the same vertices the other way round, each arc's bulge negated and moved
+    to the arc's other end."""
+    count = len(vertices)
+    order = [0, *range(count - 1, 0, -1)]
+    # vertex order[n] now starts the segment that ended there: the old segment from the
+    # vertex before it
+    bulges = -vertices[[(k - 1) % count for k in order], V_BULGE]
+    return np.column_stack([vertices[order][:, [V_X, V_Y]], bulges])
+
+
 def _finger_outline_mm(length: float, angle: float, offset: float, width: float,
-                       side: int) -> list[list[float]]:
-    """Corners of a finger bar at rest [mm]: joint end (back, face), tip end (face, back);
-    side 0 right, 1 left (the drawings' own finger, :func:`envs.render.finger_polygon`)."""
-    # the sheet lists the corners joint end (back, face), then tip end (face, back): the order
-    # of envs.render.finger_polygon's corners 0, 3, 2, 1
-    corners = finger_polygon(length, angle, offset, width, side)
-    return [[round(float(v) * MM, 4) for v in corners[k]] for k in (0, 3, 2, 1)]
+                       side: int, jaw: JawProfile = STRAIGHT) -> np.ndarray:
+    """A finger at rest [mm]: joint end (back, face), the groove's vertices from the joint side,
+    tip end (face, back), and the bulge of each segment to the next vertex; side 0 right, 1
+    left (the drawings' own finger, :func:`envs.render.finger_outline`)."""
+    outline = _sheet_outline(finger_outline(length, angle, offset, width, side, jaw))
+    outline[:, [V_X, V_Y]] *= MM
+    return outline
+
+
+def _design_row(design: dict[str, Any]) -> list[float]:
+    """A design dict as a design row: the :data:`envs.scene.DESIGN_FIELDS`, then the jaw
+    columns it has (:data:`envs.model.jaw.JAW_FIELDS`, then
+    :data:`~envs.model.jaw.LEFT_JAW_FIELDS`): 6, 10 or 14 numbers.
+
+    Raises
+    ------
+    ValueError
+        For a design with some of a finger's jaw fields but not all.
+    """
+    values = [float(design[k]) for k in DESIGN_FIELDS]
+    for names in (JAW_FIELDS, LEFT_JAW_FIELDS):
+        given = [k for k in names if k in design]
+        if not given:
+            break
+        if len(given) < len(names):
+            raise ValueError(f"design has {given} but lacks "
+                             f"{[k for k in names if k not in design]}")
+        values += [float(design[k]) for k in names]
+    return values
+
+
+def jaws_of_design(design: dict[str, Any]) -> tuple[JawProfile, JawProfile]:
+    """The right and the left finger's jaw profiles of a design dict: by the names of
+    :data:`envs.model.jaw.JAW_FIELDS` (both fingers) and :data:`~envs.model.jaw.LEFT_JAW_FIELDS`
+    (the left finger's, where it differs); none of them: straight jaws.
+
+    Raises
+    ------
+    ValueError
+        For a design with some of a finger's jaw fields but not all, or a groove out of range.
+    """
+    right, left = jaws_of_row(_design_row(design))
+    return right, right if left is None else left
+
+
+def _jaw_entry(jaw: JawProfile, rounding_m: float, corner_mm: list[float]) -> dict[str, Any]:
+    """A finger's jaw profile in the sheet's units: ``{"kind": "straight"}`` or the groove's
+    dimensions (:data:`JAW_ROWS`) and the groove centre on the face at rest [mm]."""
+    if jaw.depth_m == 0.0:
+        return {"kind": STRAIGHT_JAW_TEXT}
+    return {"kind": jaw.kind, "depth_mm": jaw.depth_m * MM,
+            "bottom_radius_mm": jaw.bottom_radius_m * MM,
+            "opening_angle_deg": math.degrees(jaw.opening_angle_rad),
+            "position_mm": jaw.position_m * MM, "mouth_width_mm": 2 * jaw.mouth_half_width_m * MM,
+            "mouth_edge_radius_mm": rounding_m * MM, "centre_on_face_mm": corner_mm}
+
+
+def _jaws(jaws: tuple[JawProfile, JawProfile], length: float, angle: float, offset: float,
+          width: float, radius: float) -> dict[str, Any]:
+    """The sheet's ``jaws``: each finger's profile (:func:`_jaw_entry`) and whether they are
+    alike; ``ValueError`` for a groove that does not fit its finger."""
+    rounding = corner_radius(width, radius)
+    entries = {}
+    for side, (name, jaw) in enumerate(zip(FINGERS, jaws, strict=True)):
+        try:
+            jaw.check_fits(length, width, rounding)
+        except ValueError as exc:
+            raise ValueError(f"the {name} finger's jaw: {exc}") from exc
+        # the groove centre on the face at rest: s = a, m = w/2 in the finger's frame
+        (centre,) = MM * finger_to_drawing([[jaw.position_m, width / 2]], angle, offset, side)
+        entries[name] = _jaw_entry(jaw, rounding, [round(float(v), 4) for v in centre])
+    return {**entries, "same": jaws[0] == jaws[1]}
+
+
+def jaw_rows(sheet: dict[str, Any]) -> list[dict[str, Any]]:
+    """The sheet's jaw profiles as table rows (quantity, value, unit, meaning): one ``jaw``
+    row "straight" for flat faces, else :data:`JAW_ROWS` prefixed ``jaw_`` (both fingers
+    alike) or ``right_jaw_`` and ``left_jaw_``."""
+    jaws = sheet["jaws"]
+    if jaws["same"]:
+        groups = [("jaw", "both fingers", jaws["right"])]
+    else:
+        groups = [(f"{side}_jaw", f"{side} finger", jaws[side]) for side in FINGERS]
+    rows = []
+    for prefix, whose, entry in groups:
+        if entry["kind"] == STRAIGHT_JAW_TEXT:
+            rows.append({"quantity": prefix, "value": STRAIGHT_JAW_TEXT, "unit": "-",
+                         "meaning": f"{whose}: a flat gripping face, no groove"})
+            continue
+        rows += [{"quantity": f"{prefix}_{key}", "value": entry[key], "unit": unit,
+                  "meaning": f"{whose}: {text}"} for key, unit, text in JAW_ROWS]
+    return rows
 
 
 def _scenario_table(rows: list[dict[str, Any]] | None) -> list[dict[str, Any]]:
@@ -190,7 +313,8 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
     Parameters
     ----------
     design
-        A design in SI units (keys of :data:`envs.scene.DESIGN_FIELDS`).
+        A design in SI units (keys of :data:`envs.scene.DESIGN_FIELDS` and, for grooved jaws,
+        of :data:`envs.model.jaw.JAW_FIELDS`, :data:`~envs.model.jaw.LEFT_JAW_FIELDS`).
     obj
         The object (``radius_m``, ``torsion_stiffness_nm_per_rad`` and, where known, ``name``,
         the material fields, ``strain_limit``, ``friction_coefficient``, ``scenarios``,
@@ -210,13 +334,18 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         ``fixed_centre``, ``tolerances`` (the placement tolerance, the object's ranges in mm
         and what is not analysed), ``scenarios`` (a row per scenario), ``finger_outline_mm``
         (the corners of the right and left finger at rest), ``joints_mm``,
-        ``object_centre_mm``, ``object`` and, with metrics, ``grasp`` (closing angles in
-        degrees, forces in N, peak compression, required friction).
+        ``object_centre_mm``, ``object``, ``jaws`` (each finger's jaw profile: ``kind``
+        "straight", or the groove's dimensions of :data:`JAW_ROWS` and its centre on the face;
+        ``same`` when both fingers are alike), with a groove ``finger_outline_bulge`` (the
+        bulge ``tan(theta / 4)`` of each outline segment to the next vertex, 0 a line, as a DXF
+        polyline has it) and, with metrics, ``grasp`` (closing angles in degrees, forces in N,
+        peak compression, required friction).
 
     Raises
     ------
     ValueError
-        If the design lacks a field or the object its radius or joint spring.
+        If the design lacks a field (or some of a finger's jaw fields), the object its radius
+        or joint spring, or a groove does not fit its finger.
     """
     missing = [k for k in DESIGN_FIELDS if k not in design]
     if missing:
@@ -235,6 +364,9 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         "torsion_stiffness_nm_per_rad": kf,
         "torsion_stiffness_nmm_per_deg": kf * MM * math.pi / 180.0,
     }
+    jaws = jaws_of_design(design)
+    outlines = {name: _finger_outline_mm(ln, th0, d3, w, side, jaws[side])
+                for side, name in enumerate(FINGERS)}
     conditions = _conditions(obj, metrics)
     assembly, note = assembly_of(d3, w)
     ranges = (obj.get("scenarios") or {}).get("ranges") or {}
@@ -258,9 +390,15 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
                  "towards the object; fingers at rest; millimetres",
         "joints_mm": [[d3 * MM, 0.0], [-d3 * MM, 0.0]],
         "object_centre_mm": [0.0, (d1 + r) * MM],
-        "finger_outline_mm": {"right": _finger_outline_mm(ln, th0, d3, w, 0),
-                              "left": _finger_outline_mm(ln, th0, d3, w, 1)},
+        "finger_outline_mm": {name: [[round(float(v), 4) for v in vertex[[V_X, V_Y]]]
+                                     for vertex in outline]
+                              for name, outline in outlines.items()},
+        "jaws": _jaws(jaws, ln, th0, d3, w, r),
     }
+    if any(jaw.depth_m > 0.0 for jaw in jaws):
+        # (+ 0.0: a straight segment's bulge is 0, never -0)
+        sheet["finger_outline_bulge"] = {name: [float(b) + 0.0 for b in outline[:, V_BULGE]]
+                                         for name, outline in outlines.items()}
     if metrics:
         grasp: dict[str, Any] = {}
         if metrics.get("jaw_angles_rad") is not None:
@@ -273,23 +411,37 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
     return sheet
 
 
-def _dimension(ax, p: np.ndarray, q: np.ndarray, offset: np.ndarray, text: str) -> None:
-    """A dimension line from p to q [mm], drawn ``offset`` [mm] aside, with extension lines."""
+def _dimension(ax, p: np.ndarray, q: np.ndarray, offset: np.ndarray, text: str,
+               at: float = 0.5) -> None:
+    """A dimension line from p to q [mm], drawn ``offset`` [mm] aside, with extension lines,
+    its text ``at`` that fraction of the way from p to q."""
     a, b = p + offset, q + offset
     for start, end in ((p, a), (q, b)):
         ax.plot(*zip(start, end, strict=True), color="0.45", lw=0.6)
     ax.annotate("", a, b, arrowprops={"arrowstyle": "<->", "color": "0.2", "lw": 0.8})
-    mid = (a + b) / 2
+    mid = a + at * (b - a)
     ax.text(*mid, text, fontsize=8, ha="center", va="center",
             bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none"})
+
+
+def _finger_vertices(sheet: dict[str, Any], side: str) -> np.ndarray:
+    """A finger's outline in the sheet [mm] with its bulges (zero for straight jaws)."""
+    corners = np.asarray(sheet["finger_outline_mm"][side], dtype=float)
+    bulges = (sheet.get("finger_outline_bulge") or {}).get(side)
+    return np.column_stack([corners, np.zeros(len(corners)) if bulges is None else bulges])
+
+
+def _finger_shapes(sheet: dict[str, Any]) -> dict[str, np.ndarray]:
+    """Each finger's outline as a polygon [mm], the groove's arcs sampled."""
+    return {side: outline_polygon(_finger_vertices(sheet, side)) for side in FINGERS}
 
 
 def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> None:
     """The two fingers at rest [mm]; stacked ones with the left finger behind the right one
     (hatched, its hidden edges dashed) and the circles their joint ends sweep."""
-    outline = sheet["finger_outline_mm"]
+    outline = _finger_shapes(sheet)
     if sheet["assembly"] != ASSEMBLY_STACKED:
-        for side in ("right", "left"):
+        for side in FINGERS:
             ax.add_patch(Polygon(outline[side], closed=True, facecolor="0.8", edgecolor="0.2",
                                  lw=1.0))
         return
@@ -304,6 +456,29 @@ def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> N
                             linestyle=":", zorder=3))
     if legend:
         ax.legend(loc="upper right", fontsize=7, framealpha=0.9)
+
+
+def _jaw_lines(sheet: dict[str, Any]) -> list[str]:
+    """The jaw profiles, a line per distinct one, for the drawing's notes."""
+    jaws = sheet["jaws"]
+    groups = [("jaws, both fingers", jaws["right"])] if jaws["same"] else [
+        (f"jaw, {side} finger", jaws[side]) for side in FINGERS]
+    lines = []
+    for whose, entry in groups:
+        if entry["kind"] == STRAIGHT_JAW_TEXT:
+            lines.append(f"{whose}: straight (a flat gripping face, no groove)")
+            continue
+        # a cradle has no flanks, a V no bottom arc: each is stated where it has one
+        shape = ([f"bottom radius R = {entry['bottom_radius_mm']:.3f} mm"]
+                 if entry["bottom_radius_mm"] > 0.0 else []) + (
+            [f"opening angle {entry['opening_angle_deg']:.1f}°"]
+            if entry["opening_angle_deg"] > 0.0 else [])
+        lines.append(
+            f"{whose}: {entry['kind']} groove, depth h = {entry['depth_mm']:.3f} mm, "
+            + ", ".join(shape) + f", centre a = {entry['position_mm']:.3f} mm from the joint "
+            f"axis, mouth {entry['mouth_width_mm']:.3f} mm wide (its edges rounded "
+            f"{entry['mouth_edge_radius_mm']:.3g} mm in the model)")
+    return lines
 
 
 def _condition_lines(sheet: dict[str, Any]) -> list[str]:
@@ -331,6 +506,7 @@ def _condition_lines(sheet: dict[str, Any]) -> list[str]:
         f"actuation torque T_a = {rows['torque_nm']:.4g} N·m on each finger; joint spring k_f = "
         f"{rows['torsion_stiffness_nm_per_rad']:.4g} N·m/rad "
         f"({rows['torsion_stiffness_nmm_per_deg']:.4g} N·mm/deg), opening",
+        *_jaw_lines(sheet),
         f"assembly: {sheet['assembly'].upper()}. {sheet['assembly_note']}",
         f"friction coefficient mu = {number('friction_coefficient', '.3g')} (fingers on the "
         f"object); strain limit {number('strain_limit', '.3g')}",
@@ -404,10 +580,98 @@ def _draw_table(ax, sheet: dict[str, Any]) -> None:
                  "(dx across, dy along the axis)", fontsize=8)
 
 
+def _jaw_profiles(sheet: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """The grooved jaw profiles to detail: (whose, entry), once for fingers alike."""
+    jaws = sheet["jaws"]
+    groups = [("both fingers'", jaws["right"])] if jaws["same"] else [
+        (f"{side} finger's", jaws[side]) for side in FINGERS]
+    return [(whose, entry) for whose, entry in groups if entry["kind"] != STRAIGHT_JAW_TEXT]
+
+
+def _jaw_of_entry(entry: dict[str, Any]) -> JawProfile:
+    """A sheet's jaw entry [mm, deg] as the profile in SI units."""
+    return JawProfile(entry["depth_mm"] / MM, entry["bottom_radius_mm"] / MM,
+                      math.radians(entry["opening_angle_deg"]), entry["position_mm"] / MM)
+
+
+def _dimension_grooves(ax, sheet: dict[str, Any], offset: float) -> None:
+    """In the drawing [mm]: each grooved finger's groove centre line across the finger and its
+    distance ``a`` from the joint, dimensioned along the finger's back ``offset`` outside it."""
+    rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
+    w, d3 = rows["finger_width_mm"], rows["joint_offset_mm"]
+    th0 = math.radians(rows["rest_angle_deg"])
+    for side, name in enumerate(FINGERS):
+        entry = sheet["jaws"][name]
+        if entry["kind"] == STRAIGHT_JAW_TEXT or (sheet["jaws"]["same"] and side == 1):
+            continue
+        a = entry["position_mm"]
+        joint_back, back, face = finger_to_drawing(
+            [[0.0, -w / 2], [a, -w / 2], [a, w / 2]], th0, d3, side)
+        outward = (back - face) / w
+        ax.plot(*zip(face, back + 0.4 * offset * outward, strict=True), color="0.3", lw=0.6,
+                ls="-.")
+        # its text near the groove, clear of the dimensions about the joints
+        _dimension(ax, joint_back, back, offset * outward, f"a = {a:.2f}", at=0.75)
+
+
+def _draw_jaw_detail(ax, entry: dict[str, Any], length: float, width: float, whose: str
+                     ) -> None:
+    """A jaw profile magnified in the finger's own frame [mm] (the joint to the left, the
+    gripping face up): the groove with its mouth width, depth, bottom radius and opening angle
+    dimensioned, its centre line ``a`` from the joint axis."""
+    jaw = _jaw_of_entry(entry)
+    outline = finger_outline(length / MM, math.pi / 2, 0.0, width / MM, 0, jaw)
+    outline[:, [V_X, V_Y]] *= MM
+    ax.add_patch(Polygon(outline_polygon(outline), closed=True, facecolor="0.8",
+                         edgecolor="0.2", lw=1.0))
+    a, h, hw = entry["position_mm"], entry["depth_mm"], width / 2
+    radius, mouth = entry["bottom_radius_mm"], entry["mouth_width_mm"] / 2
+    half = math.radians(entry["opening_angle_deg"]) / 2
+    ax.plot([a, a], [-hw - 0.1 * width, hw + 0.6 * width], color="0.3", lw=0.6, ls="-.")
+    _dimension(ax, np.array([a - mouth, hw]), np.array([a + mouth, hw]),
+               np.array([0.0, 0.45 * width]), f"mouth {2 * mouth:.2f}")
+    _dimension(ax, np.array([a, hw]), np.array([a, hw - h]), np.array([1.5 * mouth, 0.0]),
+               f"h = {h:.2f}")
+    top = hw + 0.75 * width  # the detail's upper edge
+    centre = np.array([a, hw - (h - radius)])  # the bottom arc's centre
+    if radius > 0.0:
+        # a radius dimension along a radius, off the centre line, from the centre or, where
+        # that lies above the detail (a shallow cradle), from the detail's top
+        lean = -0.5 * min(math.pi / 2 - half, math.acos(min(max((radius - h) / radius, -1.0),
+                                                               1.0)))
+        ray = np.array([math.sin(lean), -math.cos(lean)])
+        wall = centre + radius * ray
+        start = centre if centre[1] <= top - 0.15 * width else (
+            centre + ray * (centre[1] - (top - 0.15 * width)) / -ray[1])
+        ax.annotate(f"R {radius:.2f}", wall, start, fontsize=7, ha="right", va="bottom",
+                    arrowprops={"arrowstyle": "->", "color": "0.2", "lw": 0.8})
+    lowest = hw - h
+    if half > 0.0:
+        # the flanks, extended to where they meet, and the angle between them
+        apex = np.array([a, hw - (h - radius + radius / math.sin(half))])
+        lowest = apex[1]
+        for sign in (-1.0, 1.0):
+            ax.plot([a + sign * mouth, apex[0]], [hw, apex[1]], color="0.45", lw=0.6, ls=":")
+        swing = 0.6 * (hw - apex[1])
+        ax.add_patch(Arc(apex, 2 * swing, 2 * swing, theta1=90 - math.degrees(half),
+                         theta2=90 + math.degrees(half), color="0.2", lw=0.8))
+        # right of the centre line: the radius' text stands left of it
+        ax.text(a + 0.1 * mouth, apex[1] + 1.08 * swing, f"{entry['opening_angle_deg']:.1f}°",
+                fontsize=7, ha="left", va="bottom",
+                bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none"})
+    span = max(2.6 * mouth, 1.3 * width)
+    ax.set_xlim(max(a - span, -0.05 * length), min(a + span, 1.05 * length))
+    ax.set_ylim(min(-hw, lowest) - 0.15 * width, top)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=6)
+    ax.set_title(f"{whose} jaw: {entry['kind']} [mm]\n(finger's frame, joint axis at 0; "
+                 f"groove centre a = {a:.2f})", fontsize=7)
+
+
 def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
-    """A dimensioned drawing of a build sheet's gripper at rest with its object [mm], with the
-    notes a workshop needs (assembly, friction, payload, tolerances, the fixed centre) and the
-    scenario table below it."""
+    """A dimensioned drawing of a build sheet's gripper at rest with its object [mm], a detail of
+    each grooved jaw profile, the notes a workshop needs (jaws, assembly, friction, payload,
+    tolerances, the fixed centre) and the scenario table below it."""
     rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
     ln, w, d3 = rows["finger_length_mm"], rows["finger_width_mm"], rows["joint_offset_mm"]
     th0 = math.radians(rows["rest_angle_deg"])
@@ -415,12 +679,19 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     centre = np.array(sheet["object_centre_mm"])
     stacked = sheet["assembly"] == ASSEMBLY_STACKED
     notes = _note_text(sheet, 80 if stacked else 115)
-    heights = [6.4, max(2.2 if stacked else 0.0, 0.12 * (notes.count("\n") + 1) + 0.1)]
-    if sheet.get("scenarios"):
-        heights.append(0.17 * (len(sheet["scenarios"]) + 1) + 0.3)
-    fig = Figure(figsize=(7.2, sum(heights)), dpi=110)
-    grid = fig.add_gridspec(len(heights), 1, height_ratios=heights)
-    ax = fig.add_subplot(grid[0])
+    profiles = _jaw_profiles(sheet)
+    # rows of the figure: the drawing, the jaw details (grooved jaws only), the notes, the
+    # scenario table (with scenarios only)
+    heights = {"drawing": 6.4, "jaws": 2.3 if profiles else 0.0,
+               "notes": max(2.2 if stacked else 0.0, 0.12 * (notes.count("\n") + 1) + 0.1),
+               "table": 0.17 * (len(sheet["scenarios"]) + 1) + 0.3 if sheet.get("scenarios")
+               else 0.0}
+    heights = {key: value for key, value in heights.items() if value > 0.0}
+    fig = Figure(figsize=(7.2, sum(heights.values())), dpi=110)
+    grid = dict(zip(heights, fig.add_gridspec(len(heights), 1,
+                                              height_ratios=list(heights.values())),
+                    strict=False))
+    ax = fig.add_subplot(grid["drawing"])
     _draw_fingers(ax, sheet, w)
     ax.add_patch(Circle(centre, r, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
     ax.plot([centre[0]], [centre[1]], "+", color="k", ms=8)
@@ -441,6 +712,7 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
                f"d1 = {rows['object_distance_mm']:.2f}")
     _dimension(ax, centre - np.array([r, 0.0]), centre + np.array([r, 0.0]),
                np.array([0.0, r + gap]), f"2r = {2 * r:.2f}")
+    _dimension_grooves(ax, sheet, 2.2 * gap)
     arc_r = 0.35 * ln
     ax.plot([d3, d3], [0.0, arc_r * 1.1], color="0.45", lw=0.6, ls="--")
     ax.add_patch(Arc((d3, 0.0), 2 * arc_r, 2 * arc_r, theta1=90 - math.degrees(th0), theta2=90,
@@ -456,16 +728,20 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     name = (sheet.get("object") or {}).get("name") or "the object"
     ax.set_title(title or f"gripper for {name}, at rest (millimetres), fingers "
                  f"{sheet['assembly']}", fontsize=10)
+    if profiles:
+        cells = grid["jaws"].subgridspec(1, len(profiles))
+        for cell, (whose, entry) in zip(cells, profiles, strict=False):
+            _draw_jaw_detail(fig.add_subplot(cell), entry, ln, w, whose)
     if stacked:
-        cells = grid[1].subgridspec(1, 2, width_ratios=[2.6, 1.0])
+        cells = grid["notes"].subgridspec(1, 2, width_ratios=[2.6, 1.0])
         note_ax = fig.add_subplot(cells[0])
         _draw_joint_detail(fig.add_subplot(cells[1]), sheet, w)
     else:
-        note_ax = fig.add_subplot(grid[1])
+        note_ax = fig.add_subplot(grid["notes"])
     note_ax.axis("off")
     note_ax.text(0.0, 1.0, notes, fontsize=7, va="top", ha="left", transform=note_ax.transAxes)
-    if sheet.get("scenarios"):
-        _draw_table(fig.add_subplot(grid[2]), sheet)
+    if "table" in grid:
+        _draw_table(fig.add_subplot(grid["table"]), sheet)
     fig.tight_layout()
     return fig
 
@@ -482,7 +758,7 @@ def _write_design_csv(path: Path, sheet: dict[str, Any], scenarios_file: str) ->
     with path.open("w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["quantity", "value", "unit", "meaning"])
-        for row in (*sheet["rows"], *sheet["conditions"]):
+        for row in (*sheet["rows"], *jaw_rows(sheet), *sheet["conditions"]):
             writer.writerow([row["quantity"], _csv_value(row["value"], ".6g"), row["unit"],
                              row["meaning"]])
         writer.writerow(["assembly", sheet["assembly"], "", sheet["assembly_note"]])
@@ -496,12 +772,19 @@ def _write_design_csv(path: Path, sheet: dict[str, Any], scenarios_file: str) ->
         writer.writerow(["scenarios", len(sheet["scenarios"]), "",
                          f"one row each in {scenarios_file}" if sheet["scenarios"]
                          else "none: the object at its nominal place only"])
-        for side, corners in sheet["finger_outline_mm"].items():
-            for k, (x, y) in enumerate(corners):
+        grooved = "finger_outline_bulge" in sheet
+        order = ("joint end back, joint end face, the groove's vertices from the joint side, "
+                 "tip face, tip back" if grooved else
+                 "joint end back, joint end face, tip face, tip back")
+        for side in FINGERS:
+            for k, (x, y, bulge) in enumerate(_finger_vertices(sheet, side)):
                 writer.writerow([f"{side}_finger_corner_{k}_x_mm", f"{x:.4f}", "mm",
-                                 "finger outline at rest (joint end back, joint end face, "
-                                 "tip face, tip back)"])
+                                 f"finger outline at rest ({order})"])
                 writer.writerow([f"{side}_finger_corner_{k}_y_mm", f"{y:.4f}", "mm", ""])
+                if grooved:
+                    writer.writerow([f"{side}_finger_corner_{k}_bulge", f"{bulge:.6g}", "-",
+                                     "to the next corner: 0 a line, else an arc of included "
+                                     "angle 4 atan(bulge), counterclockwise if > 0 (DXF)"])
 
 
 def _write_scenarios_csv(path: Path, sheet: dict[str, Any]) -> None:
@@ -526,7 +809,8 @@ def dxf_available() -> bool:
 
 def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
     """The fingers' outlines at rest as a DXF in millimetres, the format a laser cutter or a CNC
-    shop takes: a closed polyline per finger on its own layer (:data:`DXF_LAYERS`), the joint
+    shop takes: a closed polyline per finger on its own layer (:data:`DXF_LAYERS`), a groove's
+    bottom arc as an arc of the polyline (a bulge; flanks and faces as lines), the joint
     centres as points with a cross, and the object's outline for reference, in the sheet's
     frame (origin midway between the joints, y up the symmetry axis).
 
@@ -545,8 +829,9 @@ def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
     space = doc.modelspace()
     for key, name in DXF_LAYERS.items():
         doc.layers.add(name, color={"right": 1, "left": 5, "joints": 7, "object": 8}[key])
-    for side in ("right", "left"):
-        space.add_lwpolyline(sheet["finger_outline_mm"][side], close=True,
+    for side in FINGERS:
+        # a groove's arcs are true arcs of the polyline (bulges), as a cutter follows them
+        space.add_lwpolyline(_finger_vertices(sheet, side).tolist(), format="xyb", close=True,
                              dxfattribs={"layer": DXF_LAYERS[side]})
     rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
     mark = 0.25 * rows["finger_width_mm"]
