@@ -31,8 +31,12 @@ def _train_command(args: argparse.Namespace) -> int:
     out = check_output_dir("--out", args.out)
     from optim.rl import train_policy, write_training_outputs
 
+    jaw = args.jaw or "straight"
+    if jaw == "straight" and args.jaw_per_finger:
+        raise ValueError("--jaw-per-finger: needs shaped jaws (--jaw cradle, vee or any)")
     policy = train_policy(args.method, steps=args.steps, seed=args.seed,
-                          progress=not args.no_progress)
+                          progress=not args.no_progress, jaw=jaw,
+                          jaw_per_finger=bool(args.jaw_per_finger))
     paths = write_training_outputs(policy, out)
     t = policy.meta["training"]
     print(f"trained {args.method} for {args.steps} steps (seed {args.seed}) in "
@@ -52,19 +56,25 @@ def _design_command(args: argparse.Namespace) -> int:
     from optim.rl import load_policy
 
     obj = load_object(args.object)
-    # the policy designs straight jaws only: shaped jaws (asked for here or by the object
-    # file) are refused before any work, with the command that designs them
+    # the shipped policies design straight or any jaws: others (asked for here or by the
+    # object file) are refused before any work, with the command that designs them
     jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
                       args.jaw_per_finger)
-    if jaws["jaw"] != "straight":
+    try:
+        run.check_policy_jaw("policy", jaws)
+    except ValueError:
         raise ValueError(
-            f"--jaw: the design policy designs straight jaws only, not jaw {jaws['jaw']!r}"
+            f"--jaw: the design policies design straight or any jaws alike on both fingers, "
+            f"not jaw {jaws['jaw']!r}" + (" per finger" if jaws["jaw_per_finger"] else "")
             + (" (the object file's)" if args.jaw is None else "") + f": run psm-grasp "
             f"optimize --object {args.object} --jaw {jaws['jaw']}"
-            + (" --jaw-per-finger" if jaws["jaw_per_finger"] else "") + " for shaped jaws")
+            + (" --jaw-per-finger" if jaws["jaw_per_finger"] else "") + " for them") from None
     # a bad or mismatched policy before any work, named as typed
-    policy = load_policy() if args.policy is None else cli_option("--policy", load_policy,
-                                                                   args.policy)
+    policy = load_policy(jaw=jaws["jaw"]) if args.policy is None else cli_option(
+        "--policy", load_policy, args.policy)
+    if policy.bounds.jaw != jaws["jaw"]:
+        raise ValueError(f"--policy: the policy designs {policy.bounds.jaw} jaws, not "
+                         f"{jaws['jaw']} (--jaw)")
     refine = check_integer("--refine", args.refine, 0, 100_000)
     cli_option("--seed", check_seed, args.seed)
     check_output_dir("--out", args.out)
@@ -93,6 +103,8 @@ def add_policy_parsers(subparsers: Any) -> None:
                        help="designs evaluated in training (default %(default)s, minutes on 2 "
                        "cores)")
     train.add_argument("--seed", type=int, default=0)
+    add_jaw_options(train, "design", "straight: GripperDesign-v2's six actions; shaped jaws "
+                    "train in GripperDesign-v3's action space")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--out", required=True, help="output folder, created if its parent "
                        "exists")
@@ -112,8 +124,8 @@ def add_policy_parsers(subparsers: Any) -> None:
     design.add_argument("--refine", type=int, default=0, metavar="K",
                         help="CMA-ES evaluations around the policy's design (default 0)")
     design.add_argument("--seed", type=int, default=0)
-    add_jaw_options(design, "design", "the object file's jaw, else straight; the policy "
-                    "designs straight jaws only and refuses others")
+    add_jaw_options(design, "design", "the object file's jaw, else straight; the shipped "
+                    "policies design straight or any jaws alike on both fingers")
     design.add_argument("--no-progress", action="store_true", help="no progress bar")
     design.add_argument("--out", default="out",
                         help="output folder, created if its parent exists (default %(default)s)")

@@ -38,7 +38,13 @@ from typing import Any
 
 import numpy as np
 
-from envs.design_env import OBS_FIELDS, ObjectDistribution, evaluate_objects, observe_rows
+from envs.design_env import (
+    OBS_FIELDS,
+    ObjectDistribution,
+    evaluate_objects,
+    jaw_bounds,
+    observe_rows,
+)
 from envs.evaluate import DesignBounds, RewardWeights
 from envs.model.defaults import DEFAULT_PAYLOAD_FACTOR
 from envs.model.family import resolve_model
@@ -68,6 +74,9 @@ RL_HINT = "training a policy needs stable-baselines3 and torch: pip install 'psm
 POLICY_FORMAT = 1
 POLICY_FILES = ("policy.json", "policy.npz")
 SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
+# the shipped policy that designs shaped jaws too (the "any" jaw space of GripperDesign-v3)
+SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
+SHIPPED_JAWS = {"straight": SHIPPED_POLICY, "any": SHIPPED_JAW_POLICY}
 REFINE_SIGMA = 0.1  # CMA-ES step size around the policy's design, in the normalized box
 
 
@@ -180,7 +189,9 @@ class DesignPolicy:
     # --- the forward pass -------------------------------------------------------------------
 
     def actions(self, observations: np.ndarray) -> np.ndarray:
-        """Normalized designs in [-1, 1] (B, 6) of observations (B, 6): one forward pass."""
+        """Normalized designs in [-1, 1] (B, :attr:`bounds` ``n_var``: 6, plus the jaw
+        columns of a policy that designs shaped jaws) of observations (B, 6): one forward
+        pass."""
         x = np.asarray(observations, dtype=np.float64)
         for k, (w, b) in enumerate(self.layers):
             x = x @ w.T + b
@@ -191,8 +202,12 @@ class DesignPolicy:
     @property
     def bounds(self) -> DesignBounds:
         """The action box the policy designs in."""
-        b = self.meta["bounds"]
-        return DesignBounds(tuple(b["low"]), tuple(b["high"]))
+        return bounds_of_meta(self.meta["bounds"])
+
+    @property
+    def jaw(self) -> str:
+        """The jaws the policy designs: ``"straight"``, or a kind of shaped jaws (``"any"``)."""
+        return self.bounds.jaw
 
     def problem(self, disk: SoftDisk, strain_limit: float, friction_coefficient: float,
                 **kwargs: Any) -> DesignProblem:
@@ -231,7 +246,8 @@ class DesignPolicy:
     def normalized(self, disk: SoftDisk, strain_limit: float, friction_coefficient: float,
                    payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
                    placement_tolerance_rel: float = 0.0) -> np.ndarray:
-        """The policy's design for one object, normalized (6,) (arguments as :meth:`design`)."""
+        """The policy's design for one object, normalized (its bounds' ``n_var``,) (arguments
+        as :meth:`design`)."""
         if not isinstance(disk, SoftDisk):
             raise ValueError(f"disk must be a SoftDisk, got {type(disk).__name__}")
         obs = observe_rows([disk], np.array([[strain_limit, friction_coefficient,
@@ -305,11 +321,33 @@ class _Continue:
         return getattr(self._problem, name)
 
 
-def _expected_meta() -> dict[str, Any]:
-    """What this package needs of a policy's metadata to use it."""
-    b = DesignBounds()
+def bounds_meta(bounds: DesignBounds) -> dict[str, Any]:
+    """A policy's design box as its metadata records it: the six columns' bounds and, for a
+    policy that designs shaped jaws, the jaw kind, per finger or not, and the jaw columns'
+    bounds."""
+    meta: dict[str, Any] = {"low": list(bounds.low), "high": list(bounds.high)}
+    if bounds.jaw != "straight":
+        meta.update({"jaw": bounds.jaw, "jaw_per_finger": bounds.jaw_per_finger,
+                     "jaw_low": list(bounds.jaw_low), "jaw_high": list(bounds.jaw_high)})
+    return meta
+
+
+def bounds_of_meta(meta: dict[str, Any]) -> DesignBounds:
+    """The design box of a policy's metadata (:func:`bounds_meta`)."""
+    jaw = meta.get("jaw", "straight")
+    extra: dict[str, Any] = {}
+    if jaw != "straight":
+        extra = {"jaw": jaw, "jaw_per_finger": bool(meta.get("jaw_per_finger", False)),
+                 "jaw_low": tuple(meta["jaw_low"]), "jaw_high": tuple(meta["jaw_high"])}
+    return DesignBounds(tuple(meta["low"]), tuple(meta["high"]), **extra)
+
+
+def _expected_meta(bounds: DesignBounds | None = None) -> dict[str, Any]:
+    """What this package needs of a policy's metadata to use it (the default box, with the
+    jaws of ``bounds`` if given)."""
+    b = DesignBounds() if bounds is None else bounds
     return {"format": POLICY_FORMAT, "obs_fields": [list(f) for f in OBS_FIELDS],
-            "bounds": {"low": list(b.low), "high": list(b.high)}}
+            "bounds": bounds_meta(b)}
 
 
 def _check_meta(meta: dict[str, Any], where: str) -> None:
@@ -321,6 +359,11 @@ def _check_meta(meta: dict[str, Any], where: str) -> None:
         raise PolicyMismatchError(
             f"{where}: the policy observes {meta.get('obs_fields')}, this package's env "
             f"observes {expected['obs_fields']}: retrain it (psm-grasp train-policy)")
+    try:
+        bounds_of_meta(meta.get("bounds", {}))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise PolicyMismatchError(f"{where}: the policy's design box {meta.get('bounds')} does "
+                                  f"not fit this package ({exc})") from None
     for key in ("low", "high"):
         got = np.asarray(meta.get("bounds", {}).get(key, []), dtype=float)
         want = np.asarray(expected["bounds"][key])
@@ -343,9 +386,10 @@ def _check_meta(meta: dict[str, Any], where: str) -> None:
                                   f"this is {mine}: retrain it (psm-grasp train-policy)")
 
 
-def load_policy(path: str | Path | None = None) -> DesignPolicy:
+def load_policy(path: str | Path | None = None, jaw: str = "straight") -> DesignPolicy:
     """Load a saved policy: ``path`` a folder written by :meth:`DesignPolicy.save` (or
-    ``psm-grasp train-policy --out``); ``None``: the policy shipped with the package.
+    ``psm-grasp train-policy --out``); ``None``: the policy shipped with the package for the
+    jaws ``jaw`` (``"straight"``, default; ``"any"``: the one that designs shaped jaws too).
 
     Raises
     ------
@@ -355,8 +399,12 @@ def load_policy(path: str | Path | None = None) -> DesignPolicy:
         :class:`PolicyMismatchError` (a ``ValueError``) for a policy that does not fit this
         package (observation, action box, model member, reward weights, version).
     """
-    folder = SHIPPED_POLICY if path is None else Path(path)
-    where = "the shipped policy" if path is None else f"policy folder {str(folder)!r}"
+    if path is None and jaw not in SHIPPED_JAWS:
+        raise ValueError(f"jaw: a policy is shipped for jaws {sorted(SHIPPED_JAWS)}, not "
+                         f"{jaw!r}")
+    folder = SHIPPED_JAWS[jaw] if path is None else Path(path)
+    where = (("the shipped policy" + ("" if jaw == "straight" else f" for {jaw} jaws"))
+             if path is None else f"policy folder {str(folder)!r}")
     missing = [name for name in POLICY_FILES if not (folder / name).is_file()]
     if missing:
         raise ValueError(f"{where}: no {missing[0]} in it (a folder written by psm-grasp "
@@ -413,16 +461,17 @@ def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,
     """The ``"policy"`` method of :func:`optim.optimize`: the (shipped) policy's design for
     the problem's object and ``budget - 1`` refining CMA-ES evaluations."""
     if policy is None:
-        policy = _shipped_policy()
+        policy = _shipped_policy(problem.bounds.jaw)
     elif not isinstance(policy, DesignPolicy):
         policy = load_policy(policy)
     return policy.run(problem, budget=budget, seed=seed)
 
 
 @functools.cache
-def _shipped_policy() -> DesignPolicy:
-    """The shipped policy, read once per process (an optimizer comparison asks it often)."""
-    return load_policy()
+def _shipped_policy(jaw: str = "straight") -> DesignPolicy:
+    """The shipped policy for the jaws ``jaw``, read once per process (an optimizer
+    comparison asks it often)."""
+    return load_policy(jaw=jaw)
 
 
 # --- training ---------------------------------------------------------------------------------
@@ -486,7 +535,7 @@ def _make_agent(settings: TrainingSettings, env: Any):
 
 
 def _training_env(settings: TrainingSettings, distribution: ObjectDistribution,
-                  weights: RewardWeights, model: dict[str, Any]):
+                  weights: RewardWeights, model: dict[str, Any], bounds: DesignBounds):
     from stable_baselines3.common.vec_env import VecEnvWrapper, VecMonitor
 
     from envs.sb3_env import sb3_vec_env
@@ -505,7 +554,7 @@ def _training_env(settings: TrainingSettings, distribution: ObjectDistribution,
             return obs, shaped.astype(np.float32), dones, infos
 
     env = VecMonitor(sb3_vec_env(settings.n_envs, seed=settings.seed, distribution=distribution,
-                                 weights=weights, **model))
+                                 weights=weights, bounds=bounds, **model))
     return _BoundedTail(env) if settings.tail_scale > 0 else env
 
 
@@ -555,6 +604,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
                  n_rings: int | None = None, element: str | None = None,
                  progress: bool = True, heldout: list[tuple] | None = None,
                  curve_points: int = 20, torch_threads: int | None = 1, name: str = "policy",
+                 jaw: str = "straight", jaw_per_finger: bool = False,
                  **settings: Any) -> DesignPolicy:
     """Train a design policy over an object distribution (stable-baselines3).
 
@@ -587,6 +637,11 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
         leaving the other core to the solver); None leaves torch's setting.
     name
         The policy's name in its metadata.
+    jaw, jaw_per_finger
+        The jaws it designs: ``"straight"`` (default: GripperDesign-v2's six actions) or a kind
+        of shaped jaws (GripperDesign-v3's action with the jaw columns of
+        :func:`envs.design_env.jaw_bounds`; ``"any"``: cradles, V-grooves and the rounded
+        grooves between them).
     **settings
         Fields of :class:`TrainingSettings` (``n_envs``, ``net_arch``, ``tail_scale``, ...).
 
@@ -607,7 +662,8 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
     if not isinstance(weights, RewardWeights):
         raise ValueError(f"weights must be a RewardWeights, got {type(weights).__name__}")
     member = resolve_model(n_triangles, n_rings, element or "nhquad").kwargs()
-    env = _training_env(cfg, distribution, weights, member)
+    bounds = jaw_bounds(jaw, jaw_per_finger) if jaw != "straight" else DesignBounds()
+    env = _training_env(cfg, distribution, weights, member, bounds)
     curve: list[dict[str, Any]] = []
     threads = torch.get_num_threads()
     if torch_threads is not None:
@@ -615,7 +671,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
     t0 = time.perf_counter()
     try:
         agent = _make_agent(cfg, env)
-        shell = _policy_shell(cfg, distribution, weights, member, name)
+        shell = _policy_shell(cfg, distribution, weights, member, name, bounds)
 
         def evaluate() -> float:
             layers, activation, squash = _extract_actor(agent, cfg.method)
@@ -636,10 +692,11 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
 
 
 def _policy_shell(cfg: TrainingSettings, distribution: ObjectDistribution,
-                  weights: RewardWeights, member: dict[str, Any], name: str) -> dict[str, Any]:
+                  weights: RewardWeights, member: dict[str, Any], name: str,
+                  bounds: DesignBounds | None = None) -> dict[str, Any]:
     """The metadata of a policy trained with these settings."""
     return {
-        **_expected_meta(), "name": name, "package_version": _package_version(),
+        **_expected_meta(bounds), "name": name, "package_version": _package_version(),
         "reward_weights": {f.name: getattr(weights, f.name) for f in fields(weights)},
         "model": member, "joint_spring": {"torsion_stiffness_rel": None},
         "distribution": {f.name: getattr(distribution, f.name) for f in fields(distribution)},

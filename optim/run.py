@@ -239,12 +239,18 @@ def jaw_settings(obj: ObjectSpec | None, jaw: str | None = None,
 
 
 def check_policy_jaw(method: str, settings: dict[str, Any]) -> None:
-    """The design policy designs straight jaws only (it was trained with six actions):
-    refuse it for shaped jaws, before any work."""
-    if method == "policy" and settings.get("jaw", "straight") != "straight":
+    """The shipped design policies design straight jaws (six actions) or any shaped jaws, both
+    fingers alike (:data:`optim.rl.SHIPPED_JAWS`): refuse the policy for other jaws, before
+    any work."""
+    from .rl import SHIPPED_JAWS
+
+    jaw = settings.get("jaw", "straight")
+    if method == "policy" and (jaw not in SHIPPED_JAWS or settings.get("jaw_per_finger")):
         raise ValueError(
-            f"the design policy designs straight jaws only, not jaw {settings['jaw']!r}: use "
-            "another method for shaped jaws (psm-grasp optimize --jaw ...)")
+            f"the design policies design jaws {' or '.join(sorted(SHIPPED_JAWS))} alike on "
+            f"both fingers, not jaw {jaw!r}"
+            + (" per finger" if settings.get("jaw_per_finger") else "")
+            + ": use another method for them (psm-grasp optimize --jaw ...)")
 
 
 def scenarios_of(obj: ObjectSpec | None, placement_tolerance_m=None) -> Scenarios | None:
@@ -331,7 +337,7 @@ def run_optimize(
     jaws designed (:class:`~envs.evaluate.DesignBounds`); ``None``: the object file's, else
     straight bars. The result's designs then carry the jaw fields by name
     (:data:`envs.model.jaw.JAW_FIELDS`, ``left_...`` per finger) and its extra records both.
-    The design policy designs straight jaws only.
+    The design policy designs straight jaws, or any shaped jaws alike on both fingers.
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a

@@ -22,7 +22,8 @@ strain limit, friction, density, payload factor and placement tolerance), ``psm-
 --object F`` (the shipped policy) and ``--refine 100`` against ``psm-grasp optimize --object F
 --budget 1000``, each as reported (the finer member's reward after the finish).
 
-Writes ``out/bench_policy.json`` and ``out/bench_policy.png``.
+Writes ``out/bench_policy.json`` and ``out/bench_policy.png`` (``--jaw any``: the policies that
+design shaped jaws, against CMA-ES in the same space; ``bench_policy_any.json`` and ``.png``).
 
 Usage: ``python scripts/bench_policy.py [--objects 24] [--seeds 0 1 2] [--steps 80000]
 [--ablation] [--object-files 12] [--shipped] [--ks 50 100 200]`` (a training of 80,000 steps
@@ -51,11 +52,15 @@ NEAR = 0.01  # a design within this reward of the optimum counts as near it
 REWARD_HOLDS = -1.0  # every reward of a grasp that holds (within the limit or crushing) is above
 
 
+JAW = {"jaw": "straight"}  # the jaws designed (--jaw), set once by main
+
+
 def problem_of(obj) -> DesignProblem:
     """The design problem of a held-out object (disk, strain limit, friction, payload factor,
-    tolerance over the radius): the env's reward, the worst over its placements."""
+    tolerance over the radius): the env's reward, the worst over its placements, in the
+    design space of the jaws of ``--jaw``."""
     disk, limit, mu, factor, tolerance = obj
-    return DesignProblem(disk, limit, mu, payload_factor=factor,
+    return DesignProblem(disk, limit, mu, payload_factor=factor, jaw=JAW["jaw"],
                          scenarios=Scenarios.of(placement_tolerance_m=tolerance * disk.radius_m))
 
 
@@ -70,7 +75,7 @@ def cached_optima(objects, budget: int, path: Path) -> np.ndarray:
     and budget (they take the longest and do not depend on the policy), else computed and
     written there."""
     key = {"objects": len(objects), "heldout_seed": HELDOUT_SEED, "budget": budget,
-           "first_radius_m": objects[0][0].radius_m}
+           "first_radius_m": objects[0][0].radius_m, "jaw": JAW["jaw"]}
     if path.is_file():
         data = json.loads(path.read_text())
         if data.get("key") == key:
@@ -123,11 +128,13 @@ def policy_time_ms(policy, objects, repeat: int = 200) -> float:
 def get_policy(seed: int, steps: int, folder: Path, objects, tail_scale: float = 1.0):
     """A trained policy: read from ``folder`` when it was trained before, else trained and
     saved there."""
-    path = folder / (f"seed{seed}" if tail_scale else f"seed{seed}_no_tail")
+    jaw = JAW["jaw"]
+    path = folder / ((f"seed{seed}" if tail_scale else f"seed{seed}_no_tail")
+                     + ("" if jaw == "straight" else f"_{jaw}"))
     if (path / "policy.json").is_file():
         return load_policy(path)
     policy = train_policy("sac", steps=steps, seed=seed, heldout=objects, curve_points=20,
-                          name=path.name, tail_scale=tail_scale, progress=False)
+                          name=path.name, tail_scale=tail_scale, progress=False, jaw=jaw)
     policy.save(path)
     return policy
 
@@ -230,11 +237,17 @@ def main() -> None:
                         help="refining budgets K (default %(default)s)")
     parser.add_argument("--reference-only", action="store_true",
                         help="only compute the per-object optima (cached in --out)")
+    parser.add_argument("--jaw", default="straight", choices=("straight", "any"),
+                        help="the jaws designed: straight, or any shaped jaws (the policies "
+                        "trained in GripperDesign-v3's space; --shipped: the shipped one)")
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
+    JAW["jaw"] = args.jaw
     warnings.simplefilter("ignore", NoGraspWarning)
     objects = heldout_objects(args.objects, HELDOUT_SEED)
-    optima = cached_optima(objects, REFERENCE_BUDGET, args.out / "bench_policy_optima.json")
+    suffix = "" if args.jaw == "straight" else f"_{args.jaw}"
+    optima = cached_optima(objects, REFERENCE_BUDGET,
+                           args.out / f"bench_policy_optima{suffix}.json")
     if args.reference_only:
         print(f"optima of {len(objects)} objects: mean {optima.mean():.4f}")
         return
@@ -247,7 +260,7 @@ def main() -> None:
         cold = with_budget(objects, k)
         report["cold_cmaes"][str(k)] = {**gaps(cold, optima),
                                         "not_holding": int((cold <= REWARD_HOLDS).sum())}
-    policies = ({"shipped": load_policy()} if args.shipped else
+    policies = ({"shipped": load_policy(jaw=args.jaw)} if args.shipped else
                 {str(s): get_policy(s, args.steps, args.out / "bench_policy", objects)
                  for s in args.seeds})
     for name, policy in policies.items():
@@ -300,9 +313,11 @@ def main() -> None:
         f"{c['not_holding']} not holding)" for k, c in
         ((k, report["cold_cmaes"][str(k)]) for k in ks)))
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "bench_policy.json").write_text(json.dumps(report, indent=1) + "\n")
-    chart(report, args.out / "bench_policy.png")
-    print(f"wrote {args.out / 'bench_policy.json'} and {args.out / 'bench_policy.png'}")
+    report["jaw"] = args.jaw
+    (args.out / f"bench_policy{suffix}.json").write_text(json.dumps(report, indent=1) + "\n")
+    chart(report, args.out / f"bench_policy{suffix}.png")
+    print(f"wrote {args.out / f'bench_policy{suffix}.json'} and "
+          f"{args.out / f'bench_policy{suffix}.png'}")
 
 
 if __name__ == "__main__":

@@ -325,11 +325,13 @@ def test_the_policy_refuses_shaped_jaws_before_any_work(tmp_path, capsys):
                    'thickness_m = 0.01\njaw = "vee"\n')
     assert main(["design", "--object", str(obj), "--out", str(tmp_path / "a")]) == 2
     err = capsys.readouterr().err
-    assert "designs straight jaws only, not jaw 'vee' (the object file's)" in err
+    assert "design straight or any jaws alike on both fingers, not jaw 'vee' (the object " \
+        "file's)" in err
     assert f"optimize --object {obj} --jaw vee" in err
-    assert main(["optimize", "--method", "policy", "--jaw", "any", "--out",
+    assert main(["optimize", "--method", "policy", "--jaw", "cradle", "--out",
                  str(tmp_path / "b")]) == 2
-    assert "--jaw: the design policy designs straight jaws only" in capsys.readouterr().err
+    assert "--jaw: the design policies design jaws any or straight alike on both fingers, " \
+        "not jaw 'cradle'" in capsys.readouterr().err
     assert main(["optimize", "--jaw-per-finger", "--out", str(tmp_path / "c")]) == 2
     assert "jaw_per_finger needs a jaw other than 'straight'" in capsys.readouterr().err
     assert not any((tmp_path / d).exists() for d in "abc")
