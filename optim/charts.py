@@ -67,25 +67,25 @@ def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
 
 def jaw_label(design: dict[str, float]) -> str:
     """The jaws of a design (dict in SI units) for a chart's title, in millimetres: ``""``
-    for straight bars, else a line per distinct groove (``"; jaws: cradle R = ..."``)."""
+    for straight bars, else a line per distinct groove (``"\\njaws: cradle h = ..."``)."""
     row = design_row(design)
     if row.size == N_DESIGN:
         return ""
     try:
-        jaws = jaws_of_row(row)
+        right, left = jaws_of_row(row)
     except ValueError:  # (an impossible groove: the chart shows the bare design)
         return "\njaws: out of range"
-    parts = []
-    for side, jaw in zip(("", "left "), jaws, strict=True):
-        if jaw is None or (side and jaw == jaws[0]):
-            continue
-        text = f"{side}{jaw.kind}"
+    named = ([("jaws", right)] if left is None or left == right
+             else [("right jaw", right), ("left jaw", left)])
+    lines = []
+    for name, jaw in named:
+        text = f"{name}: {jaw.kind}"
         if jaw.depth_m > 0.0:
             text += (f" h = {jaw.depth_m * 1e3:.3g} mm, R = {jaw.bottom_radius_m * 1e3:.3g} mm, "
                      f"{math.degrees(jaw.opening_angle_rad):.0f}°, at "
                      f"{jaw.position_m * 1e3:.3g} mm")
-        parts.append(text)
-    return "\njaws: " + "; ".join(parts)
+        lines.append(text)
+    return "".join("\n" + line for line in lines)
 
 
 def model_of(obj: dict[str, Any]) -> dict[str, Any]:

@@ -143,6 +143,10 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
               f"d3 = {d['joint_offset_m'] * 1e3:.4g} mm, w = {d['finger_width_m'] * 1e3:.4g} mm, "
               f"T_a = {d['torque_nm']:.4g} N·m, d1 = {d['distance_m'] * 1e3:.4g} mm, "
               f"k_f = {result.object['torsion_stiffness_nm_per_rad']:.4g} N·m/rad")
+        from .charts import jaw_label
+
+        for line in jaw_label(d).split("\n")[1:]:
+            print(f"  {line}")
     if m.get("required_friction") is not None:
         payload = m.get("payload_n", 0.0)
         print(f"  holding: needs friction {float(m['required_friction']):.3g} (the object's "

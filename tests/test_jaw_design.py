@@ -7,6 +7,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -45,6 +46,7 @@ from envs.scene import (
     design_row,
 )
 from optim.problem import DesignProblem
+from optim.result import NoGraspWarning
 
 SCENE = Scene.preset("paper-r070")
 DISK = SCENE.disk
@@ -56,10 +58,13 @@ KF = {"torsion_stiffness_nm_per_rad": SCENE.gripper.torsion_stiffness_nm_per_rad
 # every design space: each kind, per finger or alike
 SPACES = [DesignBounds(jaw=k, jaw_per_finger=p) for k in JAW_KINDS
           for p in ((False, True) if k != "straight" else (False,))]
+SPACES.append(DesignBounds(jaw="vee", joints_apart=True))
 
 
 def _ids(b: DesignBounds) -> str:
-    return b.jaw + ("-per-finger" if b.jaw_per_finger else "")
+    return (b.jaw + ("-per-finger" if b.jaw_per_finger else "")
+            + ("-joints-apart" if b.joints_apart else ""))
+
 
 
 def _params(rows: np.ndarray) -> np.ndarray:
@@ -300,6 +305,34 @@ def test_the_design_problem_searches_the_wider_box():
     assert design_row(best).tolist() == problem.to_physical(problem.best_x).tolist()
     with pytest.raises(ValueError, match=r"x must have shape \(B, 12\)"):
         problem.evaluate(np.zeros((1, 6)))
+
+
+@pytest.mark.parametrize("method", ["cmaes", "ga", "nsga2", "random"])
+def test_every_method_searches_the_jaws(method):
+    from optim.optimize import optimize
+
+    problem = DesignProblem(DISK, jaw="any", **KF)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NoGraspWarning)
+        result = optimize(method, problem, budget=30, seed=3)
+    assert result.n_evaluations == 30
+    assert list(result.best_design) == list(design_fields(10))
+    assert result.extra["jaw"] == "any"
+    assert problem.archive()["x"].shape == (30, 10)
+    for pick in [*result.top_designs, *result.pareto_front]:
+        assert design_row(pick["design"]).shape == (10,)
+
+
+def test_the_jaws_of_a_chart_title():
+    from optim.charts import jaw_label
+
+    assert jaw_label(design_mapping(PAPER.to_array())) == ""
+    both = jaw_label(design_mapping(Design(*PAPER.to_array(), jaw=CRADLE).to_array(14)))
+    assert both == "\njaws: cradle h = 4 mm, R = 84 mm, 0°, at 100 mm"
+    each = jaw_label(design_mapping(Design(*PAPER.to_array(), jaw=CRADLE,
+                                           left_jaw=VEE).to_array()))
+    assert each.splitlines()[1:] == ["right jaw: cradle h = 4 mm, R = 84 mm, 0°, at 100 mm",
+                                     "left jaw: vee h = 5 mm, R = 0 mm, 90°, at 120 mm"]
 
 
 def test_optimize_with_a_cradle_writes_the_jaws_by_name(tmp_path):
