@@ -273,3 +273,14 @@ def test_bad_jaw_fields_are_named():
     with pytest.raises(ValueError, match="the left finger's jaw: jaw depth_m"):
         build_sheet({**DESIGN, **_fields(CRADLE),
                      **_fields(JawProfile.vee(1.0, 0.0055, 0.02), LEFT_JAW_FIELDS)}, OBJ)
+
+
+def test_bad_drawing_input_is_named():
+    from envs.render import outline_polygon
+
+    with pytest.raises(ValueError, match="side must be 0"):
+        finger_polygon(L, ANGLE, OFFSET, W, 2, CRADLE)
+    with pytest.raises(ValueError, match="arc_step_rad"):
+        outline_polygon(np.zeros((3, 3)), arc_step_rad=0.0)
+    with pytest.raises(ValueError, match=r"shape \(K, 3\)"):
+        outline_polygon(np.zeros((3, 2)))
