@@ -860,6 +860,7 @@ def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: st
 
     sheet = build_sheet(design, obj, metrics, scenario_rows)
     folder = Path(out_dir)
+    folder.mkdir(parents=True, exist_ok=True)
     paths = {"design_json": folder / f"{prefix}_design.json",
              "design_csv": folder / f"{prefix}_design.csv",
              "drawing": folder / f"{prefix}_drawing.png"}

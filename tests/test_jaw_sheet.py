@@ -284,3 +284,26 @@ def test_bad_drawing_input_is_named():
         outline_polygon(np.zeros((3, 3)), arc_step_rad=0.0)
     with pytest.raises(ValueError, match=r"shape \(K, 3\)"):
         outline_polygon(np.zeros((3, 2)))
+
+
+# --- the jaw page's examples run and print what they say --------------------------------------
+
+
+def test_the_examples_of_the_jaw_page_run(tmp_path, monkeypatch, capsys):
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "jaws.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", page, flags=re.DOTALL)
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        # each print's comment says what it prints
+        said = [line.split("# ", 1)[1].split(",")[0] for line in block.splitlines()
+                if line.startswith("print(")]
+        exec(compile(block, "docs/jaws.md", "exec"), {})
+        printed = capsys.readouterr().out.splitlines()
+        assert [line.strip() for line in printed] == said
+    sheet = json.loads((tmp_path / "out" / "cradle_design.json").read_text())
+    assert sheet["jaws"]["right"]["kind"] == "cradle"
+    assert (tmp_path / "out" / "cradle_drawing.png").stat().st_size > 0
