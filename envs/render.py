@@ -23,6 +23,7 @@ from matplotlib.patches import Circle, Polygon
 
 from .model.jaw import STRAIGHT, JawProfile, jaws_of_row
 from .scene import N_DESIGN, Gripper, Scene, SoftDisk
+from .validation import check_range
 
 __all__ = [
     "draw_grasp",
@@ -139,6 +140,8 @@ def finger_to_drawing(points: np.ndarray, angle: float, offset: float, side: int
     """Points in a finger's coordinates (``s`` along it from its joint, ``m`` along its face's
     inward normal; shape (K, 2)) in the drawing's frame [m], side 0 right, 1 left, the finger at
     ``angle`` from the +y axis with its joint ``offset`` from the symmetry axis."""
+    if side not in (0, 1):
+        raise ValueError(f"side must be 0 (right) or 1 (left), got {side!r}")
     s, c = math.sin(angle), math.cos(angle)
     joint = np.array([offset, 0.0]) if side == 0 else np.array([-offset, 0.0])
     axis = np.array([s, c]) if side == 0 else np.array([-s, c])
@@ -158,7 +161,7 @@ def outline_polygon(vertices: np.ndarray, arc_step_rad: float = math.radians(5.0
         vertex (the last one's closes the outline): 0 a straight line, else an arc of
         included angle ``theta``, counterclockwise when positive.
     arc_step_rad
-        Largest angle between two samples of an arc [rad].
+        Largest angle between two samples of an arc [rad], in (0, pi].
 
     Returns
     -------
@@ -166,7 +169,11 @@ def outline_polygon(vertices: np.ndarray, arc_step_rad: float = math.radians(5.0
         Shape (M, 2): the vertices with the arcs' inner points between them, each arc's
         midpoint among them.
     """
+    check_range("arc_step_rad", arc_step_rad, 0.0, math.pi, low_open=True)
     verts = np.asarray(vertices, dtype=float)
+    if verts.ndim != 2 or verts.shape[1] != len(OUTLINE_COLUMNS):
+        raise ValueError(f"vertices must have shape (K, {len(OUTLINE_COLUMNS)}) (x, y, bulge), "
+                         f"got {verts.shape}")
     out = []
     for k, vertex in enumerate(verts):
         start, bulge = vertex[[V_X, V_Y]], float(vertex[V_BULGE])

@@ -244,17 +244,21 @@ def _jaws(jaws: tuple[JawProfile, JawProfile], length: float, angle: float, offs
     return {**entries, "same": jaws[0] == jaws[1]}
 
 
+def _jaw_groups(sheet: dict[str, Any]) -> list[tuple[str | None, dict[str, Any]]]:
+    """The sheet's distinct jaw profiles: ``[(None, entry)]`` for fingers alike, else each
+    finger's ``(side, entry)``."""
+    jaws = sheet["jaws"]
+    return [(None, jaws["right"])] if jaws["same"] else [(side, jaws[side]) for side in FINGERS]
+
+
 def jaw_rows(sheet: dict[str, Any]) -> list[dict[str, Any]]:
     """The sheet's jaw profiles as table rows (quantity, value, unit, meaning): one ``jaw``
     row "straight" for flat faces, else :data:`JAW_ROWS` prefixed ``jaw_`` (both fingers
     alike) or ``right_jaw_`` and ``left_jaw_``."""
-    jaws = sheet["jaws"]
-    if jaws["same"]:
-        groups = [("jaw", "both fingers", jaws["right"])]
-    else:
-        groups = [(f"{side}_jaw", f"{side} finger", jaws[side]) for side in FINGERS]
     rows = []
-    for prefix, whose, entry in groups:
+    for side, entry in _jaw_groups(sheet):
+        prefix = "jaw" if side is None else f"{side}_jaw"
+        whose = "both fingers" if side is None else f"{side} finger"
         if entry["kind"] == STRAIGHT_JAW_TEXT:
             rows.append({"quantity": prefix, "value": STRAIGHT_JAW_TEXT, "unit": "-",
                          "meaning": f"{whose}: a flat gripping face, no groove"})
@@ -460,11 +464,9 @@ def _draw_fingers(ax, sheet: dict[str, Any], w: float, legend: bool = True) -> N
 
 def _jaw_lines(sheet: dict[str, Any]) -> list[str]:
     """The jaw profiles, a line per distinct one, for the drawing's notes."""
-    jaws = sheet["jaws"]
-    groups = [("jaws, both fingers", jaws["right"])] if jaws["same"] else [
-        (f"jaw, {side} finger", jaws[side]) for side in FINGERS]
     lines = []
-    for whose, entry in groups:
+    for side, entry in _jaw_groups(sheet):
+        whose = "jaws, both fingers" if side is None else f"jaw, {side} finger"
         if entry["kind"] == STRAIGHT_JAW_TEXT:
             lines.append(f"{whose}: straight (a flat gripping face, no groove)")
             continue
@@ -582,10 +584,8 @@ def _draw_table(ax, sheet: dict[str, Any]) -> None:
 
 def _jaw_profiles(sheet: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     """The grooved jaw profiles to detail: (whose, entry), once for fingers alike."""
-    jaws = sheet["jaws"]
-    groups = [("both fingers'", jaws["right"])] if jaws["same"] else [
-        (f"{side} finger's", jaws[side]) for side in FINGERS]
-    return [(whose, entry) for whose, entry in groups if entry["kind"] != STRAIGHT_JAW_TEXT]
+    return [("both fingers'" if side is None else f"{side} finger's", entry)
+            for side, entry in _jaw_groups(sheet) if entry["kind"] != STRAIGHT_JAW_TEXT]
 
 
 def _jaw_of_entry(entry: dict[str, Any]) -> JawProfile:
@@ -600,10 +600,10 @@ def _dimension_grooves(ax, sheet: dict[str, Any], offset: float) -> None:
     rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
     w, d3 = rows["finger_width_mm"], rows["joint_offset_mm"]
     th0 = math.radians(rows["rest_angle_deg"])
-    for side, name in enumerate(FINGERS):
-        entry = sheet["jaws"][name]
-        if entry["kind"] == STRAIGHT_JAW_TEXT or (sheet["jaws"]["same"] and side == 1):
+    for name, entry in _jaw_groups(sheet):
+        if entry["kind"] == STRAIGHT_JAW_TEXT:
             continue
+        side = FINGERS.index(name or "right")  # fingers alike: dimensioned on the right one
         a = entry["position_mm"]
         joint_back, back, face = finger_to_drawing(
             [[0.0, -w / 2], [a, -w / 2], [a, w / 2]], th0, d3, side)
@@ -860,6 +860,7 @@ def write_build_sheet(design: dict[str, float], obj: dict[str, Any], out_dir: st
 
     sheet = build_sheet(design, obj, metrics, scenario_rows)
     folder = Path(out_dir)
+    folder.mkdir(parents=True, exist_ok=True)
     paths = {"design_json": folder / f"{prefix}_design.json",
              "design_csv": folder / f"{prefix}_design.csv",
              "drawing": folder / f"{prefix}_drawing.png"}

@@ -273,3 +273,37 @@ def test_bad_jaw_fields_are_named():
     with pytest.raises(ValueError, match="the left finger's jaw: jaw depth_m"):
         build_sheet({**DESIGN, **_fields(CRADLE),
                      **_fields(JawProfile.vee(1.0, 0.0055, 0.02), LEFT_JAW_FIELDS)}, OBJ)
+
+
+def test_bad_drawing_input_is_named():
+    from envs.render import outline_polygon
+
+    with pytest.raises(ValueError, match="side must be 0"):
+        finger_polygon(L, ANGLE, OFFSET, W, 2, CRADLE)
+    with pytest.raises(ValueError, match="arc_step_rad"):
+        outline_polygon(np.zeros((3, 3)), arc_step_rad=0.0)
+    with pytest.raises(ValueError, match=r"shape \(K, 3\)"):
+        outline_polygon(np.zeros((3, 2)))
+
+
+# --- the jaw page's examples run and print what they say --------------------------------------
+
+
+def test_the_examples_of_the_jaw_page_run(tmp_path, monkeypatch, capsys):
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "jaws.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", page, flags=re.DOTALL)
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        # each print's comment says what it prints
+        said = [line.split("# ", 1)[1].split(",")[0] for line in block.splitlines()
+                if line.startswith("print(")]
+        exec(compile(block, "docs/jaws.md", "exec"), {})
+        printed = capsys.readouterr().out.splitlines()
+        assert [line.strip() for line in printed] == said
+    sheet = json.loads((tmp_path / "out" / "cradle_design.json").read_text())
+    assert sheet["jaws"]["right"]["kind"] == "cradle"
+    assert (tmp_path / "out" / "cradle_drawing.png").stat().st_size > 0
