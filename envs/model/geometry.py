@@ -98,7 +98,11 @@ def closed_angle_rad(gripper: FingerBars) -> float:
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def closed_angle_of(length_m: float, joint_offset_m: float, width_m: float) -> float:
-    """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m]."""
+    """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m].
+
+    A jaw groove (:mod:`envs.model.jaw`) leaves it unchanged: the groove lies within the
+    gripping face, between its ends (:meth:`envs.model.jaw.JawProfile.check_fits`), so the
+    face's tip corner, which meets the axis first, is the straight bar's."""
     hw = width_m / 2
     # l sin t - hw cos t = R sin(t - phi), R = hypot(l, hw), phi = atan2(hw, l)
     rr = math.hypot(length_m, hw)
