@@ -16,7 +16,7 @@ from .model.contact_width import (
     hertz_arc_coefficient,
     relative_radius_m,
 )
-from .model.geometry import bar_distance
+from .model.geometry import bar_distance, corner_radius, jaw_finger_gap
 from .model.holding import (
     H_GRIP,
     H_LIMIT,
@@ -28,7 +28,8 @@ from .model.holding import (
     H_PIN_Y,
     N_HOLD,
 )
-from .model.jaw import JAW_FIELDS
+from .model.jaw import JAW_FIELDS, pack_groove
+from .model.layout import G_DEPTH, N_GROOVE
 from .model.problem import SceneColumns, _clearance
 from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
@@ -142,6 +143,7 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
     what happened; :func:`envs.scoring.psm_metrics_rows`); ``material_scale``: the rows' own
     disk scale, without the member's calibration factor that ``cols.stiffness_scale`` carries
     (the contact width takes the material's modulus)."""
+    grooves, rounding = grooves_m(cols)
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
         sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm,
@@ -149,13 +151,31 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
         cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
         material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
-        cols.rest_angle_rad, out["status"], out["converged"], out["iterations"], out["stable"],
+        cols.rest_angle_rad, grooves, rounding, out["status"], out["converged"],
+        out["iterations"], out["stable"],
         out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
         out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
         out["max_displacement_ratio"], out["peak_compression"])
     ok = rows[out["converged"][rows]]
     done = out["converged"][rows]
     _fill_holding(out, ok, sol.holding[done])
+
+
+def grooves_m(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
+    """Each scene's two jaw grooves packed in metres, (B, 2 N_GROOVE): the right finger's
+    ``G_*`` slots, then the left's (:func:`envs.model.jaw.pack_groove` with unit 1; zeros for a
+    straight jaw), and the corner radius ``rho`` [m] they were packed with, (B,), the
+    solver's own (:func:`envs.model.geometry.corner_radius`)."""
+    rounding = np.asarray(corner_radius(cols.finger_width_m, cols.radius_m), dtype=np.float64)
+    out = np.zeros((cols.size, 2 * N_GROOVE))
+    if cols.jaw_depth_m is None:
+        return out, rounding
+    for i in np.flatnonzero((np.asarray(cols.jaw_depth_m) > 0.0).any(axis=1)):
+        for j in range(2):
+            pack_groove(float(cols.jaw_depth_m[i, j]), float(cols.jaw_bottom_radius_m[i, j]),
+                        float(cols.jaw_opening_angle_rad[i, j]), float(cols.jaw_position_m[i, j]),
+                        float(rounding[i]), 1.0, out[i], N_GROOVE * j)
+    return out, rounding
 
 
 def _fill_holding(out: dict[str, np.ndarray], rows: np.ndarray, hold: np.ndarray) -> None:
@@ -200,13 +220,17 @@ def rest_violation(cols: SceneColumns) -> np.ndarray:
 
 
 def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndarray,
-                  offset_x_m=0.0) -> np.ndarray:
+                  offset_x_m=0.0, grooves: tuple[np.ndarray, np.ndarray] | None = None
+                  ) -> np.ndarray:
     """Distance from each finger bar to the undeformed disk at given jaw angles [m], (B, 2).
 
     0 where a bar reaches into the disk. Used for the fingers that do not touch the disk in a
     grasp: how far they are from closing on it (the disk centre is fixed, so the undeformed
     circle is where the fingers would meet it). ``offset_x_m``: the centre's lateral offset
-    ``x_c`` [m], scalar or (B,); the centre is at ``(x_c, d_1 + r)``.
+    ``x_c`` [m], scalar or (B,); the centre is at ``(x_c, d_1 + r)``. ``grooves``: the rows'
+    jaw grooves and corner radii of :func:`grooves_m`; a grooved finger's distance is the jaw
+    gap of the centre (:func:`envs.model.geometry.jaw_finger_gap`) less the radius (a groove
+    the disk could sit in moves the finger's surface away from it).
     """
     ln, _, d3, w, _, d1 = (des[:, k] for k in range(N_DESIGN))
     centre_y = d1 + radius_m
@@ -218,6 +242,17 @@ def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndar
         along = s * (centre_x - d3) + c * centre_y
         across = -c * (centre_x - d3) + s * centre_y
         out[:, side] = np.maximum(0.0, bar_distance(along, across, ln, w) - radius_m)
+    if grooves is not None:
+        packed, rounding = grooves
+        radius = np.broadcast_to(np.asarray(radius_m, dtype=np.float64), centre_y.shape)
+        offset = np.broadcast_to(np.asarray(offset_x_m, dtype=np.float64), centre_y.shape)
+        for i in np.flatnonzero((packed[:, N_GROOVE * np.arange(2) + G_DEPTH] > 0.0).any(axis=1)):
+            for side in range(2):
+                gap, _ = jaw_finger_gap(float(offset[i]), float(centre_y[i]), side,
+                                        float(jaw_angles_rad[i, side]), float(d3[i]),
+                                        float(ln[i]), float(w[i]), float(rounding[i]),
+                                        packed[i], N_GROOVE * side)
+                out[i, side] = max(0.0, gap - float(radius[i]))
     return out
 
 

@@ -38,7 +38,17 @@ offset              meaning                                                     
 ``CK_REST_CONTOUR`` rest length ``h = 2 r sin(pi/N)`` of the contour springs     m
 ``CK_AREA_STIFF``   area stiffness ``kappa t`` of the area energy (0: none)      N/m
 ``CK_REST_AREA``    rest area ``A0`` of a fan triangle                           m^2
+``CK_JAW0/1``       each finger's jaw groove (right, left): ``JW_*`` slots of    m, rad
+                    depth, bottom radius, full opening angle and position from
+                    the joint; depth 0 is the straight bar
 ==================  ===========================================================  =====
+
+A grooved finger's solid is the bar minus its groove with every convex edge rounded by
+``rho``: the points within ``rho`` of the core ``K``, the core rectangle
+``[0, l] x [-(w/2 - rho), w/2 - rho]`` less the groove grown by ``rho``. The check writes the
+grown groove in its own way, as the points within ``R_b + rho`` of a solid cone (apex at the
+bottom arc's centre, opening out of the face, half-angle half the opening angle), and measures
+the distance to ``K`` as the nearest of its boundary pieces (straight segments and one arc).
 
 Output vector (``N_OUT`` floats): ``OUT_PASSED`` (1.0 or 0.0), ``OUT_FORCE_RES`` and
 ``OUT_MOMENT_RES`` (relative residuals), ``OUT_PENETRATION`` [m], ``OUT_CONTACT_GAP`` (largest gap
@@ -79,6 +89,12 @@ __all__ = [
     "CK_REST_AREA",
     "CK_QUAD",
     "CK_SPACING",
+    "CK_JAW0",
+    "CK_JAW1",
+    "JW_DEPTH",
+    "JW_BOTTOM_RADIUS",
+    "JW_OPENING",
+    "JW_POSITION",
     "N_CK",
     "OUT_PASSED",
     "OUT_FORCE_RES",
@@ -130,7 +146,12 @@ CK_LAM = 21  # and s lambda t [N/m]
 CK_PHASE = 22  # angle of the first point of every ring [rad]
 CK_QUAD = 23  # nh-quad: s lambda t [N/m] of the volumetric energy of each quad (0: none)
 CK_SPACING = 24  # ring radii: 0 geometric from the hub, 1 evenly spaced
-N_CK = 25
+# each finger's jaw groove, SI: depth [m], bottom radius [m], full opening angle [rad] and
+# position of its centre line from the joint [m] at CK_JAW0 + JW_* (right finger), CK_JAW1 (left)
+JW_DEPTH, JW_BOTTOM_RADIUS, JW_OPENING, JW_POSITION = range(4)
+CK_JAW0 = 25
+CK_JAW1 = 29
+N_CK = 33
 
 # output vector layout
 OUT_PASSED = 0
@@ -158,6 +179,17 @@ _ACC_MOMENT = 4  # net moment on finger j at _ACC_MOMENT + j [N·m]
 _N_ACC = 6
 
 _FLAGS = dict(cache=True, error_model="numpy", _nrt=False)
+
+# corners of a finger: the bar's four (face tip, face root, back tip, back root), then a jaw
+# groove's two mouth edges (tip side, root side); a corner array may carry the bar's only
+_BAR_CORNERS = 4
+_ALL_CORNERS = 6
+
+
+@njit(inline="always", **_FLAGS)
+def _corner_count_ok(count):
+    """Whether a corner array's corner axis has a valid length (4 or 6)."""
+    return count == _BAR_CORNERS or count == _ALL_CORNERS
 
 
 class KKTReport(NamedTuple):
@@ -386,6 +418,111 @@ def _segment_crosses(p, ax, ay, bx, by):
 
 
 # --------------------------------------------------------------------------------------------
+# the grooved finger (a finger's own coordinates: s along it from the joint, m along the inward
+# face normal; for the groove u = s - a across it and v = w/2 - m, the depth below the face)
+
+
+@njit(inline="always", **_FLAGS)
+def _groove_depth(prm, j):
+    """Depth of finger j's groove [m] (0: the straight bar)."""
+    return prm[(CK_JAW0 if j == 0 else CK_JAW1) + JW_DEPTH]
+
+
+@njit(**_FLAGS)
+def _groove_shape(prm, j):
+    """Finger j's grown groove: ``a`` (centre line), ``vc`` (depth of the cone's apex, the
+    bottom arc's centre), ``grow`` (``R_b + rho``), ``sb``, ``cb`` (sine and cosine of the
+    half opening angle) and ``ue``, the half-width at which the grown groove meets the core's
+    face line ``v = rho`` (the centres of the rounded mouth edges)."""
+    base = CK_JAW0 if j == 0 else CK_JAW1
+    rho = prm[CK_RHO]
+    vc = prm[base + JW_DEPTH] - prm[base + JW_BOTTOM_RADIUS]
+    grow = prm[base + JW_BOTTOM_RADIUS] + rho
+    half = 0.5 * prm[base + JW_OPENING]
+    sb, cb = math.sin(half), math.cos(half)
+    # on v = rho the axis height above the apex is h = vc - rho; a flank's offset line
+    # |u| cb - h sb = grow holds where the foot on the cone's edge ray is beyond the apex
+    # (|u| sb + h cb > 0), else the arc about the apex
+    h = vc - rho
+    ue = (grow + h * sb) / cb
+    if not ue * sb + h * cb > 0.0:
+        ue = math.sqrt(max(grow * grow - h * h, 0.0))
+    return prm[base + JW_POSITION], vc, grow, sb, cb, ue
+
+
+@njit(**_FLAGS)
+def _cone_distance(u, v, vc, sb, cb):
+    """Distance from (u, v) to the solid cone with apex (0, vc), axis towards -v (out of the
+    face) and half-angle of sine ``sb``, cosine ``cb`` (a ray for a zero angle)."""
+    wu, wv = abs(u), vc - v  # wv: height above the apex along the axis
+    if wv >= 0.0 and wv * sb >= wu * cb:
+        return 0.0
+    if wu * sb + wv * cb <= 0.0:
+        return _hypot(wu, wv)  # nearest the apex
+    return wu * cb - wv * sb  # nearest the edge ray
+
+
+@njit(inline="always", **_FLAGS)
+def _nearer_segment(px, py, ax, ay, bx, by, best, qx, qy):
+    """Nearest point to (px, py) of segment a-b if nearer than ``best``: (best, qx, qy)."""
+    dx, dy = bx - ax, by - ay
+    den = dx * dx + dy * dy
+    t = 0.0 if den == 0.0 else _npclip(((px - ax) * dx + (py - ay) * dy) / den, 0.0, 1.0)
+    cx, cy = ax + t * dx, ay + t * dy
+    d = _hypot(px - cx, py - cy)
+    if d < best:
+        return d, cx, cy
+    return best, qx, qy
+
+
+@njit(**_FLAGS)
+def _groove_nearest(prm, j, s, m):
+    """Nearest point (s, m) of a grooved finger's core ``K`` to the point (s, m) and whether the
+    point lies in ``K``; the nearest of ``K``'s boundary pieces for a point outside."""
+    rho, ln = prm[CK_RHO], prm[CK_LENGTH]
+    hw = prm[CK_HALF_WIDTH]
+    core = hw - rho
+    a, vc, grow, sb, cb, ue = _groove_shape(prm, j)
+    u, v = s - a, hw - m
+    in_groove = _cone_distance(u, v, vc, sb, cb) < grow
+    qs, qm = _npclip(s, 0.0, ln), _npclip(m, -core, core)
+    if not in_groove and qs == s and qm == m:
+        return s, m, True
+    if not _cone_distance(qs - a, hw - qm, vc, sb, cb) < grow:
+        return qs, qm, False  # the core rectangle's nearest point is outside the groove
+    # pieces in (u, v): the core's back and ends, its face on either side of the mouth
+    back, face = hw + core, rho
+    best, bu, bv = math.inf, 0.0, 0.0
+    best, bu, bv = _nearer_segment(u, v, -a, back, ln - a, back, best, bu, bv)
+    best, bu, bv = _nearer_segment(u, v, -a, face, -a, back, best, bu, bv)
+    best, bu, bv = _nearer_segment(u, v, ln - a, face, ln - a, back, best, bu, bv)
+    best, bu, bv = _nearer_segment(u, v, -a, face, -ue, face, best, bu, bv)
+    best, bu, bv = _nearer_segment(u, v, ue, face, ln - a, face, best, bu, bv)
+    # the grown groove's flanks below the face line: the cone's edge rays offset by grow
+    tmax = (vc + grow * sb - face) / cb
+    if tmax > 0.0:
+        for side in (-1.0, 1.0):
+            x0, y0 = side * grow * cb, vc + grow * sb
+            best, bu, bv = _nearer_segment(u, v, x0, y0, x0 + side * tmax * sb, y0 - tmax * cb,
+                                           best, bu, bv)
+    # its bottom arc about the apex, between the flanks and above the face line
+    lim = 0.5 * math.pi - math.asin(sb)
+    lim = min(lim, math.acos(_npclip((face - vc) / grow, -1.0, 1.0)))
+    ang = math.atan2(u, v - vc)
+    if abs(ang) <= lim:
+        rad = _hypot(u, v - vc)
+        if abs(rad - grow) < best and rad > 0.0:
+            best = abs(rad - grow)
+            bu, bv = grow * u / rad, vc + grow * (v - vc) / rad
+    for side in (-1.0, 1.0):
+        ex, ey = side * grow * math.sin(lim), vc + grow * math.cos(lim)
+        d = _hypot(u - ex, v - ey)
+        if d < best:
+            best, bu, bv = d, ex, ey
+    return bu + a, hw - bv, False
+
+
+# --------------------------------------------------------------------------------------------
 # forces and moments
 
 
@@ -452,19 +589,25 @@ def _face_contacts(prm, p, face, j, theta, force, acc):
     """Gaps of every point to the body of finger j, and the forces its face contacts carry.
 
     The body is the bar ``0 <= s <= l``, ``|m| <= w/2`` with its corners rounded to ``rho``: the
-    rectangle ``[0, l] x [-(w/2 - rho), w/2 - rho]`` grown by ``rho``. A point's force acts along
+    rectangle ``[0, l] x [-(w/2 - rho), w/2 - rho]`` grown by ``rho``, less a jaw groove
+    (:func:`_groove_nearest`). A point's force acts along
     the outward normal of the body at the nearest surface point, about which the moment is
     taken.
     """
     jx, jy, ex, ey, nx, ny = _frame(prm, j, theta)
     ln, rho = prm[CK_LENGTH], prm[CK_RHO]
     core = prm[CK_HALF_WIDTH] - rho
+    grooved = _groove_depth(prm, j) > 0.0
     for i in range(p.shape[0]):
         rx, ry = p[i, 0] - jx, p[i, 1] - jy
         s = rx * ex + ry * ey
         m = rx * nx + ry * ny
-        ds = s - _npclip(s, 0.0, ln)
-        dm = m - _npclip(m, -core, core)
+        if grooved:
+            ks, km, _ = _groove_nearest(prm, j, s, m)
+            ds, dm = s - ks, m - km
+        else:
+            ds = s - _npclip(s, 0.0, ln)
+            dm = m - _npclip(m, -core, core)
         dist = _hypot(ds, dm)
         gap = dist - rho
         acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], -gap)
@@ -489,14 +632,26 @@ def _face_contacts(prm, p, face, j, theta, force, acc):
 def _corner_contacts(prm, p, corner, j, c, theta, force, acc):
     """Depth of corner c of finger j in the contour, and the forces it bears on the edges.
 
-    Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back. A corner's
-    force on edge ``(k, k+1)`` acts along the shortest segment from the edge to the corner's
-    centre and is shared by the two points in proportion to where it bears.
+    Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back, 4 and 5 the
+    rounded mouth edges of a jaw groove (tip side, root side). A corner's force on edge
+    ``(k, k+1)`` acts along the shortest segment from the edge to the corner's centre and is
+    shared by the two points in proportion to where it bears. A force on the mouth of a
+    finger without a groove is a loaded contact at an infinite gap.
     """
     jx, jy, ex, ey, nx, ny = _frame(prm, j, theta)
     rho = prm[CK_RHO]
-    sc = prm[CK_LENGTH] if c % 2 == 0 else 0.0
-    off = (1.0 if c < 2 else -1.0) * (prm[CK_HALF_WIDTH] - rho)
+    if c >= _BAR_CORNERS:
+        if not _groove_depth(prm, j) > 0.0:
+            for k in range(p.shape[0]):
+                if corner[j, c, k] != 0.0:
+                    acc[_ACC_GAP] = math.inf
+            return
+        a, _, _, _, _, ue = _groove_shape(prm, j)
+        sc = a + ue if c == _BAR_CORNERS else a - ue
+        off = prm[CK_HALF_WIDTH] - rho
+    else:
+        sc = prm[CK_LENGTH] if c % 2 == 0 else 0.0
+        off = (1.0 if c < 2 else -1.0) * (prm[CK_HALF_WIDTH] - rho)
     kx = (jx + sc * ex) + off * nx
     ky = (jy + sc * ey) + off * ny
     depth = _dist_polygon(p, kx, ky)
@@ -536,12 +691,19 @@ def _finger(prm, p, theta, j, face, corner, stop, force, acc):
     acc[_ACC_MOMENT + j] -= sign * stop[j]
     acc[_ACC_SCALE] = _pymax(acc[_ACC_SCALE], abs(closing))
     _face_contacts(prm, p, face, j, theta, force, acc)
-    jx, jy, ex, ey, _, _ = _frame(prm, j, theta)
+    jx, jy, ex, ey, nx, ny = _frame(prm, j, theta)
     ln = prm[CK_LENGTH]
-    if _segment_crosses(p, jx, jy, jx + ln * ex, jy + ln * ey):
+    # the bar's spine: its axis, or for a groove the line midway between the groove's bottom
+    # and the back, inside the solid all along (a disk in a deep groove may reach the axis)
+    spine = 0.0
+    depth = _groove_depth(prm, j)
+    if depth > 0.0:
+        spine = 0.5 * ((prm[CK_HALF_WIDTH] - depth) - prm[CK_HALF_WIDTH])
+    sx, sy = jx + spine * nx, jy + spine * ny
+    if _segment_crosses(p, sx, sy, sx + ln * ex, sy + ln * ey):
         # the bar runs right through the disk: points and corners are all outside it
         acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], prm[CK_HALF_WIDTH])
-    for c in range(4):
+    for c in range(corner.shape[1]):
         _corner_contacts(prm, p, corner, j, c, theta, force, acc)
     if stop[j] != 0.0:
         acc[_ACC_FMIN] = _pymin(acc[_ACC_FMIN], stop[j])
@@ -566,7 +728,7 @@ def _verdict(prm, face, corner, force, spring_max, acc, out):
             f_face = _npmax(f_face, abs(face[j, i]))
     f_corner = 0.0
     for j in range(2):
-        for c in range(4):
+        for c in range(corner.shape[1]):
             for k in range(corner.shape[2]):
                 f_corner = _npmax(f_corner, abs(corner[j, c, k]))
     f_ref = _pymax(_pymax(spring_max, f_face), f_floor)
@@ -617,17 +779,18 @@ def check_one(prm, points, angles, face, corner, stop, out):
         Right and left finger angles [rad].
     face : float64[2, N]
         Normal force of each finger's body on each point [N].
-    corner : float64[2, 4, N]
-        Force of each finger's rounded corners (face tip, face root, back tip, back root) on
-        each contour edge ``(k, k+1)`` [N].
+    corner : float64[2, 4, N] or float64[2, 6, N]
+        Force of each finger's rounded corners (face tip, face root, back tip, back root, and
+        a groove's two mouth edges, tip side and root side) on each contour edge ``(k, k+1)``
+        [N].
     stop : float64[2]
         Torques of the closed-jaw stops [N·m].
     out : float64[N_OUT]
         Out: the verdict, laid out by the ``OUT_*`` offsets.
     """
     n = points.shape[0]
-    if face.shape[1] != n or corner.shape[2] != n or corner.shape[1] != 4:
-        raise ValueError("check_one: face must be (2, N) and corner (2, 4, N)")
+    if face.shape[1] != n or corner.shape[2] != n or not _corner_count_ok(corner.shape[1]):
+        raise ValueError("check_one: face must be (2, N) and corner (2, 4 or 6, N)")
     force = np.zeros((n, 2))  # net force on each contour point
     acc = np.zeros(_N_ACC)
     acc[_ACC_FMIN] = math.inf
@@ -835,8 +998,8 @@ def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
     fan. ``interior``: the interior points [m], ``((M - 1) N, 2)``, ring by ring from the hub
     out (empty for the fan)."""
     n = points.shape[0]
-    if face.shape[1] != n or corner.shape[2] != n or corner.shape[1] != 4:
-        raise ValueError("check_mesh_one: face must be (2, N) and corner (2, 4, N)")
+    if face.shape[1] != n or corner.shape[2] != n or not _corner_count_ok(corner.shape[1]):
+        raise ValueError("check_mesh_one: face must be (2, N) and corner (2, 4 or 6, N)")
     if interior.shape[0] != (int(prm[CK_RINGS]) - 1) * n:
         raise ValueError("check_mesh_one: interior must hold (M - 1) N points")
     force = np.zeros((n + interior.shape[0], 2))
@@ -860,7 +1023,7 @@ def check_batch(prms, points, angles, face, corner, stop, out):
     (:func:`envs.parallel.run_rows`).
 
     Shapes: ``prms`` (B, N_CK), ``points`` (B, N, 2), ``angles`` (B, 2), ``face`` (B, 2, N),
-    ``corner`` (B, 2, 4, N), ``stop`` (B, 2), ``out`` (B, N_OUT); all float64.
+    ``corner`` (B, 2, 4 or 6, N), ``stop`` (B, 2), ``out`` (B, N_OUT); all float64.
     """
     from envs.parallel import run_rows  # threads only: no physics of the solver
 
@@ -869,8 +1032,8 @@ def check_batch(prms, points, angles, face, corner, stop, out):
                  stop.shape[0], out.shape[0]):
         if size != nb:
             raise ValueError("check_batch: every argument needs the same batch size")
-    if face.shape[2] != n or corner.shape[3] != n or corner.shape[2] != 4:
-        raise ValueError("check_batch: face must be (B, 2, N) and corner (B, 2, 4, N)")
+    if face.shape[2] != n or corner.shape[3] != n or not _corner_count_ok(corner.shape[2]):
+        raise ValueError("check_batch: face must be (B, 2, N) and corner (B, 2, 4 or 6, N)")
     run_rows(_check_rows, nb, prms, points, angles, face, corner, stop, out)
 
 
@@ -939,7 +1102,13 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     if element == "nhquad":
         vals[CK_QUAD], vals[CK_LAM] = vals[CK_LAM], 0.0
         vals[CK_SPACING] = 1.0
+    for base, jaw in zip((CK_JAW0, CK_JAW1), g.jaws, strict=True):
+        vals[base + JW_DEPTH] = jaw.depth_m
+        vals[base + JW_BOTTOM_RADIUS] = jaw.bottom_radius_m
+        vals[base + JW_OPENING] = jaw.opening_angle_rad
+        vals[base + JW_POSITION] = jaw.position_m
     return np.array(vals, dtype=np.float64)
+
 
 
 @functools.cache
@@ -1039,7 +1208,8 @@ def check_grasp(
         Normal force of each finger face on each point [N], shape (2, N).
     corner_forces_n
         Force of each finger's rounded corners (tip and root of the gripping face, tip and root
-        of the back of the bar) on each contour edge ``(k, k+1)`` [N], shape (2, 4, N).
+        of the back of the bar, then a jaw groove's two mouth edges) on each contour edge
+        ``(k, k+1)`` [N], shape (2, 4, N) or (2, 6, N).
     stop_torques_nm
         Torques of the closed-jaw stops [N·m], (2,).
 
@@ -1058,7 +1228,10 @@ def check_grasp(
     if points.ndim != 2 or points.shape[1] != 2:
         raise ValueError(f"points_m must have shape (N, 2), got {points.shape}")
     n = points.shape[0]
-    corner = _as_f64("corner_forces_n", corner_forces_n, (2, 4, n))
+    corner = np.ascontiguousarray(corner_forces_n, dtype=np.float64)
+    if corner.shape not in ((2, _BAR_CORNERS, n), (2, _ALL_CORNERS, n)):
+        raise ValueError(f"corner_forces_n must have shape (2, 4, {n}) or (2, 6, {n}), "
+                         f"got {corner.shape}")
     face = _as_f64("face_forces_n", face_forces_n, (2, n))
     angles = _as_f64("jaw_angles_rad", jaw_angles_rad, (2,))
     stop = _as_f64("stop_torques_nm", stop_torques_nm, (2,))

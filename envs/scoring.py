@@ -23,7 +23,8 @@ from .model.contact_width import (
     relative_radius_m,
     segment_contact,
 )
-from .model.geometry import finger_gap_m
+from .model.geometry import finger_gap_m, jaw_finger_gap
+from .model.layout import G_DEPTH, N_GROOVE
 from .solver.status import CHECK_FAILED
 
 # layout of the weights vector of :func:`reward_rows` (RewardWeights.vector())
@@ -113,15 +114,118 @@ def face_extent_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m
     return total / n
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m, width_m,
+                   rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
+    """:func:`_point_indicator` against a grooved finger (the gap to the jaw's surface,
+    :func:`envs.model.geometry.jaw_finger_gap`) and the curvature of the surface nearest the
+    point."""
+    force = forces_n[i]
+    gap, curvature = jaw_finger_gap(points_m[i, 0], points_m[i, 1], j, angle_rad,
+                                    joint_offset_m, length_m, width_m, rounding_m, groove, base)
+    if force > 0.0:
+        gap = 0.0  # the solver holds a pressed point on the surface
+    return contact_indicator(force, spacing_m * thickness_m, spacing_m, gap, e_star_pa), curvature
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def grooved_face_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m,
+                       rounding_m, groove, base, radius_m, thickness_m, modulus_pa,
+                       poisson_ratio):
+    """Share of the contour in contact with a grooved finger ``j``, each contact capped by the
+    Hertz width of its own force on the surface it touches.
+
+    A *contact* is a run of consecutive pressed points (a positive indicator,
+    :func:`envs.model.contact_width.contact_indicator`) with the segments on either side
+    interpolated as in :func:`face_extent_share`: a V-groove's two flanks are two contacts, a
+    cradle's arc one. Each run's share is at most ``k sqrt(F)`` of its own force ``F``, ``k``
+    of the relative radius of the disk against the surface where the run touches: the largest
+    concave curvature over its pressed points (:func:`envs.model.geometry.jaw_finger_gap`), so
+    a run that touches a cradle's arc of radius ``R > r`` has ``R r / (R - r)``, one on a
+    flank ``r`` (a flat face), and one on an arc that fits the disk (``R <= r``) no cap: a
+    conforming contact measures the arc it touches at any force.
+
+    Parameters
+    ----------
+    points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m
+        As :func:`face_extent_share`.
+    rounding_m, groove, base
+        The corner radius ``rho`` [m] and the finger's groove packed in metres at
+        ``groove[base:]`` (:func:`envs.model.jaw.pack_groove` with unit 1).
+    radius_m, thickness_m, modulus_pa, poisson_ratio
+        The disk's ``r``, ``t`` [m], modulus ``E`` [Pa] and ``nu`` (the material's, as for
+        :func:`psm_metrics_rows`).
+    """
+    n = points_m.shape[0]
+    spacing = 2.0 * math.pi * radius_m / n
+    e_star = plane_strain_modulus_pa(modulus_pa, poisson_ratio)
+    # a free point to start from, so that no run wraps round the scan's ends
+    start = -1
+    for i in range(n):
+        phi, _ = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m,
+                                width_m, rounding_m, groove, base, spacing, thickness_m, e_star)
+        if not phi > 0.0:
+            start = i
+            break
+    if start < 0:
+        # every point pressed: one contact round the whole contour
+        total = 0.0
+        bend = -math.inf
+        for i in range(n):
+            _, curvature = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m,
+                                          length_m, width_m, rounding_m, groove, base, spacing,
+                                          thickness_m, e_star)
+            total += forces_n[i]
+            bend = max(bend, curvature)
+        return _run_share(1.0, total, bend, radius_m, thickness_m, modulus_pa, poisson_ratio)
+    share = 0.0
+    before, _ = _jaw_indicator(points_m, forces_n, start, j, angle_rad, joint_offset_m,
+                               length_m, width_m, rounding_m, groove, base, spacing,
+                               thickness_m, e_star)
+    extent = force = 0.0
+    bend = -math.inf
+    for k in range(1, n + 1):
+        i = (start + k) % n
+        here, curvature = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m,
+                                         length_m, width_m, rounding_m, groove, base, spacing,
+                                         thickness_m, e_star)
+        # the segment before point i belongs to the run of its pressed end(s)
+        extent += segment_contact(before, here) / n
+        if here > 0.0:
+            force += forces_n[i]
+            bend = max(bend, curvature)
+        elif before > 0.0:
+            # the run ends on this free point
+            share += _run_share(extent, force, bend, radius_m, thickness_m, modulus_pa,
+                                poisson_ratio)
+            extent = force = 0.0
+            bend = -math.inf
+        else:
+            extent = 0.0
+        before = here
+    return share
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _run_share(extent, force_n, curvature_per_m, radius_m, thickness_m, modulus_pa,
+               poisson_ratio):
+    """One contact's share: its extent, at most the Hertz width of its force against a surface
+    of curvature ``curvature_per_m`` (concave positive)."""
+    hertz_k = hertz_arc_coefficient(radius_m, thickness_m, modulus_pa, poisson_ratio,
+                                    relative_radius_m(radius_m, curvature_per_m))
+    return contact_share(extent, force_n, hertz_k)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
                      jaw_angles_rad, points_m, face_forces_n, corner_totals_n, stop_torques_nm,
                      peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
                      finger_length_m, joint_offset_m, finger_width_m, radius_m, thickness_m,
                      youngs_modulus_pa, poisson_ratio, material_scale, torque_nm,
-                     kf_nm_per_rad, rest_angle_rad, status, converged, iterations, stable,
-                     jaw_out, n_contacts, touching, total_force_n, contact_score, grip_share,
-                     peak_out, peak_log_out, displacement_out, compression_out):
+                     kf_nm_per_rad, rest_angle_rad, grooves_m, rounding_m, status, converged,
+                     iterations, stable, jaw_out, n_contacts, touching, total_force_n,
+                     contact_score, grip_share, peak_out, peak_log_out, displacement_out,
+                     compression_out):
     """Write the point-spring metrics of solved rows ``rows`` (group order ``g``) into the
     output columns.
 
@@ -134,7 +238,10 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     (:func:`envs.model.contact_width.hertz_arc_coefficient`, flat faces). Both take the
     object's modulus, ``material_scale`` times E: the disk's own scale, not a member's
     discretization scale (which the solve's stiffness carries, and which is not part of the
-    material).
+    material). A grooved finger's share is :func:`grooved_face_share`, each contact capped on
+    its own with the surface's curvature where it touches; ``grooves_m`` (G, 2 N_GROOVE) holds
+    each row's two grooves packed in metres (:func:`envs.model.jaw.pack_groove`, unit 1; depth
+    0: straight) and ``rounding_m`` (G,) the corner radius they were packed with.
     """
     for g in range(rows.shape[0]):
         r = rows[g]
@@ -158,11 +265,18 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                 total += f
                 if f > 0.0:
                     cnt += 1
-            extent = face_extent_share(points_m[g], face_forces_n[g, j], j,
-                                       jaw_angles_rad[g, j], joint_offset_m[g],
-                                       finger_length_m[g], finger_width_m[g], radius_m[g],
-                                       thickness_m[g], e_star)
-            shares += contact_share(extent, total, hertz_k)
+            base = N_GROOVE * j
+            if grooves_m[g, base + G_DEPTH] > 0.0:
+                shares += grooved_face_share(
+                    points_m[g], face_forces_n[g, j], j, jaw_angles_rad[g, j],
+                    joint_offset_m[g], finger_length_m[g], finger_width_m[g], rounding_m[g],
+                    grooves_m[g], base, radius_m[g], thickness_m[g], modulus, poisson_ratio[g])
+            else:
+                extent = face_extent_share(points_m[g], face_forces_n[g, j], j,
+                                           jaw_angles_rad[g, j], joint_offset_m[g],
+                                           finger_length_m[g], finger_width_m[g], radius_m[g],
+                                           thickness_m[g], e_star)
+                shares += contact_share(extent, total, hertz_k)
             total += corner
             finite = finite and math.isfinite(jaw_angles_rad[g, j]) and math.isfinite(total)
             # written for every row; a failed row's are zeroed below

@@ -99,8 +99,9 @@ def kkt_check(
         Normal force of each finger face on each point [N], shape (2, N).
     corner_forces_n
         Force of each finger's rounded corners (tip and root of the gripping face, tip and root
-        of the back of the bar) on each contour edge ``(k, k+1)`` [N], shape (2, 4, N). The
-        force acts along the shortest segment between the corner's centre and the edge.
+        of the back of the bar) on each contour edge ``(k, k+1)`` [N], shape (2, 4, N), or the
+        solver's (2, 6, N) with the mouth corners of a jaw groove unloaded. The force acts
+        along the shortest segment between the corner's centre and the edge.
     stop_torques_nm
         Torques of the closed-jaw stops [N·m], (2,).
 
@@ -120,6 +121,12 @@ def kkt_check(
     centre = d.center_m
     p = np.asarray(points_m, dtype=float)
     corner_forces = np.asarray(corner_forces_n, dtype=float)
+    if corner_forces.shape == (2, 6, n):
+        # the solver's layout adds a jaw groove's two mouth edges; this reference knows the
+        # straight bar only, whose mouth corners carry nothing
+        if corner_forces[:, 4:].any() or any(jaw.depth_m > 0.0 for jaw in g.jaws):
+            raise ValueError("the reference check knows straight jaws only")
+        corner_forces = corner_forces[:, :4]
     if corner_forces.shape != (2, 4, n):
         raise ValueError(f"corner_forces_n must have shape (2, 4, {n}), got {corner_forces.shape}")
     force = np.zeros_like(p)  # net force on each contour point

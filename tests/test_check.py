@@ -344,7 +344,10 @@ def test_hypot_is_pythons():
 def test_layout_names_are_distinct():
     from envs import check
 
-    ck = [v for k, v in vars(check).items() if k.startswith("CK_")]
+    ck = [v for k, v in vars(check).items() if k.startswith("CK_") and not k.startswith("CK_JAW")]
+    jw = [v for k, v in vars(check).items() if k.startswith("JW_")]
+    # each finger's jaw takes the JW_* slots from its CK_JAW* offset
+    ck += [base + v for base in (check.CK_JAW0, check.CK_JAW1) for v in jw]
     out = [v for k, v in vars(check).items() if k.startswith("OUT_")]
     assert sorted(ck) == list(range(N_CK))
     assert sorted(out) == list(range(N_OUT))

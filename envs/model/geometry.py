@@ -22,6 +22,8 @@ import numpy as np
 from numba import njit, vectorize
 
 from .defaults import CORNER_ROUNDING
+from .jaw import jaw_gap
+from .layout import G_DEPTH
 
 __all__ = [
     "FingerBars",
@@ -31,6 +33,8 @@ __all__ = [
     "closed_angle_rad",
     "distance_to_finger_bar",
     "finger_gap_m",
+    "jaw_finger_gap",
+    "surface_curvature_per_m",
     "rest_points",
     "corner_radius",
 ]
@@ -98,7 +102,11 @@ def closed_angle_rad(gripper: FingerBars) -> float:
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def closed_angle_of(length_m: float, joint_offset_m: float, width_m: float) -> float:
-    """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m]."""
+    """:func:`closed_angle_rad` of plain numbers: finger length, joint offset, width [m].
+
+    A jaw groove (:mod:`envs.model.jaw`) leaves it unchanged: the groove lies within the
+    gripping face, between its ends (:meth:`envs.model.jaw.JawProfile.check_fits`), so the
+    face's tip corner, which meets the axis first, is the straight bar's."""
     hw = width_m / 2
     # l sin t - hw cos t = R sin(t - phi), R = hypot(l, hw), phi = atan2(hw, l)
     rr = math.hypot(length_m, hw)
@@ -127,6 +135,49 @@ def finger_gap_m(x_m, y_m, j, angle_rad, joint_offset_m, length_m, width_m):
     ex, ey, nx, ny = finger_axes(j, math.sin(angle_rad), math.cos(angle_rad))
     rx = x_m - (joint_offset_m if j == 0 else -joint_offset_m)
     return bar_distance(ex * rx + ey * y_m, nx * rx + ny * y_m, length_m, width_m)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def jaw_finger_gap(x_m, y_m, j, angle_rad, joint_offset_m, length_m, width_m, rounding_m,
+                   groove, base):
+    """Gap [m] of the point ``(x_m, y_m)`` (gripper frame) to finger ``j`` at ``angle_rad``
+    with a jaw groove, and the curvature of the finger's surface at its nearest point.
+
+    ``groove[base:]`` is the finger's groove packed in metres
+    (:func:`envs.model.jaw.pack_groove` with unit 1), ``rounding_m`` the corner radius ``rho``
+    it was packed with. The gap is :func:`envs.model.jaw.jaw_gap` (the solver's own), signed;
+    for a straight jaw (depth 0) it is :func:`finger_gap_m`, the bar's distance, so straight
+    fingers keep their measure.
+
+    Returns
+    -------
+    tuple
+        ``(gap_m, curvature_per_m)``: the curvature of the nearest surface point, positive
+        where the surface is concave towards the point (:func:`surface_curvature_per_m`); 0
+        for a straight jaw.
+    """
+    if not groove[base + G_DEPTH] > 0.0:
+        return finger_gap_m(x_m, y_m, j, angle_rad, joint_offset_m, length_m, width_m), 0.0
+    ex, ey, nx, ny = finger_axes(j, math.sin(angle_rad), math.cos(angle_rad))
+    rx = x_m - (joint_offset_m if j == 0 else -joint_offset_m)
+    g, g_s, g_m, g_ss, g_sm, g_mm = jaw_gap(ex * rx + ey * y_m, nx * rx + ny * y_m, length_m,
+                                            0.5 * width_m, rounding_m, groove, base)
+    return g, surface_curvature_per_m(g, g_s, g_m, g_ss, g_sm, g_mm)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def surface_curvature_per_m(g, g_s, g_m, g_ss, g_sm, g_mm):
+    """Curvature [1/m] of a surface at the nearest point to a point at distance ``g`` from it,
+    from the distance's gradient and Hessian in the plane (the point on the surface's normal).
+
+    Along the surface's tangent ``t = (-g_m, g_s)`` the distance to a surface of curvature
+    ``k`` (positive where it is concave towards the point, as a cradle's arc of radius R:
+    ``1/R``) has ``g_tt = -k / (1 - k g)``, so ``k = -g_tt / (1 - g g_tt)``: 0 for a flat face,
+    ``-1/rho`` on a convex edge rounded by ``rho``. A point inside the solid counts as on it.
+    """
+    gtt = g_ss * g_m * g_m - 2.0 * g_sm * g_s * g_m + g_mm * g_s * g_s
+    gap = g if g > 0.0 else 0.0
+    return -gtt / (1.0 - gap * gtt)
 
 
 def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point):

@@ -102,7 +102,12 @@ N_INFO = 8
 
 # constraint kinds
 KIND_FACE, KIND_CORNER, KIND_STOP = 0, 1, 2
-N_CORNERS = 4  # per finger: face tip, face root, back tip, back root
+# the rounded convex corners of a finger (corner-against-edge constraints): the gripping face's
+# tip and root ends, the back's tip and root ends, and the two mouth edges of a jaw groove (on
+# the tip side, s = a + u_E, and the root side, s = a - u_E; inactive for a straight jaw)
+C_FACE_TIP, C_FACE_ROOT, C_BACK_TIP, C_BACK_ROOT, C_MOUTH_TIP, C_MOUTH_ROOT = range(6)
+N_CORNERS = 6
+N_BAR_CORNERS = 4  # the corners every finger has (the bar's ends); the mouth's follow
 
 
 def default_options() -> np.ndarray:

@@ -9,12 +9,15 @@ import math
 from numba import njit
 
 from ..model.layout import (
+    N_BAR_CORNERS,
+    N_CORNERS,
     P_C0X,
     P_POLICY,
     P_RHO,
     P_THMIN,
 )
 from .contact import (
+    _corner_active,
     _corner_centre,
     _corner_gap,
     _face_gap,
@@ -39,8 +42,9 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
     """Candidate constraints at the start point ``x0`` (see :func:`solve_one` for the policies).
 
     Every point within FACE_NEAR of a finger body; each corner against the contour edges near
-    the arc it sweeps as its finger closes (all edges clear of it for the tip corners of
-    policy 1).
+    the arc it sweeps as its finger closes (all edges clear of it for the bar's tip corners of
+    policy 1); a groove's mouth corners only on a grooved jaw. Both use the jaw's own gap, so a
+    point resting in a groove, behind the straight face's line, is near the finger.
     Work arrays: ``edges`` float (n, 4), ``sweep`` float (CORNER_SWEEP, 2).
     """
     nb = 2 * n
@@ -75,8 +79,12 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
             mx = edges[k, 0] - jx
             my = edges[k, 1] - jy
             edges[k, 3] = math.sqrt(mx * mx + my * my)
-        for c in range(4):
-            swept = not (c % 2 == 0 and prm[P_POLICY] > 0.0)
+        for c in range(N_CORNERS):
+            if not _corner_active(j, c, prm):
+                for k in range(n):
+                    corner_cand[j, c, k] = False
+                continue
+            swept = not (c % 2 == 0 and c < N_BAR_CORNERS and prm[P_POLICY] > 0.0)
             kx, ky = _corner_centre(j, sweep[0, 0], sweep[0, 1], c, prm)
             rc = math.sqrt((kx - jx) * (kx - jx) + (ky - jy) * (ky - jy))
             for k in range(n):
@@ -124,7 +132,9 @@ def _grow_candidates(xs, x0, n, prm, face_cand, corner_cand, blocked, commit=Tru
                             return True
                         face_cand[j, i] = True
                         changed = True
-        for c in range(4):
+        for c in range(N_CORNERS):
+            if not _corner_active(j, c, prm):
+                continue
             # edges left out at the start that the corner now touches or crossed
             kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
             crossed = _inside(q, n, kx, ky)

@@ -13,15 +13,72 @@ import math
 from numba import njit
 
 from ..model.geometry import finger_axes
+from ..model.jaw import jaw_gap
 from ..model.layout import (
+    C_MOUTH_TIP,
+    G_DEPTH,
+    G_MOUTH,
+    G_POSITION,
     KIND_CORNER,
     KIND_FACE,
+    N_BAR_CORNERS,
+    N_CORNERS,
+    N_GROOVE,
     P_C0X,
+    P_GROOVE0,
     P_HW,
     P_LMAX,
     P_RHO,
     P_THMIN,
 )
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _groove_base(j):
+    """Offset of finger j's packed groove in the parameter vector (slots ``G_*``)."""
+    return P_GROOVE0 + N_GROOVE * j
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _grooved(j, prm):
+    """Whether finger j's jaw has a groove (depth > 0; else the straight bar)."""
+    return prm[_groove_base(j) + G_DEPTH] > 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _corner_active(j, c, prm):
+    """Whether corner c of finger j exists: the bar's four always, the groove's two mouth
+    edges only on a grooved jaw (never candidates on a straight one)."""
+    return c < N_BAR_CORNERS or _grooved(j, prm)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _corner_local(j, c, prm):
+    """Centre (s, m) of the rounded corner c of finger j in finger coordinates.
+
+    The bar's corners sit at s = l (tip, even c) or 0 (root), m = +-(w/2 - rho) (face, c < 2;
+    back); a groove's mouth edges at s = a +- u_E (tip side ``C_MOUTH_TIP``), m = w/2 - rho
+    (:func:`envs.model.jaw.pack_groove`).
+    """
+    hc = prm[P_HW] - prm[P_RHO]
+    if c >= N_BAR_CORNERS:
+        base = _groove_base(j)
+        ue = prm[base + G_MOUTH]
+        return prm[base + G_POSITION] + (ue if c == C_MOUTH_TIP else -ue), hc
+    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
+    if c >= 2:
+        hc = -hc
+    return sc, hc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _axis_offset(j, prm):
+    """Offset along the inward normal of the line that the anti-tunnelling tests treat as the
+    finger's spine: the axis (0) for a straight bar; for a grooved jaw of depth h, m = -h / 2,
+    half-way between the groove's bottom (w/2 - h) and the back (-w/2), so it stays inside
+    the solid along the whole finger (h <= 3/4 w) while a point resting in the groove, which
+    may lie beyond the axis, is in front of it."""
+    return -0.5 * prm[_groove_base(j) + G_DEPTH]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -46,6 +103,20 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     """
     ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
+    if _grooved(j, prm):
+        # a jaw groove: the shared gap kernel, then the chain rule to (qx, qy, theta)
+        g, g_s, g_m, g_ss, g_sm, g_mm = jaw_gap(s, m, prm[P_LMAX], prm[P_HW], rho, prm,
+                                                _groove_base(j))
+        if g_s == 0.0 and g_m == 0.0:
+            # inside the core: deep penetration (never at a feasible point)
+            for a in range(3):
+                grad[a] = 0.0
+                if want_hess:
+                    for b in range(3):
+                        hess[a, b] = 0.0
+            return g
+        _chain_rule(ex, ey, nx, ny, s, m, g_s, g_m, g_ss, g_sm, g_mm, grad, hess, want_hess)
+        return g
     hc = prm[P_HW] - rho
     ds = s - min(max(s, 0.0), prm[P_LMAX])
     dm = m - min(max(m, -hc), hc)
@@ -99,6 +170,18 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
         g_sm = 0.0
     else:
         return -rho  # inside the core rectangle: deep penetration (never at a feasible point)
+    _chain_rule(ex, ey, nx, ny, s, m, g_s, g_m, g_ss, g_sm, g_mm, grad, hess, want_hess)
+    return dist - rho
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _chain_rule(ex, ey, nx, ny, s, m, g_s, g_m, g_ss, g_sm, g_mm, grad, hess, want_hess):
+    """Gradient and Hessian over (qx, qy, theta) of a gap given by its derivatives in finger
+    coordinates (s, m) of a point with finger axes e, n.
+
+    ds/dq = e, dm/dq = n, ds/dth = -m, dm/dth = s, d2s/dq dth = -n, d2m/dq dth = e,
+    d2s/dth2 = -s, d2m/dth2 = -m.
+    """
     # first derivatives: grad = g_s grad(s) + g_m grad(m)
     as0, as1, as2 = ex, ey, -m
     am0, am1, am2 = nx, ny, s
@@ -106,7 +189,7 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     grad[1] = g_s * as1 + g_m * am1
     grad[2] = g_s * as2 + g_m * am2
     if not want_hess:
-        return dist - rho
+        return
     # second derivatives: sum of g_ab grad(a) grad(b)^T plus g_s Hess(s) + g_m Hess(m)
     sv = (as0, as1, as2)
     mv = (am0, am1, am2)
@@ -122,14 +205,15 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     hess[1, 2] += hy
     hess[2, 1] += hy
     hess[2, 2] += -g_s * s - g_m * m
-    return dist - rho
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _corner_eval(q, k, j, sj, cj, c, prm, grad, hess, want_hess):
     """Rounded corner c of finger j vs contour edge k -> k+1.
 
-    Corners: 0 tip and 1 root of the gripping face, 2 tip and 3 root of the back of the bar.
+    Corners (``C_*`` of :mod:`envs.model.layout`): 0 tip and 1 root of the gripping face, 2 tip
+    and 3 root of the back of the bar, 4 and 5 the mouth edges of a jaw groove (tip and root
+    side; only on a grooved jaw).
 
     Local variables (ax, ay, bx, by, theta). Value: distance from the centre of the rounded
     corner to the segment, minus the corner radius: the distance to the edge line where the foot
@@ -141,10 +225,7 @@ def _corner_eval(q, k, j, sj, cj, c, prm, grad, hess, want_hess):
     k1 = k + 1 if k + 1 < n else 0
     ex, ey, nx, ny = finger_axes(j, sj, cj)
     rho = prm[P_RHO]
-    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
-    hw = prm[P_HW] - rho  # centre of the rounded corner, in finger coordinates (sc, hw)
-    if c >= 2:
-        hw = -hw
+    sc, hw = _corner_local(j, c, prm)  # centre of the rounded corner, finger coordinates
     cx = prm[P_C0X + 2 * j]
     cy = prm[P_C0X + 2 * j + 1]
     kx = -cx + sc * ex + hw * nx
@@ -251,6 +332,8 @@ def _face_gap(q, i, j, sj, cj, prm):
     """Value of :func:`_face_eval` only."""
     ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
+    if _grooved(j, prm):
+        return jaw_gap(s, m, prm[P_LMAX], prm[P_HW], rho, prm, _groove_base(j))[0]
     hc = prm[P_HW] - rho
     ds = s - min(max(s, 0.0), prm[P_LMAX])
     dm = m - min(max(m, -hc), hc)
@@ -345,10 +428,7 @@ def _all_gaps(x, n, prm, kinds, fj, fidx, gout):
 def _corner_centre(j, sj, cj, c, prm):
     """Centre of the rounded corner c of finger j (disk-centred, units of r)."""
     ex, ey, nx, ny = finger_axes(j, sj, cj)
-    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
-    hc = prm[P_HW] - prm[P_RHO]
-    if c >= 2:
-        hc = -hc
+    sc, hc = _corner_local(j, c, prm)
     return (-prm[P_C0X + 2 * j] + sc * ex + hc * nx,
             -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny)
 
@@ -369,14 +449,16 @@ def _inside(q, n, px, py):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _bar_crossed(q, n, j, sj, cj, prm):
-    """Does a contour edge cross the axis of finger j (the bar runs right through the disk)?
+    """Does a contour edge cross the spine of finger j (the bar runs right through the disk)?
+    The spine is the axis, moved behind a jaw groove's bottom (:func:`_axis_offset`).
 
     Every point outside the bar and every corner outside the contour do not exclude an edge
     with one end in front of the bar and the other behind it.
     """
-    ex, ey, _, _ = finger_axes(j, sj, cj)
-    ax = -prm[P_C0X + 2 * j]
-    ay = -prm[P_C0X + 2 * j + 1]
+    ex, ey, nx, ny = finger_axes(j, sj, cj)
+    mline = _axis_offset(j, prm)
+    ax = -prm[P_C0X + 2 * j] + mline * nx
+    ay = -prm[P_C0X + 2 * j + 1] + mline * ny
     bx = ax + prm[P_LMAX] * ex
     by = ay + prm[P_LMAX] * ey
     for k in range(n):
@@ -415,15 +497,18 @@ def _crossed_through_sc(x, n, prm, sn, cs):
         r2 = max(r2, x[2 * i] * x[2 * i] + x[2 * i + 1] * x[2 * i + 1])
     for j in range(2):
         # distance from the pin to the axis segment of the bar
-        ex, ey, _, _ = finger_axes(j, _sel(sn, j), _sel(cs, j))
-        ax = -prm[P_C0X + 2 * j]
-        ay = -prm[P_C0X + 2 * j + 1]
+        ex, ey, nx, ny = finger_axes(j, _sel(sn, j), _sel(cs, j))
+        mline = _axis_offset(j, prm)
+        ax = -prm[P_C0X + 2 * j] + mline * nx
+        ay = -prm[P_C0X + 2 * j + 1] + mline * ny
         t = min(max(-(ax * ex + ay * ey), 0.0), prm[P_LMAX])
         px = ax + t * ex
         py = ay + t * ey
         if px * px + py * py <= r2 and _bar_crossed(q, n, j, _sel(sn, j), _sel(cs, j), prm):
             return True
-        for c in range(4):
+        for c in range(N_CORNERS):
+            if not _corner_active(j, c, prm):
+                continue
             kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
             if kx * kx + ky * ky <= r2 and _inside(q, n, kx, ky):
                 return True
@@ -436,7 +521,8 @@ def _tunnels(x, xt, n, prm):
 
     The corner gaps are distances to segments and the bar of a finger is thin, so a long step
     can jump across a constraint and land where every gap is positive again. Rejected: a corner
-    ending inside the contour, a point crossing a finger's axis line along the bar.
+    ending inside the contour, a point crossing a finger's spine (:func:`_axis_offset`) along
+    the bar.
     """
     sn1, cs1 = _trig(xt, n)
     if _crossed_through_sc(xt, n, prm, sn1, cs1):
@@ -448,11 +534,12 @@ def _tunnels(x, xt, n, prm):
         cx = prm[P_C0X + 2 * j]
         cy = prm[P_C0X + 2 * j + 1]
         lmax = prm[P_LMAX]
+        mline = _axis_offset(j, prm)
         for i in range(n):
             vx0, vy0 = x[2 * i] + cx, x[2 * i + 1] + cy
             vx1, vy1 = xt[2 * i] + cx, xt[2 * i + 1] + cy
-            m0 = nx0 * vx0 + ny0 * vy0
-            m1 = nx1 * vx1 + ny1 * vy1
+            m0 = nx0 * vx0 + ny0 * vy0 - mline
+            m1 = nx1 * vx1 + ny1 * vy1 - mline
             if m0 * m1 < 0.0:
                 s0 = ex0 * vx0 + ey0 * vy0
                 s1 = ex1 * vx1 + ey1 * vy1
@@ -472,7 +559,7 @@ def _build_constraints(face, corner, n, kinds, fj, fidx):
                 fidx[m] = i
                 m += 1
     for j in range(2):
-        for c in range(4):
+        for c in range(N_CORNERS):
             for k in range(n):
                 if corner[j, c, k]:
                     kinds[m] = 1

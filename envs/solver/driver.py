@@ -24,6 +24,7 @@ from ..model.layout import (
     I_STATUS,
     KIND_CORNER,
     KIND_FACE,
+    N_CORNERS,
     O_GAUGE,
     O_MAXIT,
     O_MAXROUND,
@@ -344,12 +345,12 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     lam_face : float64[2, n]
         In: multipliers of the previous solution (warm start) or zeros; out: scaled face contact
         forces.
-    lam_corner : float64[2, 4, n]
+    lam_corner : float64[2, N_CORNERS, n]
         Out: scaled force of each corner (finger; face tip, face root, back tip, back root) on
         each contour edge k -> k+1.
     lam_stop : float64[2]
         Out: scaled joint-stop torques.
-    corner_cand : bool[2, 4, n]
+    corner_cand : bool[2, N_CORNERS, n]
         Work/out: corner-edge constraints considered.
     face_cand : bool[2, n]
         Work/out: face constraints considered.
@@ -378,7 +379,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         # the Newton iterations closed them at the line search's limit of 0.05 rad a step)
         _close_to_contact(x, n, prm)
     x0 = x.copy()
-    mmax = 10 * n + 2
+    mmax = 2 * n * (1 + N_CORNERS) + 2  # every point on each finger, every corner-edge pair
     kinds = np.zeros(mmax, dtype=np.int64)
     fj = np.zeros(mmax, dtype=np.int64)
     fidx = np.zeros(mmax, dtype=np.int64)

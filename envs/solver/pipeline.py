@@ -38,6 +38,10 @@ from envs.model.layout import (
     I_ROUNDS,
     I_STABLE,
     I_STATUS,
+    J_BOTTOM_RADIUS,
+    J_DEPTH,
+    J_OPENING,
+    J_POSITION,
     N_CORNERS,
     N_INFO,
     P_A0,
@@ -55,6 +59,8 @@ from envs.model.layout import (
     P_THMIN,
     S_CONTOUR_RATIO,
     S_DISTANCE,
+    S_JAW0,
+    S_JAW1,
     S_JOINT_OFFSET,
     S_LENGTH,
     S_OFFSET_X,
@@ -100,9 +106,9 @@ class BatchSolution(NamedTuple):
     jaw_angles_rad: np.ndarray  # (B, 2)
     points_m: np.ndarray  # (B, N, 2)
     face_forces_n: np.ndarray  # (B, 2, N)
-    corner_forces_n: np.ndarray  # (B, 2, 4, N)
-    corner_totals_n: np.ndarray  # (B, 2, 4): total force of each corner
-    corner_edges: np.ndarray  # (B, 2, 4): edge carrying most of each corner's force, -1: none
+    corner_forces_n: np.ndarray  # (B, 2, N_CORNERS, N)
+    corner_totals_n: np.ndarray  # (B, 2, N_CORNERS): total force of each corner
+    corner_edges: np.ndarray  # (B, 2, N_CORNERS): edge with most of each corner's force, -1: none
     stop_torques_nm: np.ndarray  # (B, 2)
     peak_strain: np.ndarray  # (B,) max |spring strain|
     peak_log_strain: np.ndarray  # (B,) max over triangles of the largest principal |ln lambda|
@@ -183,6 +189,12 @@ def _check_row(s, prm, n, ck):
     # nh-quad: the volumetric modulus of the quads, and the ring spacing the mesh was built with
     ck[check.CK_QUAD] = prm[P_QUAD] * k_unit
     ck[check.CK_SPACING] = prm[P_SPACING]
+    # each finger's jaw groove, SI, as the scene row gives it (the check grows it itself)
+    for base, jaw in ((check.CK_JAW0, S_JAW0), (check.CK_JAW1, S_JAW1)):
+        ck[base + check.JW_DEPTH] = s[jaw + J_DEPTH]
+        ck[base + check.JW_BOTTOM_RADIUS] = s[jaw + J_BOTTOM_RADIUS]
+        ck[base + check.JW_OPENING] = s[jaw + J_OPENING]
+        ck[base + check.JW_POSITION] = s[jaw + J_POSITION]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -340,8 +352,8 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     scene, n, prm
         The (B, N_SCENE) scene matrix, N and the packed parameters.
     xs, lam_face, lam_corner, lam_stop
-        Scaled states (B, 2N + 2) and multipliers: face (B, 2, N), corner (B, 2, 4, N), joint
-        stop (B, 2).
+        Scaled states (B, 2N + 2) and multipliers: face (B, 2, N), corner (B, 2, N_CORNERS,
+        N), joint stop (B, 2).
     infos
         Solver info rows (B, N_INFO) (layout ``I_*``): its claim in ``I_STATUS``.
     elapsed

@@ -6,6 +6,14 @@ the gripping face, its ends, its back), on the two end points of a contour edge 
 The gradient's direction is the contact's normal, so the contact list and the net force and
 moment on the object come from the solver's own contact geometry, written once. The fixed
 centre carries what they leave unbalanced (:mod:`envs.model.holding`).
+
+Jaw grooves need nothing more: a face contact's normal is its gap's gradient on the grooved
+finger too (:func:`envs.model.jaw.jaw_gap`), and a groove's two mouth edges are corners like
+the bar's ends. The pressure shift of :func:`envs.model.holding.holding_of_contacts` groups the
+contacts that share a normal and a line across it as one face: a V-groove's flank is a face of
+its own, and each contact on a curved surface (a cradle's arc, a rounded mouth edge) is a face
+by itself, whose pressure may shift by its own force's Hertz half-width only. That is
+conservative: a patch on an arc shifts less than the face it would share on a flat bar.
 """
 
 from __future__ import annotations
@@ -48,7 +56,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
     s, prm, n
         The scene row (SI), its packed parameters and N.
     x, lam_face, lam_corner
-        The scaled state and the face (2, N) and corner (2, 4, N) multipliers.
+        The scaled state and the face (2, N) and corner (2, N_CORNERS, N) multipliers.
     payload
         The payload ``W`` [N] the grasp must carry in every direction of the load set
         (:mod:`envs.model.holding`), >= 0.

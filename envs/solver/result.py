@@ -15,6 +15,7 @@ import numpy as np
 
 from envs.check import KKTReport
 from envs.model.holding import LIMIT_NAMES
+from envs.model.layout import N_CORNERS
 
 __all__ = ["GraspResult"]
 
@@ -46,13 +47,15 @@ class GraspResult:
     torque_nm, n_triangles, method, stiffness_rule
         The problem solved.
     corner_forces_n : numpy.ndarray
-        Total force of each rounded corner of each finger on the contour [N], (2, 4); corners
-        in the order: tip and root of the gripping face, tip and root of the back of the bar.
+        Total force of each rounded corner of each finger on the contour [N], (2, 6); corners
+        in the order (``C_*`` of :mod:`envs.model.layout`): tip and root of the gripping face,
+        tip and root of the back of the bar, a jaw groove's mouth edges on the tip and the
+        root side (zero for a straight jaw).
     corner_edges : numpy.ndarray
         Edge ``k`` (from point k to k+1) carrying most of each corner's force, -1 for none,
-        (2, 4).
+        (2, 6).
     corner_edge_forces_n : numpy.ndarray
-        Force of each corner on each contour edge ``k`` [N], (2, 4, N): a corner pressing on a
+        Force of each corner on each contour edge ``k`` [N], (2, 6, N): a corner pressing on a
         vertex bears on both edges that meet there.
     stop_torques_nm : numpy.ndarray
         Reaction torque of the closed-jaw stop of each finger [N·m] (non-zero: jaws closed).
@@ -136,9 +139,11 @@ class GraspResult:
     n_triangles: int = 0
     method: str = "newton"
     stiffness_rule: str = "van_gelder"
-    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4)))
-    corner_edges: np.ndarray = field(default_factory=lambda: -np.ones((2, 4), dtype=int))
-    corner_edge_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, 4, 0)))
+    corner_forces_n: np.ndarray = field(default_factory=lambda: np.zeros((2, N_CORNERS)))
+    corner_edges: np.ndarray = field(
+        default_factory=lambda: -np.ones((2, N_CORNERS), dtype=int))
+    corner_edge_forces_n: np.ndarray = field(
+        default_factory=lambda: np.zeros((2, N_CORNERS, 0)))
     stop_torques_nm: np.ndarray = field(default_factory=lambda: np.zeros(2))
     energy_j: float = math.nan
     max_displacement_ratio: float = math.nan

@@ -13,6 +13,7 @@ import math
 from numba import njit
 
 from ..model.layout import (
+    N_CORNERS,
     P_C0X,
     P_HW,
     P_KAPPA,
@@ -23,6 +24,7 @@ from ..model.layout import (
     P_THMIN,
 )
 from .contact import (
+    _corner_active,
     _corner_gap,
     _crossed_through_sc,
     _face_gap,
@@ -131,7 +133,9 @@ def _clear_of_finger(x, n, prm, j):
     for i in range(n):
         if not _face_gap(q, i, j, _sel(sn, j), _sel(cs, j), prm) > CLEAR_GAP:
             return False
-    for c in range(4):
+    for c in range(N_CORNERS):
+        if not _corner_active(j, c, prm):
+            continue
         for k in range(n):
             if not _corner_gap(q, k, j, _sel(sn, j), _sel(cs, j), c, prm) > CLEAR_GAP:
                 return False
