@@ -228,9 +228,14 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
                       disk[rows, DISK_OFFSET_X])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
     # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
-    # with the physical E the FEM solves with); NaN (not converged) stays NaN
+    # with the physical E the FEM solves with): the FEM's own capped shares (per contact
+    # segment on a grooved jaw), else, for a straight result cached before they were stored,
+    # the flat face's cap of its force; NaN (not converged) stays NaN
     shares = np.empty(rows.size)
     for i, d in enumerate(disk[rows]):
+        if np.all(np.isfinite(fem["contact_shares"][i])):
+            shares[i] = float(np.sum(fem["contact_shares"][i]))
+            continue
         k = hertz_arc_coefficient(d[DISK_RADIUS], d[DISK_THICKNESS], d[DISK_YOUNG],
                                   d[DISK_POISSON],
                                   relative_radius_m(d[DISK_RADIUS], FLAT_FACE_CURVATURE_PER_M))
