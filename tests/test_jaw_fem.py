@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from scipy.optimize import brentq
 
 from envs import fem
@@ -255,20 +256,51 @@ PINNED_R070_T02 = {"jaw_angle_rad": 0.6601656258758632, "force_n": 3.79373346338
                    "fraction": 0.07752781273767856}
 
 
-def test_grooved_tangent_matches_finite_differences_of_gradient(vee, small_cradle):
-    """The curved obstacle's Hessian terms (d2g/dp2, d2g/dp dq) and the rounded mouth
-    corners make the system's tangent exact."""
-    for _scene, _onset, _results, system, x, load in (vee, small_cradle):
-        rng = np.random.default_rng(3)
-        d = np.zeros_like(x)
-        d[system.free] = 1e-3 * rng.standard_normal(system.free.size)
-        d[-2:] = [1.0, 0.7]
-        _, _, k = system.evaluate(x, load)
-        step = 1e-9
-        gp = system.evaluate(x + step * d, load)[1]
-        gm = system.evaluate(x - step * d, load)[1]
-        fd = (gp - gm) / (2 * step)
-        assert np.abs(fd - k @ d).max() <= 1e-5 * np.abs(k @ d).max()
+def _contact_gradient_tangent(system, x, load):
+    """The contact part of the system's gradient and tangent (elastic terms left out)."""
+    _, grad, (rows, cols, vals), _, _ = system._contact(x, load, True)
+    nt = system.ntot
+    if not vals:
+        return grad, sp.csr_matrix((nt, nt))
+    return grad, sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                       np.concatenate(cols))), shape=(nt, nt))
+
+
+@pytest.mark.parametrize("case", ["cradle", "vee", "small_cradle"])
+def test_grooved_contact_tangent_matches_finite_differences(case, request):
+    """The contact tangent of grooved jaws (nodes on the curved solid, the mouth corners, the
+    finger angles) is the derivative of the contact forces."""
+    _scene, _onset, _results, system, x, load = request.getfixturevalue(case)
+    grad, k = _contact_gradient_tangent(system, x, load)
+    rng = np.random.default_rng(3)
+    d = np.zeros_like(x)
+    d[system.free] = 1e-3 * rng.standard_normal(system.free.size)
+    d[-2:] = [1.0, 0.7]
+    step = 1e-8
+    fd = (_contact_gradient_tangent(system, x + step * d, load)[0]
+          - _contact_gradient_tangent(system, x - step * d, load)[0]) / (2 * step)
+    assert np.abs(fd - k @ d).max() <= 1e-7 * np.abs(k @ d).max()
+
+
+def test_cradle_tangent_carries_the_jaws_curvature(cradle):
+    """Sliding the pressed nodes along the cradle's arc turns their forces with its normal: the
+    tangent's curvature term ``-f d2g/dp2``, alone when the nodes move along the surface."""
+    _scene, _onset, _results, system, x, load = cradle
+    forces = system.contact_forces(x, load)[0][0]
+    pressed = np.flatnonzero(forces > 0)
+    _, _, dgdp, *_ = system.obstacles[0].evaluate(system.rim_positions(x), x[system.n])
+    d = np.zeros_like(x)
+    tangent = np.column_stack((-dgdp[pressed, 1], dgdp[pressed, 0]))
+    d[system.rim.dofs[pressed]] = tangent
+    grad, k = _contact_gradient_tangent(system, x, load)
+    # a step of 10 nm: the gap's round-off (1e-17 m on a 0.07 m arc) stays far below the
+    # curvature's change of the normal
+    step = 1e-8
+    fd = (_contact_gradient_tangent(system, x + step * d, load)[0]
+          - _contact_gradient_tangent(system, x - step * d, load)[0]) / (2 * step)
+    kd = k @ d
+    assert np.abs(kd).max() > 0.0
+    np.testing.assert_allclose(fd, kd, rtol=0, atol=1e-2 * np.abs(kd).max())
 
 
 # --------------------------------------------------------------------------------- the grasps
