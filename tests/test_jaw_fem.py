@@ -399,3 +399,17 @@ def test_segment_hertz_cap_follows_the_jaws_curvature():
     assert math.isinf(segment_hertz_cap(force, 1 / r, r, t, e, nu))
     assert math.isinf(segment_hertz_cap(force, 2 / r, r, t, e, nu))
     assert segment_hertz_cap(0.0, 0.0, r, t, e, nu) == 0.0
+
+
+def test_fem_fidelity_scenes_carry_the_rows_jaws():
+    """The FEM fidelity of the design evaluator grasps with each row's jaw profiles (the
+    scene columns' jaw slots, right and left), straight where they are 0."""
+    from envs.batch_metrics import _with_jaws
+    from envs.model.problem import SceneColumns
+
+    scene, _ = _vee_scene()
+    left = JawProfile.cradle(0.05, DEPTH_M, 0.09)
+    scene = replace(scene, gripper=replace(scene.gripper, left_jaw=left))
+    cols = SceneColumns.from_rows(np.vstack([scene.rows(0.1), R070.rows(0.1)]))
+    assert _with_jaws(R070, cols, 0).gripper.jaws == (scene.gripper.jaw, left)
+    assert _with_jaws(R070, cols, 1).gripper.jaws == (STRAIGHT, STRAIGHT)
