@@ -6,6 +6,7 @@ the rest violation and the fingers' gaps.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -28,10 +29,10 @@ from .model.holding import (
     H_PIN_Y,
     N_HOLD,
 )
-from .model.jaw import JAW_FIELDS, pack_groove
+from .model.jaw import JAW_FIELDS, JawProfile, pack_groove
 from .model.layout import G_DEPTH, N_GROOVE
 from .model.problem import SceneColumns, _clearance
-from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
+from .scene import DESIGN_FIELDS, N_DESIGN, Design, Scene, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
 from .solver.pipeline import BatchSolution
 from .solver.status import FEM_FAILED, OK
@@ -262,6 +263,18 @@ def _soft_disk(row: np.ndarray) -> SoftDisk:
     return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
 
 
+def _with_jaws(scene: Scene, cols: SceneColumns, k: int) -> Scene:
+    """The scene with the jaw profiles of row ``k`` of ``cols`` (unchanged where the columns
+    carry none: straight bars)."""
+    if cols.jaw_depth_m is None:
+        return scene
+    right, left = (JawProfile(*(float(c[k, side]) for c in (
+        cols.jaw_depth_m, cols.jaw_bottom_radius_m, cols.jaw_opening_angle_rad,
+        cols.jaw_position_m))) for side in (0, 1))
+    gripper = replace(scene.gripper, jaw=right, left_jaw=None if left == right else left)
+    return replace(scene, gripper=gripper)
+
+
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
               kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray
               ) -> None:
@@ -270,17 +283,23 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     :func:`evaluate_designs`)."""
     from .fem.designs import fem_design_grasps, fem_metrics
 
-    scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
-              for i in rows.tolist()]
+    scenes = [_with_jaws(Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i])),
+                         cols, k)
+              for k, i in enumerate(rows.tolist())]
     fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings,
                                         payloads_n=payload_n),
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
                       disk[rows, DISK_OFFSET_X])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)
     # each face's share of the rim, at most the Hertz width of its force (as for the PSM,
-    # with the physical E the FEM solves with); NaN (not converged) stays NaN
+    # with the physical E the FEM solves with): the FEM's own capped shares (per contact
+    # segment on a grooved jaw), else, for a straight result cached before they were stored,
+    # the flat face's cap of its force; NaN (not converged) stays NaN
     shares = np.empty(rows.size)
     for i, d in enumerate(disk[rows]):
+        if np.all(np.isfinite(fem["contact_shares"][i])):
+            shares[i] = float(np.sum(fem["contact_shares"][i]))
+            continue
         k = hertz_arc_coefficient(d[DISK_RADIUS], d[DISK_THICKNESS], d[DISK_YOUNG],
                                   d[DISK_POISSON],
                                   relative_radius_m(d[DISK_RADIUS], FLAT_FACE_CURVATURE_PER_M))

@@ -45,12 +45,14 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
 
     ``contact_fractions`` (B, 2) is the share of the rim in contact with each face (the
     contact's extent interpolated between rim nodes, :func:`envs.fem.contact.rim_contact_shares`;
-    uncapped), ``contact_fraction`` (B,) their sum,
-    ``n_contacts`` (B, 2) the rim nodes in contact, ``face_force_n`` (B, 2) the force each face
-    carries (the total without the tip corner's), ``peak_compression`` (B,) the largest
-    shortening of a radius ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C =
-    (centre_x_m, centre_y_m)``, the disk centre; ``centre_x_m`` 0 unless the disk was displaced
-    across the axis), the point-spring model's same measure.
+    uncapped), ``contact_fraction`` (B,) their sum, ``contact_shares`` (B, 2) the same capped by
+    Hertz's width (:attr:`FemResult.contact_shares`; NaN where a result cached before it was
+    stored lacks it), ``n_contacts`` (B, 2) the rim nodes in contact, ``face_force_n`` (B, 2)
+    the force each face carries (the total without the tip corner's; a grooved jaw's mouth
+    edges included), ``peak_compression`` (B,) the largest shortening of a radius
+    ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C = (centre_x_m, centre_y_m)``, the
+    disk centre; ``centre_x_m`` 0 unless the disk was displaced across the axis), the
+    point-spring model's same measure.
     """
     b = len(results)
     radius_m = np.broadcast_to(np.asarray(radius_m, dtype=float), (b,))
@@ -83,6 +85,7 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
         "total_force_n": column(lambda r: r.contact_forces_n, 2),
         "contact_fraction": column(lambda r: sum(r.contact_fractions)),
         "contact_fractions": column(lambda r: r.contact_fractions, 2),
+        "contact_shares": column(lambda r: r.contact_shares, 2),
         "face_force_n": column(lambda r: np.subtract(r.contact_forces_n, r.tip_forces_n), 2),
         "peak_compression": compression,
         "stop_torques_nm": column(lambda r: r.stop_torques_nm, 2),

@@ -33,7 +33,7 @@ from envs.validation import check_range
 
 from .body import _Body
 from .cache import FEM_VERSION, _cache_dir, _cache_key, _load_cache, _store_cache
-from .contact import _PENALTY_FACTOR, _JawFace, _JawTip, _Rim, rim_contact_shares
+from .contact import _PENALTY_FACTOR, _Rim, jaw_corners, jaw_obstacle, rim_contact_shares
 from .material import _check_plane, _log_strain_magnitude, _stretch_strain_magnitude
 from .mesh import (
     _arc_facets,
@@ -217,14 +217,14 @@ def _solve_grasp(
         body,
         rim,
         fixed,
-        [_JawFace(scene, 0, 0), _JawFace(scene, 1, 1)],
+        [jaw_obstacle(scene, 0, 0), jaw_obstacle(scene, 1, 1)],
         2,
         q_potential,
         eps,
         q_scale=np.array([r, r]),
         force_tol_n=force_tol,
         length_scale_m=r,
-        corners=[_JawTip(scene, 0, 0), _JawTip(scene, 1, 1)],
+        corners=jaw_corners(scene),
         rim_order=order,
     )
     n = body.n
@@ -276,7 +276,12 @@ def _solve_grasp(
                 )
             )
             continue
-        forces, tip = system.contact_forces(x, load)
+        forces, corner_forces = system.contact_forces(x, load)
+        # each finger's corners: its tip (corners 0 and 1) and its groove's mouth edges
+        tip = corner_forces[:2]
+        finger_corner_n = [float(sum(f for c, f in zip(system.corners, corner_forces,
+                                                       strict=True) if c.side == side))
+                           for side in (0, 1)]
         normals, points, node_forces, net, moment = system.contact_list(x, load)
         # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
         moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
@@ -288,8 +293,10 @@ def _solve_grasp(
             act = valid & (f > 0)
             if np.any(act):
                 pen = max(pen, float(np.max(-g[act])))
-        tip_pen = (tip - system.corner_multipliers) / system.k_corner
-        pen = max(pen, float(np.max(np.where(tip > 0, tip_pen, 0.0))))
+        corner_pen = (corner_forces - system.corner_multipliers) / system.k_corner
+        pen = max(pen, float(np.max(np.where(corner_forces > 0, corner_pen, 0.0))))
+        extents, shares = rim_contact_shares(scene, rim, order, system.rim_positions(x),
+                                             forces[:2], x[n:])
         fmat = body.deformation_gradient(x[:n])
         strain = _log_strain_magnitude(fmat)
         stretch = _stretch_strain_magnitude(fmat)
@@ -303,8 +310,8 @@ def _solve_grasp(
                 message="converged (jaws on the closed stop)" if at_stop else "converged",
                 contour_m=system.rim_positions(x)[order],
                 contact_forces_n=(
-                    float(np.sum(forces[0]) + tip[0]),
-                    float(np.sum(forces[1]) + tip[1]),
+                    float(np.sum(forces[0]) + finger_corner_n[0]),
+                    float(np.sum(forces[1]) + finger_corner_n[1]),
                 ),
                 tip_forces_n=(float(tip[0]), float(tip[1])),
                 peak_strain=float(np.max(strain[outside_hub])),
@@ -315,8 +322,8 @@ def _solve_grasp(
                     int(np.count_nonzero(forces[0] > 0)),
                     int(np.count_nonzero(forces[1] > 0)),
                 ),
-                contact_fractions=rim_contact_shares(scene, rim, order, system.rim_positions(x),
-                                                     forces[:2], x[n:]),
+                contact_fractions=extents,
+                contact_shares=shares,
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
                 pin_force_n=(float(hold[H_PIN_X]), float(hold[H_PIN_Y])),

@@ -47,7 +47,7 @@ class FemResult:
     newton_iterations
         Newton iterations spent on this torque (including bisected sub-steps).
     max_penetration_m
-        Largest penetration of a rim node into a jaw face or of a tip corner into the rim [m]
+        Largest penetration of a rim node into a jaw or of a jaw corner into the rim [m]
         (penalty artefact; reduce it with ``al_iterations``).
     max_displacement_m
         Largest rim-node displacement [m].
@@ -55,7 +55,8 @@ class FemResult:
         Number of rim nodes in contact with the right and left jaw's face.
     tip_forces_n
         Part of ``contact_forces_n`` carried by each finger's tip corner [N] (0 when the corner
-        does not touch the disk).
+        does not touch the disk); a grooved jaw's mouth edges are corners too, their forces in
+        ``contact_forces_n`` but not here.
     plane
         ``"strain"`` or ``"stress"``.
     hub_radius_m
@@ -67,7 +68,14 @@ class FemResult:
         extent interpolated between rim nodes from their pressures and gaps
         (:func:`envs.fem.contact.rim_contact_shares`): the point-spring model's measure of the
         fraction of the contour in contact (:mod:`envs.model.contact_width`), continuous in
-        the design.
+        the design. On a grooved jaw a free node's gap is to the grooved solid.
+    contact_shares
+        The same share at most the physical width (Hertz line contact) [-]: a straight face's
+        extent at most the width of its force on a flat face, a grooved jaw's contact segments
+        each at most the width of its own force on the jaw's curvature under it (a cradle that
+        fits the disk is not capped; each flank of a V is a flat contact of its own). NaN in
+        results cached before it was stored (straight faces: the flat cap of the face's force,
+        :func:`envs.model.contact_width.contact_share`, gives it).
     stop_torques_nm
         Torque the closed-jaw stop takes from each finger [N·m] (0 unless the jaws are on it).
     peak_stretch_strain
@@ -113,6 +121,7 @@ class FemResult:
     hub_radius_m: float = math.nan
     hub_edge_peak_strain: float = math.nan
     contact_fractions: tuple[float, float] = (math.nan, math.nan)
+    contact_shares: tuple[float, float] = (math.nan, math.nan)
     stop_torques_nm: tuple[float, float] = (0.0, 0.0)
     peak_stretch_strain: float = math.nan
     pin_force_n: tuple[float, float] = (math.nan, math.nan)
@@ -164,4 +173,6 @@ class FemResult:
         kw["contact_node_counts"] = tuple(int(v) for v in kw["contact_node_counts"])
         for name in ("tip_forces_n", "contact_fractions", "stop_torques_nm", "pin_force_n"):
             kw[name] = tuple(float(v) for v in kw[name])
+        if "contact_shares" in kw:  # (absent from results cached before it was stored)
+            kw["contact_shares"] = tuple(float(v) for v in kw["contact_shares"])
         return cls(**kw, from_cache=from_cache)

@@ -17,7 +17,7 @@ import scipy.sparse.linalg as spla
 from .body import _Body
 from .contact import (
     _corner_feature,
-    _JawTip,
+    _JawCorner,
     _Obstacle,
     _Rim,
     _segment_gap_gradient,
@@ -41,7 +41,7 @@ class _System:
         q_scale: np.ndarray,
         force_tol_n: float,
         length_scale_m: float,
-        corners: Sequence[_JawTip] = (),
+        corners: Sequence[_JawCorner] = (),
         rim_order: np.ndarray | None = None,
     ) -> None:
         self.body = body
@@ -60,7 +60,7 @@ class _System:
         self.force_tol_n = force_tol_n
         self.length_scale_m = length_scale_m
         self._order: np.ndarray | None = None
-        # tip corners against the deformed rim polygon (rim nodes in counter-clockwise order)
+        # convex jaw corners against the deformed rim polygon (rim nodes in counter-clockwise order)
         self.corners = list(corners)
         self.rim_order = rim_order
         if self.corners:
@@ -88,7 +88,7 @@ class _System:
         forces = []
         for ob, lam in zip(self.obstacles, self.multipliers, strict=True):
             q = x[self.n + ob.qi]
-            g, valid, dgdp, dgdq, d2q, d2pq = ob.evaluate(p, q)
+            g, valid, dgdp, dgdq, d2q, d2pq, d2pp = ob.evaluate(p, q)
             k = self.k_node
             trial = lam - k * g
             act = valid & (trial > 0)
@@ -106,12 +106,13 @@ class _System:
             np.add.at(grad, dofs[:, 1], -fa * dp[:, 1])
             grad[qd] += float(np.sum(-fa * dgdq[ia]))
             if want_tangent:
-                # Hessian of psi(g(x)): k dg dg^T - f d2g
+                # Hessian of psi(g(x)): k dg dg^T - f d2g (d2g/dp2 only for a curved obstacle)
                 for a in range(2):
                     for b in range(2):
                         rows.append(dofs[:, a])
                         cols.append(dofs[:, b])
-                        vals.append(ka * dp[:, a] * dp[:, b])
+                        curved = 0.0 if d2pp is None else fa * d2pp[ia, a, b]
+                        vals.append(ka * dp[:, a] * dp[:, b] - curved)
                     kpq = ka * dp[:, a] * dgdq[ia] - fa * d2pq[ia, a]
                     rows += [dofs[:, a], np.full(ia.size, qd)]
                     cols += [np.full(ia.size, qd), dofs[:, a]]
@@ -128,8 +129,8 @@ class _System:
                 qd = self.n + corner.qi
                 c, dc, d2c = corner.evaluate(float(x[qd]))
                 lam_c = self.corner_multipliers[ci]
-                gap, kind, idx = _corner_feature(poly, c)
-                trial = lam_c - k * gap
+                centre_gap, kind, idx = _corner_feature(poly, c)
+                trial = lam_c - k * (centre_gap - corner.radius_m)
                 if trial <= 0:
                     energy -= lam_c**2 / (2 * k)
                     continue
@@ -142,7 +143,8 @@ class _System:
                 else:
                     nodes = [poly_idx[idx]]
                     z = np.concatenate((poly[idx], c))
-                    _, gz, hz = _with_hessian(_vertex_distance_gradient, z, math.copysign(1, gap))
+                    _, gz, hz = _with_hessian(_vertex_distance_gradient, z,
+                                              math.copysign(1, centre_gap))
                 # chain rule from (rim nodes, corner position) to (rim dofs, q)
                 nv = 2 * len(nodes)
                 dg = np.concatenate((gz[:nv], [gz[nv:] @ dc]))
@@ -206,10 +208,11 @@ class _System:
         """The contacts on the body and their net force and moment about the origin.
 
         Returns ``(normals (k, 2), points (k, 2) [m], forces (k,) [N], net_force (2,) [N],
-        net_moment [N·m])``: each loaded rim node on a jaw face (its normal the face's, the
-        force the node's penalty force) and each loaded tip corner (its normal the direction of
-        the force it puts on the rim nodes it presses, at the corner); the net force and moment
-        sum the forces on the rim nodes (the hub carries their opposite at equilibrium).
+        net_moment [N·m])``: each loaded rim node on a jaw (its normal the gap's gradient, the
+        face's on a straight jaw, the force the node's penalty force) and each loaded jaw corner
+        (its normal the direction of the force it puts on the rim nodes it presses, at the
+        corner's point of contact); the net force and moment sum the forces on the rim nodes
+        (the hub carries their opposite at equilibrium).
         """
         p = self.rim_positions(x)
         nodes, corner_forces = self.contact_forces(x, load)
@@ -219,7 +222,8 @@ class _System:
         for ob, f in zip(self.obstacles, nodes, strict=True):
             _, _, dgdp, *_ = ob.evaluate(p, x[self.n + ob.qi])
             act = np.flatnonzero(f > 0)
-            vec = f[act, None] * dgdp[act]  # the face pushes a node along its normal
+            # the obstacle pushes a node along its normal (the gap's gradient)
+            vec = f[act, None] * dgdp[act]
             net += vec.sum(axis=0)
             moment += float(np.sum(p[act, 0] * vec[:, 1] - p[act, 1] * vec[:, 0]))
             normals.append(dgdp[act])
@@ -247,7 +251,8 @@ class _System:
                 total = vec.sum(axis=0)
                 size = float(np.linalg.norm(total))
                 normals.append((total / size)[None, :])
-                points.append(c[None, :])
+                # a rounded corner touches the rim its radius from its centre, along the push
+                points.append((c + corner.radius_m * total / size)[None, :])
                 forces.append(np.array([size]))
         return (np.concatenate(normals) if normals else np.zeros((0, 2)),
                 np.concatenate(points) if points else np.zeros((0, 2)),
@@ -285,7 +290,7 @@ class _System:
         return out
 
     def penetration(self, x: np.ndarray) -> float:
-        """Largest penetration [m] of a rim node into a face or of a tip corner into the rim."""
+        """Largest penetration [m] of a rim node into a face or of a jaw corner into the rim."""
         p = self.rim_positions(x)
         worst = 0.0
         for ob in self.obstacles:
@@ -296,7 +301,7 @@ class _System:
             poly = p[self.rim_order]
             for corner in self.corners:
                 c = corner.evaluate(float(x[self.n + corner.qi]))[0]
-                worst = max(worst, -_corner_feature(poly, c)[0])
+                worst = max(worst, corner.radius_m - _corner_feature(poly, c)[0])
         return worst
 
     def penetration_cap(self, x: np.ndarray) -> float:

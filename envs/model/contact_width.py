@@ -67,6 +67,7 @@ __all__ = [
     "plane_strain_modulus_pa",
     "relative_radius_m",
     "segment_contact",
+    "segment_hertz_cap",
 ]
 
 #: ``c`` of the pressed points' indicator ``p s / (c E*)`` (see the module): on Hertz's profiles
@@ -142,6 +143,41 @@ def contact_share(extent_share, face_force_n, hertz_k):
     ``F`` [N] (no cap for ``hertz_k = inf``, a conforming face)."""
     width = hertz_k * math.sqrt(face_force_n) if face_force_n > 0.0 else 0.0
     return width if width < extent_share else extent_share
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def segment_hertz_cap(force_n, face_curvature_per_m, radius_m, thickness_m, youngs_modulus_pa,
+                      poisson_ratio):
+    """Largest share of the contour one contact segment may cover: the Hertz width of its force.
+
+    A contact segment is one run of neighbouring pressed points on one face (a V-groove's two
+    flanks are two segments, each with its own force); the jaw's local curvature there sets the
+    relative radius (:func:`relative_radius_m`): a flat face or flank caps the segment at
+    ``k sqrt(F)`` with the disk's own radius, a cradle of radius ``R > r`` at the wider width of
+    ``r R / (R - r)``, and a cradle that fits or wraps the disk (``R <= r``) not at all.
+
+    Parameters
+    ----------
+    force_n
+        The segment's normal force ``F`` [N] (the sum over its pressed points).
+    face_curvature_per_m
+        The jaw's curvature under the segment [1/m], positive where it is concave towards the
+        disk (``1 / R`` on a cradle's arc), 0 on a flat face or flank.
+    radius_m, thickness_m, youngs_modulus_pa, poisson_ratio
+        The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] and ``nu`` [-] (as for
+        :func:`hertz_arc_coefficient`).
+
+    Returns
+    -------
+    float
+        ``k(R) sqrt(F)`` (:func:`hertz_arc_coefficient`), 0 for ``F <= 0``, ``inf`` where the
+        face conforms (no cap).
+    """
+    if not force_n > 0.0:
+        return 0.0
+    k = hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio,
+                              relative_radius_m(radius_m, face_curvature_per_m))
+    return k * math.sqrt(force_n) if k < math.inf else math.inf
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
