@@ -22,6 +22,7 @@ from .model.contact_width import (
     plane_strain_modulus_pa,
     relative_radius_m,
     segment_contact,
+    segment_hertz_cap,
 )
 from .model.geometry import finger_gap_m, jaw_finger_gap
 from .model.layout import G_DEPTH, N_GROOVE
@@ -211,9 +212,9 @@ def _run_share(extent, force_n, curvature_per_m, radius_m, thickness_m, modulus_
                poisson_ratio):
     """One contact's share: its extent, at most the Hertz width of its force against a surface
     of curvature ``curvature_per_m`` (concave positive)."""
-    hertz_k = hertz_arc_coefficient(radius_m, thickness_m, modulus_pa, poisson_ratio,
-                                    relative_radius_m(radius_m, curvature_per_m))
-    return contact_share(extent, force_n, hertz_k)
+    cap = segment_hertz_cap(force_n, curvature_per_m, radius_m, thickness_m, modulus_pa,
+                            poisson_ratio)
+    return cap if cap < extent else extent
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -15,7 +15,9 @@ inflate the agreement) it reports:
 - the default model's reward Spearman at other strain limits (``--strain-limits``): how the
   agreement depends on the weight of deformation against contact.
 
-Writes ``out/fidelity.json`` and ``out/fidelity.png`` (PSM against FEM reward per design, one
+``--jaw cradle|vee|any`` draws the random designs with grooved jaws (writes
+``out/fidelity_{jaw}.json`` and ``.png``). Writes ``out/fidelity.json`` and
+``out/fidelity.png`` (PSM against FEM reward per design, one
 panel per disk). The FEM costs ~0.3-1 s per design; ``--workers`` runs it in processes.
 
 Usage::
@@ -110,9 +112,9 @@ def limit_sensitivity(designs: np.ndarray, scene: Scene, executor, limits) -> di
 
 
 def run_scene(name: str, n: int, seed: int, executor, models: dict,
-              limits: tuple[float, ...] = ()) -> dict:
+              limits: tuple[float, ...] = (), jaw: str = "straight") -> dict:
     scene = Scene.preset(name)
-    designs = DesignBounds().sample(np.random.default_rng(seed), n, scene.disk)
+    designs = DesignBounds(jaw=jaw).sample(np.random.default_rng(seed), n, scene.disk)
     t0 = time.perf_counter()
     fem = evaluate_designs(designs, scene.disk, fidelity="fem", executor=executor)
     fem_s = time.perf_counter() - t0
@@ -181,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="finer nh-quad members NxM scored beside the default (none: skip)")
     ap.add_argument("--strain-limits", nargs="*", type=float, default=[0.05, 0.15, 0.2],
                     help="also rank the default model at these strain limits (default 0.10)")
+    ap.add_argument("--jaw", default="straight", choices=("straight", "cradle", "vee", "any"),
+                    help="random designs of this jaw design space (default straight)")
     ap.add_argument("--out", default="out")
     args = ap.parse_args(argv)
     scenes = ("paper-r070",) if args.quick else SCENES
@@ -196,7 +200,8 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     try:
         for name in scenes:
-            entry = run_scene(name, n, args.seed, executor, models, tuple(args.strain_limits))
+            entry = run_scene(name, n, args.seed, executor, models, tuple(args.strain_limits),
+                              args.jaw)
             results.append(entry)
             print(f"{name}: {entry['valid_at_rest']} of {n} valid, FEM "
                   f"{entry['fem_converged']} converged in {entry['fem_wall_s']:.0f} s")
@@ -217,10 +222,11 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if executor is not None:
             executor.close()
-    (out / "fidelity.json").write_text(json.dumps(
-        {"designs": n, "seed": args.seed, "scenes": results}, indent=1) + "\n")
-    chart(results, out / "fidelity.png")
-    print(f"wrote {out / 'fidelity.json'} and {out / 'fidelity.png'}")
+    stem = "fidelity" if args.jaw == "straight" else f"fidelity_{args.jaw}"
+    (out / f"{stem}.json").write_text(json.dumps(
+        {"designs": n, "seed": args.seed, "jaw": args.jaw, "scenes": results}, indent=1) + "\n")
+    chart(results, out / f"{stem}.png")
+    print(f"wrote {out / f'{stem}.json'} and {out / f'{stem}.png'}")
     return 0
 
 
