@@ -246,8 +246,8 @@ def _jaws(jaws: tuple[JawProfile, JawProfile], length: float, angle: float, offs
 
 def _jaw_groups(sheet: dict[str, Any]) -> list[tuple[str | None, dict[str, Any]]]:
     """The sheet's distinct jaw profiles: ``[(None, entry)]`` for fingers alike, else each
-    finger's ``(side, entry)``."""
-    jaws = sheet["jaws"]
+    finger's ``(side, entry)``; a sheet written before jaw profiles has straight jaws."""
+    jaws = sheet.get("jaws") or {"right": {"kind": STRAIGHT_JAW_TEXT}, "same": True}
     return [(None, jaws["right"])] if jaws["same"] else [(side, jaws[side]) for side in FINGERS]
 
 
