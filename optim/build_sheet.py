@@ -246,8 +246,8 @@ def _jaws(jaws: tuple[JawProfile, JawProfile], length: float, angle: float, offs
 
 def _jaw_groups(sheet: dict[str, Any]) -> list[tuple[str | None, dict[str, Any]]]:
     """The sheet's distinct jaw profiles: ``[(None, entry)]`` for fingers alike, else each
-    finger's ``(side, entry)``."""
-    jaws = sheet["jaws"]
+    finger's ``(side, entry)``; a sheet written before jaw profiles has straight jaws."""
+    jaws = sheet.get("jaws") or {"right": {"kind": STRAIGHT_JAW_TEXT}, "same": True}
     return [(None, jaws["right"])] if jaws["same"] else [(side, jaws[side]) for side in FINGERS]
 
 
@@ -627,12 +627,15 @@ def _draw_jaw_detail(ax, entry: dict[str, Any], length: float, width: float, who
     a, h, hw = entry["position_mm"], entry["depth_mm"], width / 2
     radius, mouth = entry["bottom_radius_mm"], entry["mouth_width_mm"] / 2
     half = math.radians(entry["opening_angle_deg"]) / 2
-    ax.plot([a, a], [-hw - 0.1 * width, hw + 0.6 * width], color="0.3", lw=0.6, ls="-.")
+    span = max(2.6 * mouth, 1.3 * width)  # the detail's half-width
+    # room above the face for the dimensions, enough for their text on a thin finger
+    headroom = max(0.75 * width, 0.25 * span)
+    top = hw + headroom  # the detail's upper edge
+    ax.plot([a, a], [-hw - 0.1 * width, hw + 0.8 * headroom], color="0.3", lw=0.6, ls="-.")
     _dimension(ax, np.array([a - mouth, hw]), np.array([a + mouth, hw]),
-               np.array([0.0, 0.45 * width]), f"mouth {2 * mouth:.2f}")
+               np.array([0.0, 0.5 * headroom]), f"mouth {2 * mouth:.2f}")
     _dimension(ax, np.array([a, hw]), np.array([a, hw - h]), np.array([1.5 * mouth, 0.0]),
                f"h = {h:.2f}")
-    top = hw + 0.75 * width  # the detail's upper edge
     centre = np.array([a, hw - (h - radius)])  # the bottom arc's centre
     if radius > 0.0:
         # a radius dimension along a radius, off the centre line, from the centre or, where
@@ -641,9 +644,9 @@ def _draw_jaw_detail(ax, entry: dict[str, Any], length: float, width: float, who
                                                                1.0)))
         ray = np.array([math.sin(lean), -math.cos(lean)])
         wall = centre + radius * ray
-        start = centre if centre[1] <= top - 0.15 * width else (
-            centre + ray * (centre[1] - (top - 0.15 * width)) / -ray[1])
-        ax.annotate(f"R {radius:.2f}", wall, start, fontsize=7, ha="right", va="bottom",
+        high = hw + 0.8 * headroom  # above the mouth's dimension
+        start = centre if centre[1] <= high else centre + ray * (centre[1] - high) / -ray[1]
+        ax.annotate(f"R {radius:.2f}", wall, start, fontsize=7, ha="right", va="center",
                     arrowprops={"arrowstyle": "->", "color": "0.2", "lw": 0.8})
     lowest = hw - h
     if half > 0.0:
@@ -659,7 +662,6 @@ def _draw_jaw_detail(ax, entry: dict[str, Any], length: float, width: float, who
         ax.text(a + 0.1 * mouth, apex[1] + 1.08 * swing, f"{entry['opening_angle_deg']:.1f}°",
                 fontsize=7, ha="left", va="bottom",
                 bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none"})
-    span = max(2.6 * mouth, 1.3 * width)
     ax.set_xlim(max(a - span, -0.05 * length), min(a + span, 1.05 * length))
     ax.set_ylim(min(-hw, lowest) - 0.15 * width, top)
     ax.set_aspect("equal")

@@ -262,6 +262,10 @@ def test_a_design_without_jaw_fields_keeps_todays_sheet(tmp_path):
     fig = drawing_figure(plain)
     assert "jaws, both fingers: straight" in _texts(fig)
     assert not any("jaw:" in ax.get_title() for ax in fig.axes)
+    # a sheet written before jaw profiles (no "jaws") is drawn as today's, its jaws straight
+    legacy = {k: v for k, v in plain.items() if k != "jaws"}
+    assert jaw_rows(legacy) == jaw_rows(plain)
+    assert "jaws, both fingers: straight" in _texts(drawing_figure(legacy))
 
 
 def test_bad_jaw_fields_are_named():
