@@ -17,6 +17,7 @@ import envs
 from envs.batch_inputs import _design_table, _disk_table
 from envs.batch_metrics import _columns
 from envs.design_space import (
+    JAW_BOUNDS,
     JAW_COLUMNS,
     JAW_KINDS,
     DesignBounds,
@@ -255,6 +256,15 @@ def test_every_corner_of_the_box_is_valid_at_rest(bounds, preset):
     room = 0.5 * ln - corner_radius(w, disk.radius_m) - mouth
     deepest = si[:, 6] >= MAX_DEPTH_OF_WIDTH * w * (1 - 1e-12)
     assert np.any(room < 1e-6 * ln) and np.any(deepest)
+
+
+def test_other_jaws_for_a_box_keep_its_jaw_bounds_for_the_same_kind_only():
+    narrow = DesignBounds(jaw="cradle", jaw_low=(0.1, 1.0, 0.2), jaw_high=(0.5, 1.5, 0.8))
+    assert narrow.with_jaw(jaw_per_finger=True).jaw_range == narrow.jaw_range
+    assert narrow.with_jaw("vee").jaw_range == tuple(
+        tuple(JAW_BOUNDS["vee"][c][i] for c in JAW_COLUMNS["vee"]) for i in (0, 1))
+    assert DesignProblem(DISK, bounds=narrow, jaw="cradle").bounds == narrow
+    assert DesignProblem(DISK, bounds=narrow, jaw="any").bounds.jaw_low is None
 
 
 def test_a_finger_too_short_for_its_groove_is_invalid_not_an_error():
