@@ -22,6 +22,7 @@ from envs.evaluate import finger_gaps_m
 from envs.model.family import resolve_model
 from envs.model.geometry import distance_to_finger_bar
 from envs.model.holding import hertz_half_width
+from envs.model.layout import S_OFFSET_X
 from envs.model.problem import REST_OFFSET, REST_OK, REST_OVERLAP, rest_codes
 from envs.scene import DESIGN_FIELDS, Design, SoftDisk
 from tests.kkt_reference import kkt_check
@@ -75,7 +76,7 @@ def test_a_displacement_uses_up_the_rest_clearance_at_cos_theta():
             Scene(R070.gripper, outside)
         assert "overlaps a finger" in str(err.value)
         rows = R070.rows()
-        rows[0, -1] = sign * 1.001 * limit
+        rows[0, S_OFFSET_X] = sign * 1.001 * limit
         assert rest_codes(rows)[0] == REST_OFFSET
     # past a finger altogether: behind its gripping face
     with pytest.raises(ValueError, match="behind a gripping face"):
@@ -84,7 +85,7 @@ def test_a_displacement_uses_up_the_rest_clearance_at_cos_theta():
     tight = R070.rows()
     tight[0, DESIGN_FIELDS.index("rest_angle_rad")] = 0.3
     for x in (0.0, 0.3 * limit, -0.3 * limit):
-        tight[0, -1] = x
+        tight[0, S_OFFSET_X] = x
         assert rest_codes(tight)[0] == REST_OVERLAP
 
 
