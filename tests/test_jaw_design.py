@@ -169,6 +169,23 @@ def test_rows_of_each_width_evaluate_and_a_bad_groove_spoils_its_row_only():
         evaluate_designs(np.zeros((1, 7)), DISK)
 
 
+def test_the_fem_gets_each_row_s_gripper_with_its_jaws(monkeypatch):
+    import envs.fem.designs
+
+    seen = []
+
+    def capture(scenes, *args, **kwargs):
+        seen.extend(scenes)
+        raise RuntimeError("captured")
+
+    monkeypatch.setattr(envs.fem.designs, "fem_design_grasps", capture)
+    rows = np.array([Design(*PAPER.to_array(), jaw=CRADLE, left_jaw=VEE).to_array(),
+                     Design(*PAPER.to_array(), jaw=VEE).to_array(14)])
+    with pytest.raises(RuntimeError, match="captured"):
+        evaluate_designs(rows, DISK, fidelity="fem", **KF)
+    assert [s.gripper.jaws for s in seen] == [(CRADLE, VEE), (VEE, VEE)]
+
+
 def test_scenarios_keep_one_physical_groove():
     rows = np.array([Design(*PAPER.to_array(), jaw=CRADLE, left_jaw=VEE).to_array()])
     scenarios = Scenarios.of({"radius_m": (0.06, 0.08)}, 0.002)
