@@ -201,8 +201,8 @@ class DesignBounds:
         Each finger its own groove (needs a ``jaw`` other than ``"straight"``).
     jaw_low, jaw_high
         Bounds of one finger's jaw columns (:data:`JAW_COLUMNS` of ``jaw``, in that order;
-        default ``None``: the kind's :data:`JAW_BOUNDS`), the same for both fingers;
-        ``low < high``. :attr:`jaw_range` holds those in use.
+        default ``None``: the kind's :data:`JAW_BOUNDS`, filled in), the same for both
+        fingers; ``low < high``. :meth:`with_jaw` changes the jaws with their bounds.
     """
 
     low: tuple[float, ...] = (1.5, math.radians(10.0), 0.0, 0.05, 0.0, 0.005)
@@ -249,12 +249,10 @@ class DesignBounds:
             raise ValueError("DesignBounds.jaw_per_finger needs a jaw other than 'straight' "
                              f"(one of {JAW_KINDS[1:]})")
         columns = JAW_COLUMNS[self.jaw]
-        ranges = []
         for index, name in enumerate(("jaw_low", "jaw_high")):
             given = getattr(self, name)
-            if given is None:  # (kept None: a replaced jaw takes its own kind's defaults)
-                ranges.append(tuple(JAW_BOUNDS[self.jaw][c][index] for c in columns))
-                continue
+            if given is None:
+                given = tuple(JAW_BOUNDS[self.jaw][c][index] for c in columns)
             given = tuple(given)
             if len(given) != len(columns):
                 raise ValueError(f"DesignBounds.{name} needs {len(columns)} values for jaw "
@@ -262,15 +260,11 @@ class DesignBounds:
             vals = tuple(check_range(f"DesignBounds.{name}[{c}]", v, 0.0, _COLUMN_LIMITS[c])
                          for c, v in zip(columns, given, strict=True))
             object.__setattr__(self, name, vals)
-            ranges.append(vals)
-        # the jaw columns' bounds in use (derived: not fields)
-        object.__setattr__(self, "_jaw_lo", ranges[0])
-        object.__setattr__(self, "_jaw_hi", ranges[1])
-        for c, lo, hi in zip(columns, self._jaw_lo, self._jaw_hi, strict=True):
+        for c, lo, hi in zip(columns, self.jaw_low, self.jaw_high, strict=True):
             if not lo < hi:
                 raise ValueError(f"DesignBounds for {c}: low = {lo!r} must be smaller than "
                                  f"high = {hi!r}")
-        low = dict(zip(columns, self._jaw_lo, strict=True))
+        low = dict(zip(columns, self.jaw_low, strict=True))
         # a groove with depth needs a bottom radius or an opening (JawProfile)
         if low.get(_RADIUS, 0.0) == 0.0 and low.get(_OPENING, 0.0) == 0.0 and columns:
             raise ValueError(f"DesignBounds for jaw {self.jaw!r}: the low "
@@ -280,7 +274,8 @@ class DesignBounds:
     def with_jaw(self, jaw: str | None = None, jaw_per_finger: bool | None = None
                  ) -> DesignBounds:
         """This box with other jaws (``None``: this box's): its jaw bounds kept where the
-        kind stays, the new kind's defaults otherwise."""
+        kind stays, the new kind's defaults otherwise (``dataclasses.replace`` with another
+        ``jaw`` would keep bounds of the old kind's columns)."""
         jaw = self.jaw if jaw is None else jaw
         same = jaw == self.jaw
         return replace(self, jaw=jaw,
@@ -290,12 +285,6 @@ class DesignBounds:
                        jaw_high=self.jaw_high if same else None)
 
     # --- the columns --------------------------------------------------------------------------
-
-    @property
-    def jaw_range(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        """The low and high bounds of one finger's jaw columns in use (:attr:`jaw_low` and
-        :attr:`jaw_high`, or the kind's defaults)."""
-        return self._jaw_lo, self._jaw_hi
 
     @property
     def jaw_fields(self) -> tuple[str, ...]:
@@ -331,12 +320,12 @@ class DesignBounds:
     @property
     def low_array(self) -> np.ndarray:
         """Lower bounds (relative units) as a float64 array (:attr:`n_var`,)."""
-        return np.array((*self.low, *self._jaw_bounds(self._jaw_lo)), dtype=np.float64)
+        return np.array((*self.low, *self._jaw_bounds(self.jaw_low)), dtype=np.float64)
 
     @property
     def high_array(self) -> np.ndarray:
         """Upper bounds (relative units) as a float64 array (:attr:`n_var`,)."""
-        return np.array((*self.high, *self._jaw_bounds(self._jaw_hi)), dtype=np.float64)
+        return np.array((*self.high, *self._jaw_bounds(self.jaw_high)), dtype=np.float64)
 
     def _jaw_bounds(self, one: tuple[float, ...]) -> tuple[float, ...]:
         return one * (2 if self.jaw_per_finger else 1)
@@ -373,7 +362,7 @@ class DesignBounds:
         fit = fitting_depth(room, radius, opening)
         fit = np.where(opening == 0.0, np.minimum(fit, radius), fit)
         k = JAW_COLUMNS[self.jaw].index(_DEPTH)
-        lo, hi = self._jaw_lo[k], self._jaw_hi[k]
+        lo, hi = self.jaw_low[k], self.jaw_high[k]
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.maximum(lo, np.minimum(hi, fit / width))
 

@@ -277,11 +277,14 @@ def test_every_corner_of_the_box_is_valid_at_rest(bounds, preset):
 
 def test_other_jaws_for_a_box_keep_its_jaw_bounds_for_the_same_kind_only():
     narrow = DesignBounds(jaw="cradle", jaw_low=(0.1, 1.0, 0.2), jaw_high=(0.5, 1.5, 0.8))
-    assert narrow.with_jaw(jaw_per_finger=True).jaw_range == narrow.jaw_range
-    assert narrow.with_jaw("vee").jaw_range == tuple(
+    per_finger = narrow.with_jaw(jaw_per_finger=True)
+    assert (per_finger.jaw_low, per_finger.jaw_high) == (narrow.jaw_low, narrow.jaw_high)
+    assert per_finger.n_var == 12
+    vee = narrow.with_jaw("vee")
+    assert (vee.jaw_low, vee.jaw_high) == tuple(
         tuple(JAW_BOUNDS["vee"][c][i] for c in JAW_COLUMNS["vee"]) for i in (0, 1))
     assert DesignProblem(DISK, bounds=narrow, jaw="cradle").bounds == narrow
-    assert DesignProblem(DISK, bounds=narrow, jaw="any").bounds.jaw_low is None
+    assert DesignProblem(DISK, bounds=narrow, jaw="any").bounds == DesignBounds(jaw="any")
 
 
 def test_a_finger_too_short_for_its_groove_is_invalid_not_an_error():
