@@ -12,7 +12,7 @@ import math
 import operator
 import textwrap
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -1081,11 +1081,11 @@ def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
                bounds: DesignBounds | None = None) -> DesignBounds:
     """The design space of ``GripperDesign-v3``: ``bounds`` (default the default box) with
     the jaws ``jaw`` (one of :data:`envs.design_space.JAW_KINDS`, default ``"any"``) and
-    ``jaw_per_finger``, at their kind's default ranges."""
+    ``jaw_per_finger`` (:meth:`~envs.evaluate.DesignBounds.with_jaw`)."""
     if bounds is not None and not isinstance(bounds, DesignBounds):
         raise ValueError(f"bounds must be None or a DesignBounds, got {type(bounds).__name__}")
     base = DesignBounds() if bounds is None else bounds
-    return replace(base, jaw=jaw, jaw_per_finger=jaw_per_finger, jaw_low=None, jaw_high=None)
+    return base.with_jaw(jaw, jaw_per_finger)
 
 
 def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import vectorize
@@ -201,7 +201,8 @@ class DesignBounds:
         Each finger its own groove (needs a ``jaw`` other than ``"straight"``).
     jaw_low, jaw_high
         Bounds of one finger's jaw columns (:data:`JAW_COLUMNS` of ``jaw``, in that order;
-        default ``None``: :data:`JAW_BOUNDS`), the same for both fingers; ``low < high``.
+        default ``None``: the kind's :data:`JAW_BOUNDS`, filled in), the same for both
+        fingers; ``low < high``. :meth:`with_jaw` changes the jaws with their bounds.
     """
 
     low: tuple[float, ...] = (1.5, math.radians(10.0), 0.0, 0.05, 0.0, 0.005)
@@ -269,6 +270,19 @@ class DesignBounds:
             raise ValueError(f"DesignBounds for jaw {self.jaw!r}: the low "
                              + " or ".join(c for c in (_RADIUS, _OPENING) if c in columns)
                              + " must be > 0 (a groove needs a bottom radius or an opening)")
+
+    def with_jaw(self, jaw: str | None = None, jaw_per_finger: bool | None = None
+                 ) -> DesignBounds:
+        """This box with other jaws (``None``: this box's): its jaw bounds kept where the
+        kind stays, the new kind's defaults otherwise (``dataclasses.replace`` with another
+        ``jaw`` would keep bounds of the old kind's columns)."""
+        jaw = self.jaw if jaw is None else jaw
+        same = jaw == self.jaw
+        return replace(self, jaw=jaw,
+                       jaw_per_finger=(self.jaw_per_finger if jaw_per_finger is None
+                                       else jaw_per_finger),
+                       jaw_low=self.jaw_low if same else None,
+                       jaw_high=self.jaw_high if same else None)
 
     # --- the columns --------------------------------------------------------------------------
 

@@ -321,12 +321,7 @@ class DesignProblem:
         if joints_apart:
             self.bounds = replace(self.bounds, joints_apart=True)
         if jaw is not None or jaw_per_finger is not None:
-            # (DesignBounds validates them; its jaw bounds are the new kind's defaults)
-            self.bounds = replace(
-                self.bounds, jaw=self.bounds.jaw if jaw is None else jaw,
-                jaw_per_finger=(self.bounds.jaw_per_finger if jaw_per_finger is None
-                                else jaw_per_finger),
-                jaw_low=None, jaw_high=None)
+            self.bounds = self.bounds.with_jaw(jaw, jaw_per_finger)  # (validated there)
         self.weights = RewardWeights() if weights is None else weights
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")

@@ -17,6 +17,7 @@ import envs
 from envs.batch_inputs import _design_table, _disk_table
 from envs.batch_metrics import _columns
 from envs.design_space import (
+    JAW_BOUNDS,
     JAW_COLUMNS,
     JAW_KINDS,
     DesignBounds,
@@ -168,6 +169,23 @@ def test_rows_of_each_width_evaluate_and_a_bad_groove_spoils_its_row_only():
         evaluate_designs(np.zeros((1, 7)), DISK)
 
 
+def test_the_fem_gets_each_row_s_gripper_with_its_jaws(monkeypatch):
+    import envs.fem.designs
+
+    seen = []
+
+    def capture(scenes, *args, **kwargs):
+        seen.extend(scenes)
+        raise RuntimeError("captured")
+
+    monkeypatch.setattr(envs.fem.designs, "fem_design_grasps", capture)
+    rows = np.array([Design(*PAPER.to_array(), jaw=CRADLE, left_jaw=VEE).to_array(),
+                     Design(*PAPER.to_array(), jaw=VEE).to_array(14)])
+    with pytest.raises(RuntimeError, match="captured"):
+        evaluate_designs(rows, DISK, fidelity="fem", **KF)
+    assert [s.gripper.jaws for s in seen] == [(CRADLE, VEE), (VEE, VEE)]
+
+
 def test_scenarios_keep_one_physical_groove():
     rows = np.array([Design(*PAPER.to_array(), jaw=CRADLE, left_jaw=VEE).to_array()])
     scenarios = Scenarios.of({"radius_m": (0.06, 0.08)}, 0.002)
@@ -255,6 +273,18 @@ def test_every_corner_of_the_box_is_valid_at_rest(bounds, preset):
     room = 0.5 * ln - corner_radius(w, disk.radius_m) - mouth
     deepest = si[:, 6] >= MAX_DEPTH_OF_WIDTH * w * (1 - 1e-12)
     assert np.any(room < 1e-6 * ln) and np.any(deepest)
+
+
+def test_other_jaws_for_a_box_keep_its_jaw_bounds_for_the_same_kind_only():
+    narrow = DesignBounds(jaw="cradle", jaw_low=(0.1, 1.0, 0.2), jaw_high=(0.5, 1.5, 0.8))
+    per_finger = narrow.with_jaw(jaw_per_finger=True)
+    assert (per_finger.jaw_low, per_finger.jaw_high) == (narrow.jaw_low, narrow.jaw_high)
+    assert per_finger.n_var == 12
+    vee = narrow.with_jaw("vee")
+    assert (vee.jaw_low, vee.jaw_high) == tuple(
+        tuple(JAW_BOUNDS["vee"][c][i] for c in JAW_COLUMNS["vee"]) for i in (0, 1))
+    assert DesignProblem(DISK, bounds=narrow, jaw="cradle").bounds == narrow
+    assert DesignProblem(DISK, bounds=narrow, jaw="any").bounds == DesignBounds(jaw="any")
 
 
 def test_a_finger_too_short_for_its_groove_is_invalid_not_an_error():

@@ -85,7 +85,7 @@ def test_a_displacement_uses_up_the_rest_clearance_at_cos_theta():
     tight = R070.rows()
     tight[0, DESIGN_FIELDS.index("rest_angle_rad")] = 0.3
     for x in (0.0, 0.3 * limit, -0.3 * limit):
-        tight[0, -1] = x
+        tight[0, S_OFFSET_X] = x
         assert rest_codes(tight)[0] == REST_OVERLAP
 
 
