@@ -247,3 +247,43 @@ def test_vee_flanks_are_two_contacts_each_capped_by_its_force():
         capped = k_flat * (math.sqrt(flanks[0]) + math.sqrt(flanks[1]))
         assert share == pytest.approx(capped, rel=1e-12)
         assert share > k_flat * math.sqrt(sum(flanks)) * 1.2
+
+
+def test_solver_gap_smooths_only_the_ridge_of_a_vee():
+    """The solver's gap to a V-grooved finger is the kernel's, except in a cone about the V's
+    centre line above its bottom, where it is a smooth lower bound: its gradient matches
+    central differences in and around the groove (a sharp V, a rounded one, a narrow one), and
+    it is the kernel's gap and normal at every point on the surface."""
+    from envs.model.jaw import jaw_gap, pack_groove
+    from envs.model.layout import N_PARAMS, P_GROOVE0, P_HW, P_LMAX, P_RHO
+    from envs.solver.contact import _solver_jaw_gap
+
+    rng = np.random.default_rng(3)
+    for opening, bottom in ((math.radians(160.0), 0.0), (math.radians(90.0), 0.01),
+                            (math.radians(30.0), 0.0)):
+        prm = np.zeros(N_PARAMS)
+        prm[P_HW], prm[P_LMAX], prm[P_RHO] = 0.5, 10.0, 0.02
+        depth = 0.7
+        pack_groove(depth, bottom, opening, 5.0, 0.02, 1.0, prm, P_GROOVE0)
+        lowered = 0
+        for _ in range(4000):
+            s = 5.0 + rng.uniform(-2.0, 2.0)
+            m = 0.5 - rng.uniform(-0.5, depth + 0.05)
+            g = _solver_jaw_gap(s, m, 0, prm)
+            ref = jaw_gap(s, m, 10.0, 0.5, 0.02, prm, P_GROOVE0)
+            assert g[0] <= ref[0] + 1e-15
+            lowered += g[0] < ref[0]
+            h = 1e-7
+            fd_s = (_solver_jaw_gap(s + h, m, 0, prm)[0] - _solver_jaw_gap(s - h, m, 0, prm)[0])
+            fd_m = (_solver_jaw_gap(s, m + h, 0, prm)[0] - _solver_jaw_gap(s, m - h, 0, prm)[0])
+            assert abs(fd_s / (2 * h) - g[1]) < 1e-6 and abs(fd_m / (2 * h) - g[2]) < 1e-6
+            if abs(ref[0]) < 1e-3:
+                assert g == ref  # at a surface: the kernel's own gap and normal
+        assert lowered > 0
+
+
+def test_baselines_refuse_a_grooved_jaw():
+    """The baselines model straight jaws only: a grooved one is refused by name."""
+    scene = BASE.with_changes(jaw=JawProfile.vee(math.radians(120.0), 0.004, 0.05))
+    with pytest.raises(ValueError, match="method = 'newton'"):
+        simulate(scene, 0.1, method="slsqp")

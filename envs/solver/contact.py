@@ -16,9 +16,12 @@ from ..model.geometry import finger_axes
 from ..model.jaw import jaw_gap
 from ..model.layout import (
     C_MOUTH_TIP,
+    G_CENTRE,
+    G_COS,
     G_DEPTH,
     G_MOUTH,
     G_POSITION,
+    G_SIN,
     KIND_CORNER,
     KIND_FACE,
     N_BAR_CORNERS,
@@ -71,6 +74,55 @@ def _corner_local(j, c, prm):
     return sc, hc
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _solver_jaw_gap(s, m, j, prm):
+    """Gap of the point (s, m) to grooved finger j for the solver: the shared kernel
+    :func:`envs.model.jaw.jaw_gap`, (g, g_s, g_m, g_ss, g_sm, g_mm), with the ridge of a V's
+    centre line smoothed.
+
+    Why: inside a V-groove (or a rounded V, above its bottom arc's centre) the distance to the
+    solid is the smaller of the two flanks' distances, ``S - cb |u|`` with ``u = s - a`` across
+    the centre line, ``S`` the mean of the two and ``cb`` the cosine of the half opening
+    angle: its gradient flips on the centre line. A contour point hovering above a V's bottom
+    (a disk resting on both flanks) sits there, and its barrier term made the interior-point
+    steps zig-zag across the ridge. Within ``cb |u| < w`` of the centre line, ``w = sb H / 2``
+    (``sb`` the sine of the half angle, ``H`` the height above the arc's centre), ``|t|``
+    (``t = cb u``) is replaced by its C1 upper bound ``t^2 / (2 w) + w / 2`` (Huber's): the
+    gap there is a lower bound of the distance, above ``R_g + sb H / 2 - rho > 0``, so no
+    admissible point is lost and no answer penetrates; a point touching a flank
+    (``cb |u| = S > w``) is outside that cone, so contacts and their normals are exact. ``w``
+    vanishes at the arc's centre (where the bottom arc takes over) and the cone stays clear of
+    the mouth (``cb u_E >= sb h``), so the gap stays continuous with a continuous gradient.
+    """
+    base = _groove_base(j)
+    hw = prm[P_HW]
+    g, g_s, g_m, g_ss, g_sm, g_mm = jaw_gap(s, m, prm[P_LMAX], hw, prm[P_RHO], prm, base)
+    sb = prm[base + G_SIN]
+    height = prm[base + G_CENTRE] - (hw - m)  # H: above the bottom arc's centre
+    if not (sb > 0.0 and height > 0.0):
+        return g, g_s, g_m, g_ss, g_sm, g_mm
+    cb = prm[base + G_COS]
+    if g_ss != 0.0 or g_sm != 0.0 or g_mm != 0.0 or g_m != sb or abs(g_s) != cb:
+        return g, g_s, g_m, g_ss, g_sm, g_mm  # not on a flank's side of the ridge
+    w = 0.5 * sb * height
+    t = cb * (s - prm[base + G_POSITION])
+    if not abs(t) < w:
+        return g, g_s, g_m, g_ss, g_sm, g_mm
+    # the flank distance is S - |t|, S = g + rho + |t|; S depends on the depth v = w/2 - m
+    # alone (dS/dv = -sb), w too (dw/dv = -sb / 2)
+    huber = t * t / (2.0 * w) + 0.5 * w
+    f_t = t / w
+    f_w = 0.5 - t * t / (2.0 * w * w)
+    value = g + abs(t) - huber
+    # derivatives in (u, v), then (s, m): d/ds = d/du, d/dm = -d/dv
+    d_u = -f_t * cb
+    d_v = -sb + 0.5 * sb * f_w
+    d_uu = -cb * cb / w
+    d_uv = 0.5 * sb * cb * (-t / (w * w))
+    d_vv = -0.25 * sb * sb * t * t / (w * w * w)
+    return value, d_u, -d_v, d_uu, -d_uv, d_vv
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _axis_offset(j, prm):
     """Offset along the inward normal of the line that the anti-tunnelling tests treat as the
@@ -105,8 +157,7 @@ def _face_eval(q, i, j, sj, cj, prm, grad, hess, want_hess):
     rho = prm[P_RHO]
     if _grooved(j, prm):
         # a jaw groove: the shared gap kernel, then the chain rule to (qx, qy, theta)
-        g, g_s, g_m, g_ss, g_sm, g_mm = jaw_gap(s, m, prm[P_LMAX], prm[P_HW], rho, prm,
-                                                _groove_base(j))
+        g, g_s, g_m, g_ss, g_sm, g_mm = _solver_jaw_gap(s, m, j, prm)
         if g_s == 0.0 and g_m == 0.0:
             # inside the core: deep penetration (never at a feasible point)
             for a in range(3):
@@ -333,7 +384,7 @@ def _face_gap(q, i, j, sj, cj, prm):
     ex, ey, nx, ny, s, m = _finger_coords(q, i, j, sj, cj, prm)
     rho = prm[P_RHO]
     if _grooved(j, prm):
-        return jaw_gap(s, m, prm[P_LMAX], prm[P_HW], rho, prm, _groove_base(j))[0]
+        return _solver_jaw_gap(s, m, j, prm)[0]
     hc = prm[P_HW] - rho
     ds = s - min(max(s, 0.0), prm[P_LMAX])
     dm = m - min(max(m, -hc), hc)

@@ -270,6 +270,10 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
     if m > 1 and stiffness_rule != "van_gelder":
         raise ValueError(f"n_rings = {m} needs stiffness_rule = 'van_gelder', got "
                          f"{stiffness_rule!r}")
+    if method != "newton" and any(jaw.depth_m > 0.0 for jaw in scene.gripper.jaws):
+        # the baselines' gaps are the straight bar's: a groove would be ignored
+        raise ValueError(f"a grooved jaw (depth_m > 0) needs method = 'newton' (the baselines "
+                         f"model straight jaws only), got method = {method!r}")
     return spec
 
 

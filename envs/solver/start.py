@@ -149,9 +149,11 @@ def _close_to_contact(x, n, prm):
     equilibrium without contact if that comes first; a finger already closer is left alone.
 
     The finger is taken as the box 0 <= s <= l + rho, |m| <= w/2 about its joint (it holds
-    the rounded bar): closing, a contour point meets the box, or a corner of the box's tip end
-    meets a contour edge. Nothing is changed where a contour point lies within w/2 of a joint
-    or the closed start is not strictly clear of the finger (:func:`_clear_of_finger`).
+    the rounded bar, and a grooved finger too: a groove only removes material, so the box is
+    met first and the start stays short of the groove's contact): closing, a contour point
+    meets the box, or a corner of the box's tip end meets a contour edge. Nothing is changed
+    where a contour point lies within w/2 of a joint or the closed start is not strictly clear
+    of the finger (:func:`_clear_of_finger`).
     """
     nb = 2 * n
     hw = prm[P_HW]
