@@ -26,6 +26,41 @@ from .contact import (
 )
 
 
+def _corner_terms(poly: np.ndarray, c: np.ndarray, radius_m: float
+                  ) -> list[tuple[float, str, int, float]]:
+    """The penalty terms of a jaw corner against the rim polygon: ``(gap, kind, index, sign)``
+    each, ``kind`` and ``index`` the rim feature (:func:`_corner_feature`) and ``sign`` that of
+    its distance function (the gap is ``sign * distance - radius_m``).
+
+    A sharp corner (``radius_m = 0``, the tips) has one term, its signed distance to the
+    nearest feature. A rounded corner (the groove's mouth edges) whose centre is outside the
+    rim has one term per rim segment within ``radius_m`` of it (its distance to that segment):
+    where the rim wraps around the edge, the corner presses the two segments on either side of
+    a node at once, and the sum of their terms stays smooth as it slides (the nearest of them
+    alone would switch from one to the other, a kink Newton's method cannot converge on). A
+    rounded corner whose centre has entered the rim keeps the signed distance's one term.
+    """
+    centre_gap, kind, idx = _corner_feature(poly, c)
+    if radius_m == 0.0 or centre_gap <= 0.0:
+        # the segment's distance function is signed itself, the vertex's takes the sign
+        sign = 1.0 if kind == "segment" else math.copysign(1.0, centre_gap)
+        return [(centre_gap - radius_m, kind, idx, sign)]
+    t = np.roll(poly, -1, axis=0) - poly
+    xi = np.clip(np.sum(t * (c - poly), axis=1) / np.sum(t * t, axis=1), 0.0, 1.0)
+    dist = np.linalg.norm(c - (poly + xi[:, None] * t), axis=1)
+    terms = []
+    for i in np.flatnonzero(dist < radius_m):
+        if 0.0 < xi[i] < 1.0:
+            # the signed distance to the segment's line is positive outside the rim
+            d_line = (c[0] - poly[i, 0]) * t[i, 1] - (c[1] - poly[i, 1]) * t[i, 0]
+            terms.append((float(dist[i]) - radius_m, "segment", int(i),
+                          math.copysign(1.0, d_line)))
+        else:
+            vertex = int(i) if xi[i] == 0.0 else (int(i) + 1) % poly.shape[0]
+            terms.append((float(dist[i]) - radius_m, "vertex", vertex, 1.0))
+    return terms
+
+
 class _System:
     """Total potential of body + contact + scalar unknowns, with free-dof bookkeeping."""
 
@@ -129,36 +164,38 @@ class _System:
                 qd = self.n + corner.qi
                 c, dc, d2c = corner.evaluate(float(x[qd]))
                 lam_c = self.corner_multipliers[ci]
-                centre_gap, kind, idx = _corner_feature(poly, c)
-                trial = lam_c - k * (centre_gap - corner.radius_m)
-                if trial <= 0:
-                    energy -= lam_c**2 / (2 * k)
-                    continue
-                corner_forces[ci] = trial
-                energy += (trial**2 - lam_c**2) / (2 * k)
-                if kind == "segment":
-                    nodes = [poly_idx[idx], poly_idx[(idx + 1) % poly_idx.size]]
-                    z = np.concatenate((poly[idx], poly[(idx + 1) % poly_idx.size], c))
-                    _, gz, hz = _with_hessian(_segment_gap_gradient, z)
-                else:
-                    nodes = [poly_idx[idx]]
-                    z = np.concatenate((poly[idx], c))
-                    _, gz, hz = _with_hessian(_vertex_distance_gradient, z,
-                                              math.copysign(1, centre_gap))
-                # chain rule from (rim nodes, corner position) to (rim dofs, q)
-                nv = 2 * len(nodes)
-                dg = np.concatenate((gz[:nv], [gz[nv:] @ dc]))
-                dofs = np.concatenate([self.rim.dofs[i] for i in nodes] + [np.array([qd])])
-                np.add.at(grad, dofs, -trial * dg)
-                if want_tangent:
-                    d2g = np.empty((nv + 1, nv + 1))
-                    d2g[:nv, :nv] = hz[:nv, :nv]
-                    d2g[:nv, nv] = d2g[nv, :nv] = hz[:nv, nv:] @ dc
-                    d2g[nv, nv] = dc @ hz[nv:, nv:] @ dc + gz[nv:] @ d2c
-                    local = k * np.outer(dg, dg) - trial * d2g
-                    rows.append(np.repeat(dofs, nv + 1))
-                    cols.append(np.tile(dofs, nv + 1))
-                    vals.append(local.ravel())
+                terms = _corner_terms(poly, c, corner.radius_m)
+                if corner.radius_m > 0.0:
+                    lam_c = 0.0  # a rounded corner's terms are pure penalty
+                for gap, kind, idx, sign in terms:
+                    trial = lam_c - k * gap
+                    if trial <= 0:
+                        energy -= lam_c**2 / (2 * k)
+                        continue
+                    corner_forces[ci] += trial
+                    energy += (trial**2 - lam_c**2) / (2 * k)
+                    if kind == "segment":
+                        nodes = [poly_idx[idx], poly_idx[(idx + 1) % poly_idx.size]]
+                        z = np.concatenate((poly[idx], poly[(idx + 1) % poly_idx.size], c))
+                        _, gz, hz = _with_hessian(_segment_gap_gradient, z, sign)
+                    else:
+                        nodes = [poly_idx[idx]]
+                        z = np.concatenate((poly[idx], c))
+                        _, gz, hz = _with_hessian(_vertex_distance_gradient, z, sign)
+                    # chain rule from (rim nodes, corner position) to (rim dofs, q)
+                    nv = 2 * len(nodes)
+                    dg = np.concatenate((gz[:nv], [gz[nv:] @ dc]))
+                    dofs = np.concatenate([self.rim.dofs[i] for i in nodes] + [np.array([qd])])
+                    np.add.at(grad, dofs, -trial * dg)
+                    if want_tangent:
+                        d2g = np.empty((nv + 1, nv + 1))
+                        d2g[:nv, :nv] = hz[:nv, :nv]
+                        d2g[:nv, nv] = d2g[nv, :nv] = hz[:nv, nv:] @ dc
+                        d2g[nv, nv] = dc @ hz[nv:, nv:] @ dc + gz[nv:] @ d2c
+                        local = k * np.outer(dg, dg) - trial * d2g
+                        rows.append(np.repeat(dofs, nv + 1))
+                        cols.append(np.tile(dofs, nv + 1))
+                        vals.append(local.ravel())
         return energy, grad, (rows, cols, vals), forces, corner_forces
 
     def energy(self, x: np.ndarray, load: float) -> float:
@@ -231,24 +268,30 @@ class _System:
             forces.append(f[act])
         if self.corners:
             poly = p[self.rim_order]
-            for corner, f in zip(self.corners, corner_forces, strict=True):
+            k = self.k_corner
+            for corner, lam_c, f in zip(self.corners, self.corner_multipliers, corner_forces,
+                                        strict=True):
                 if not f > 0:
                     continue
                 c = corner.evaluate(float(x[self.n + corner.qi]))[0]
-                gap, kind, idx = _corner_feature(poly, c)
-                if kind == "segment":
-                    ends = [idx, (idx + 1) % poly.shape[0]]
-                    _, gz = _segment_gap_gradient(np.concatenate((poly[ends[0]], poly[ends[1]],
-                                                                  c)))
-                else:
-                    ends = [idx]
-                    _, gz = _vertex_distance_gradient(np.concatenate((poly[idx], c)))
-                    gz = math.copysign(1.0, gap) * gz
-                gz = np.real(gz[: 2 * len(ends)]).reshape(-1, 2)
-                vec = f * gz  # the force on each rim node the corner presses
-                net += vec.sum(axis=0)
-                moment += float(np.sum(poly[ends, 0] * vec[:, 1] - poly[ends, 1] * vec[:, 0]))
-                total = vec.sum(axis=0)
+                lam = 0.0 if corner.radius_m > 0.0 else lam_c
+                total = np.zeros(2)
+                for gap, kind, idx, sign in _corner_terms(poly, c, corner.radius_m):
+                    trial = lam - k * gap
+                    if not trial > 0:
+                        continue
+                    if kind == "segment":
+                        ends = [idx, (idx + 1) % poly.shape[0]]
+                        _, gz = _segment_gap_gradient(np.concatenate((poly[ends[0]],
+                                                                      poly[ends[1]], c)))
+                    else:
+                        ends = [idx]
+                        _, gz = _vertex_distance_gradient(np.concatenate((poly[idx], c)))
+                    gz = sign * np.real(gz[: 2 * len(ends)]).reshape(-1, 2)
+                    vec = trial * gz  # the force on each rim node the corner presses
+                    net += vec.sum(axis=0)
+                    moment += float(np.sum(poly[ends, 0] * vec[:, 1] - poly[ends, 1] * vec[:, 0]))
+                    total += vec.sum(axis=0)
                 size = float(np.linalg.norm(total))
                 normals.append((total / size)[None, :])
                 # a rounded corner touches the rim its radius from its centre, along the push
