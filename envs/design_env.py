@@ -551,7 +551,7 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
         scene = chosen.to_scene(disk, **spring)
     except ValueError as exc:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
-        draw_design(fig.add_subplot(), design[:N_DESIGN], disk.radius_m,
+        draw_design(fig.add_subplot(), design, disk.radius_m,
                     title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
         return figure_rgb_array(fig)
     key = (tuple(design.tolist()), disk, model, tuple(spring.items()))

@@ -39,9 +39,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Arc, Circle, Polygon
 
 from envs.model.geometry import corner_radius
-from envs.model.jaw import JAW_FIELDS, LEFT_JAW_FIELDS, STRAIGHT, JawProfile, jaws_of_row
+from envs.model.jaw import STRAIGHT, JawProfile, jaws_of_row
 from envs.render import V_BULGE, V_X, V_Y, finger_outline, finger_to_drawing, outline_polygon
-from envs.scene import DESIGN_FIELDS
+from envs.scene import DESIGN_FIELDS, design_row
 
 __all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of", "write_dxf",
            "dxf_available", "DXF_LAYERS", "jaws_of_design", "jaw_rows", "JAW_ROWS",
@@ -179,28 +179,6 @@ def _finger_outline_mm(length: float, angle: float, offset: float, width: float,
     return outline
 
 
-def _design_row(design: dict[str, Any]) -> list[float]:
-    """A design dict as a design row: the :data:`envs.scene.DESIGN_FIELDS`, then the jaw
-    columns it has (:data:`envs.model.jaw.JAW_FIELDS`, then
-    :data:`~envs.model.jaw.LEFT_JAW_FIELDS`): 6, 10 or 14 numbers.
-
-    Raises
-    ------
-    ValueError
-        For a design with some of a finger's jaw fields but not all.
-    """
-    values = [float(design[k]) for k in DESIGN_FIELDS]
-    for names in (JAW_FIELDS, LEFT_JAW_FIELDS):
-        given = [k for k in names if k in design]
-        if not given:
-            break
-        if len(given) < len(names):
-            raise ValueError(f"design has {given} but lacks "
-                             f"{[k for k in names if k not in design]}")
-        values += [float(design[k]) for k in names]
-    return values
-
-
 def jaws_of_design(design: dict[str, Any]) -> tuple[JawProfile, JawProfile]:
     """The right and the left finger's jaw profiles of a design dict: by the names of
     :data:`envs.model.jaw.JAW_FIELDS` (both fingers) and :data:`~envs.model.jaw.LEFT_JAW_FIELDS`
@@ -211,7 +189,7 @@ def jaws_of_design(design: dict[str, Any]) -> tuple[JawProfile, JawProfile]:
     ValueError
         For a design with some of a finger's jaw fields but not all, or a groove out of range.
     """
-    right, left = jaws_of_row(_design_row(design))
+    right, left = jaws_of_row(design_row(design))
     return right, right if left is None else left
 
 

@@ -104,8 +104,8 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
     try:
         scene = scene_of(design, obj)
     except ValueError:
-        row = design_row(design)[:N_DESIGN]  # (the bars at rest, without their grooves)
-        draw_design(ax, row, obj["radius_m"], title=title + " (invalid)", length_unit="mm")
+        draw_design(ax, design_row(design), obj["radius_m"], title=title + " (invalid)",
+                    length_unit="mm")
         return
     res = simulate(scene, design["torque_nm"], **model_of(obj))
     draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend,
@@ -170,7 +170,7 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
         scene = scene_of(result.best_design, obj)
     except ValueError:
         fig = Figure(figsize=(5.5, 5.5), dpi=100)
-        row = design_row(result.best_design)[:N_DESIGN]
+        row = design_row(result.best_design)
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)",
                     length_unit="mm")
         return _save(fig, path)

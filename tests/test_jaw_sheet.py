@@ -269,7 +269,7 @@ def test_a_design_without_jaw_fields_keeps_todays_sheet(tmp_path):
 
 
 def test_bad_jaw_fields_are_named():
-    with pytest.raises(ValueError, match="lacks"):
+    with pytest.raises(ValueError, match="needs all of .*missing .jaw_bottom_radius_m."):
         build_sheet({**DESIGN, "jaw_depth_m": 0.003}, OBJ)
     # a cradle wider than the finger is long
     with pytest.raises(ValueError, match="the right finger's jaw: jaw position_m"):
