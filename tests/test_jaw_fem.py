@@ -413,3 +413,29 @@ def test_fem_fidelity_scenes_carry_the_rows_jaws():
     cols = SceneColumns.from_rows(np.vstack([scene.rows(0.1), R070.rows(0.1)]))
     assert _with_jaws(R070, cols, 0).gripper.jaws == (scene.gripper.jaw, left)
     assert _with_jaws(R070, cols, 1).gripper.jaws == (STRAIGHT, STRAIGHT)
+
+
+def test_rounded_corner_presses_both_segments_of_a_notch_smoothly():
+    """A rounded corner in a notch of the rim (the rim wrapped around a groove's edge) presses
+    both segments at once; its penalty energy is smooth as it slides across the node, where
+    the nearest segment alone would switch (a kink in the energy's slope)."""
+    from envs.fem.system import _corner_terms
+
+    # counter-clockwise, a notch (reflex vertex) at (1, 1.8) in the top edge
+    poly = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [1.0, 1.8], [0.0, 2.0]])
+    radius = 0.1
+
+    def energy(cx, all_terms=True):
+        c = np.array([cx, 1.85])
+        terms = _corner_terms(poly, c, radius) if all_terms else [
+            min(_corner_terms(poly, c, radius), key=lambda t: t[0] + radius)]
+        return sum(0.5 * min(gap, 0.0) ** 2 for gap, *_ in terms)
+
+    terms = _corner_terms(poly, np.array([1.0, 1.85]), radius)
+    assert sorted(kind for _, kind, *_ in terms) == ["segment", "segment"]
+    h, d = 1e-7, 1e-4
+    slope = [(energy(x + h) - energy(x - h)) / (2 * h) for x in (1.0 - d, 1.0 + d)]
+    near = [(energy(x + h, False) - energy(x - h, False)) / (2 * h) for x in (1.0 - d, 1.0 + d)]
+    assert abs(slope[1] - slope[0]) < 1e-3 * abs(near[1] - near[0])
+    # a sharp corner keeps its one signed term (the tips)
+    assert len(_corner_terms(poly, np.array([1.0, 1.85]), 0.0)) == 1
