@@ -439,3 +439,20 @@ def test_rounded_corner_presses_both_segments_of_a_notch_smoothly():
     assert abs(slope[1] - slope[0]) < 1e-3 * abs(near[1] - near[0])
     # a sharp corner keeps its one signed term (the tips)
     assert len(_corner_terms(poly, np.array([1.0, 1.85]), 0.0)) == 1
+
+
+def test_grooved_results_round_trip_the_cache(tmp_path, monkeypatch):
+    """A grooved grasp is cached under its own key (the jaws are inputs) with its capped
+    shares; a result cached before the shares were stored reads them as NaN."""
+    monkeypatch.setenv("PSM_GRASP_CACHE", str(tmp_path))
+    scene, onset = _cradle_scene()
+    h = scene.disk.radius_m / 6
+    (first,) = fem.fem_grasp(scene, [2.0 * onset], mesh_size_m=h)
+    (again,) = fem.fem_grasp(scene, [2.0 * onset], mesh_size_m=h)
+    assert again.from_cache and not first.from_cache and again == first
+    assert np.all(np.isfinite(again.contact_shares))
+    (straight,) = fem.fem_grasp(R070, [2.0 * onset], mesh_size_m=h)
+    assert not straight.from_cache  # another key
+    old = first.to_json()
+    del old["contact_shares"]
+    assert np.all(np.isnan(fem.FemResult.from_json(old).contact_shares))

@@ -156,7 +156,8 @@ def fem_grasp(
         "al_iterations": int(al_iterations),
     }
     if any(jaw.depth_m > 0.0 for jaw in grip.jaws):  # (straight jaws keep their keys)
-        inputs["jaws"] = [jaw_row(jaw) for jaw in grip.jaws]
+        # (lists: the entry's inputs are compared after a JSON round trip)
+        inputs["jaws"] = [list(jaw_row(jaw)) for jaw in grip.jaws]
     if payload > 0.0:  # (keys of results without a payload stay as they were)
         inputs["payload_n"] = payload
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
