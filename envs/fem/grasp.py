@@ -1,6 +1,7 @@
 """The torque-controlled grasp: :func:`fem_grasp` (validation, cache) and its solve.
 
-Builds the grasp mesh with its rigid hub, the two jaw faces and tip corners, the torsion-spring
+Builds the grasp mesh with its rigid hub, the two jaws (flat faces or grooved solids) and their
+corners, the torsion-spring
 potential of the fingers with the closed-jaw stop, and walks the torque ramp, one
 :class:`~envs.fem.result.FemResult` per torque.
 """
@@ -73,6 +74,9 @@ def fem_grasp(
     ----------
     scene
         Gripper and disk. ``disk.stiffness_scale`` is ignored (the FEM uses the physical ``E``).
+        A finger with a groove (``Gripper.jaws``, :class:`envs.model.jaw.JawProfile`) presses
+        the rim with its grooved solid (:func:`envs.model.jaw.jaw_gap`) and the groove's rounded
+        mouth edges (:mod:`envs.fem.contact`).
         The hub holds the disk where it was placed, at ``disk.center_m`` (off the axis when
         ``disk.offset_x_m`` is not 0).
     torques_nm
