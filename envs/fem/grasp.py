@@ -1,9 +1,8 @@
 """The torque-controlled grasp: :func:`fem_grasp` (validation, cache) and its solve.
 
 Builds the grasp mesh with its rigid hub, the two jaws (flat faces or grooved solids) and their
-corners, the torsion-spring
-potential of the fingers with the closed-jaw stop, and walks the torque ramp, one
-:class:`~envs.fem.result.FemResult` per torque.
+corners, the torsion-spring potential of the fingers with the closed-jaw stop, and walks the
+torque ramp, one :class:`~envs.fem.result.FemResult` per torque.
 """
 
 from __future__ import annotations
@@ -298,8 +297,11 @@ def _solve_grasp(
             act = valid & (f > 0)
             if np.any(act):
                 pen = max(pen, float(np.max(-g[act])))
-        corner_pen = (corner_forces - system.corner_multipliers) / system.k_corner
-        pen = max(pen, float(np.max(np.where(corner_forces > 0, corner_pen, 0.0))))
+        # a tip's penetration from its force; a rounded mouth edge's (pure penalty, maybe on
+        # two rim segments) from its geometry
+        tip_pen = (tip - system.corner_multipliers[:2]) / system.k_corner
+        pen = max(pen, float(np.max(np.where(tip > 0, tip_pen, 0.0))),
+                  system.rounded_corner_penetration(x))
         extents, shares = rim_contact_shares(scene, rim, order, system.rim_positions(x),
                                              forces[:2], x[n:])
         fmat = body.deformation_gradient(x[:n])
