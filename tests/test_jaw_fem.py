@@ -334,6 +334,21 @@ def test_fitted_cradle_touches_along_its_arc_at_a_small_torque(cradle):
     assert pressure[inner].min() > 0.2 * pressure[inner].max()
 
 
+def test_fitted_cradle_is_not_capped_when_pressed_hard():
+    """Pressed hard, the fitted cradle's disk also presses the cradle's rounded mouth edges and
+    the face beyond: still one conforming contact, its share its extent (the edges' nodes do
+    not make the cradle's curvature look flatter), at least the arc."""
+    scene, onset = _cradle_scene()
+    disk, jaw = scene.disk, scene.gripper.jaw
+    arc = 2 * math.asin(jaw.mouth_half_width_m / disk.radius_m) / (2 * math.pi)
+    results, system, *_ = _solve(scene, [20.0 * onset, 60.0 * onset])
+    spacing = 1.0 / system.rim.dofs.shape[0]
+    for res in results:
+        assert res.converged
+        assert res.contact_shares == res.contact_fractions
+        assert res.contact_shares[0] > arc - 2 * spacing
+
+
 def test_vee_flanks_both_carry_forces_in_statics(vee):
     """A V-groove holds the disk on both flanks, each node's force along its flank's normal;
     each finger's moment balance about its joint and the disk's force balance with the hub
