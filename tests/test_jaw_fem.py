@@ -334,6 +334,21 @@ def test_fitted_cradle_touches_along_its_arc_at_a_small_torque(cradle):
     assert pressure[inner].min() > 0.2 * pressure[inner].max()
 
 
+def test_fitted_cradle_is_not_capped_when_pressed_hard():
+    """Pressed hard, the fitted cradle's disk also presses the cradle's rounded mouth edges and
+    the face beyond: still one conforming contact, its share its extent (the edges' nodes do
+    not make the cradle's curvature look flatter), at least the arc."""
+    scene, onset = _cradle_scene()
+    disk, jaw = scene.disk, scene.gripper.jaw
+    arc = 2 * math.asin(jaw.mouth_half_width_m / disk.radius_m) / (2 * math.pi)
+    results, system, *_ = _solve(scene, [20.0 * onset, 60.0 * onset])
+    spacing = 1.0 / system.rim.dofs.shape[0]
+    for res in results:
+        assert res.converged
+        assert res.contact_shares == res.contact_fractions
+        assert res.contact_shares[0] > arc - 2 * spacing
+
+
 def test_vee_flanks_both_carry_forces_in_statics(vee):
     """A V-groove holds the disk on both flanks, each node's force along its flank's normal;
     each finger's moment balance about its joint and the disk's force balance with the hub
@@ -413,3 +428,46 @@ def test_fem_fidelity_scenes_carry_the_rows_jaws():
     cols = SceneColumns.from_rows(np.vstack([scene.rows(0.1), R070.rows(0.1)]))
     assert _with_jaws(R070, cols, 0).gripper.jaws == (scene.gripper.jaw, left)
     assert _with_jaws(R070, cols, 1).gripper.jaws == (STRAIGHT, STRAIGHT)
+
+
+def test_rounded_corner_presses_both_segments_of_a_notch_smoothly():
+    """A rounded corner in a notch of the rim (the rim wrapped around a groove's edge) presses
+    both segments at once; its penalty energy is smooth as it slides across the node, where
+    the nearest segment alone would switch (a kink in the energy's slope)."""
+    from envs.fem.system import _corner_terms
+
+    # counter-clockwise, a notch (reflex vertex) at (1, 1.8) in the top edge
+    poly = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [1.0, 1.8], [0.0, 2.0]])
+    radius = 0.1
+
+    def energy(cx, all_terms=True):
+        c = np.array([cx, 1.85])
+        terms = _corner_terms(poly, c, radius) if all_terms else [
+            min(_corner_terms(poly, c, radius), key=lambda t: t[0] + radius)]
+        return sum(0.5 * min(gap, 0.0) ** 2 for gap, *_ in terms)
+
+    terms = _corner_terms(poly, np.array([1.0, 1.85]), radius)
+    assert sorted(kind for _, kind, *_ in terms) == ["segment", "segment"]
+    h, d = 1e-7, 1e-4
+    slope = [(energy(x + h) - energy(x - h)) / (2 * h) for x in (1.0 - d, 1.0 + d)]
+    near = [(energy(x + h, False) - energy(x - h, False)) / (2 * h) for x in (1.0 - d, 1.0 + d)]
+    assert abs(slope[1] - slope[0]) < 1e-3 * abs(near[1] - near[0])
+    # a sharp corner keeps its one signed term (the tips)
+    assert len(_corner_terms(poly, np.array([1.0, 1.85]), 0.0)) == 1
+
+
+def test_grooved_results_round_trip_the_cache(tmp_path, monkeypatch):
+    """A grooved grasp is cached under its own key (the jaws are inputs) with its capped
+    shares; a result cached before the shares were stored reads them as NaN."""
+    monkeypatch.setenv("PSM_GRASP_CACHE", str(tmp_path))
+    scene, onset = _cradle_scene()
+    h = scene.disk.radius_m / 6
+    (first,) = fem.fem_grasp(scene, [2.0 * onset], mesh_size_m=h)
+    (again,) = fem.fem_grasp(scene, [2.0 * onset], mesh_size_m=h)
+    assert again.from_cache and not first.from_cache and again == first
+    assert np.all(np.isfinite(again.contact_shares))
+    (straight,) = fem.fem_grasp(R070, [2.0 * onset], mesh_size_m=h)
+    assert not straight.from_cache  # another key
+    old = first.to_json()
+    del old["contact_shares"]
+    assert np.all(np.isnan(fem.FemResult.from_json(old).contact_shares))

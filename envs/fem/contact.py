@@ -371,9 +371,11 @@ def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
     pressed nodes) its interpolated extent, at most the Hertz width of its own force on the
     jaw's curvature under it (:func:`envs.model.contact_width.segment_hertz_cap`).
 
-    The curvature of a segment is its nodes' curvatures weighted by their forces, a rounded
-    convex edge (the groove's mouth, rounded only so that the gap is smooth) counting as flat;
-    so a cradle's arc gives ``1 / R``, a V's flank 0, each flank its own segment.
+    The curvature of a segment is its nodes' curvatures weighted by their forces, over the nodes
+    on a flat or concave part of the jaw: a node on a rounded convex edge (the groove's mouth,
+    rounded only so that the gap is smooth) does not count, and a segment on such edges alone
+    counts as flat. So a cradle's arc gives ``1 / R`` however hard the disk presses its mouth
+    edges, a V's flank 0, each flank its own segment.
     """
     disk = scene.disk
     pressed = phi > 0.0
@@ -397,11 +399,13 @@ def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
         if part > 0.0:
             extent[run[i] if pressed[i] else run[j]] += part
     total = 0.0
-    concave = np.maximum(curvature_per_m, FLAT_FACE_CURVATURE_PER_M)
+    on_face = curvature_per_m >= FLAT_FACE_CURVATURE_PER_M  # not a rounded convex edge
     for k in range(label + 1):
         members = run == k
         force = float(np.sum(forces_n[members]))
-        curvature = float(np.sum(forces_n[members] * concave[members]) / force)
+        weights = forces_n[members & on_face]
+        curvature = (float(np.sum(weights * curvature_per_m[members & on_face]) / np.sum(weights))
+                     if np.sum(weights) > 0.0 else FLAT_FACE_CURVATURE_PER_M)
         cap = segment_hertz_cap(force, curvature, disk.radius_m, disk.thickness_m,
                                 disk.youngs_modulus_pa, disk.poisson_ratio)
         total += min(float(extent[k]), cap)

@@ -1,8 +1,8 @@
 """The torque-controlled grasp: :func:`fem_grasp` (validation, cache) and its solve.
 
-Builds the grasp mesh with its rigid hub, the two jaw faces and tip corners, the torsion-spring
-potential of the fingers with the closed-jaw stop, and walks the torque ramp, one
-:class:`~envs.fem.result.FemResult` per torque.
+Builds the grasp mesh with its rigid hub, the two jaws (flat faces or grooved solids) and their
+corners, the torsion-spring potential of the fingers with the closed-jaw stop, and walks the
+torque ramp, one :class:`~envs.fem.result.FemResult` per torque.
 """
 
 from __future__ import annotations
@@ -73,6 +73,9 @@ def fem_grasp(
     ----------
     scene
         Gripper and disk. ``disk.stiffness_scale`` is ignored (the FEM uses the physical ``E``).
+        A finger with a groove (``Gripper.jaws``, :class:`envs.model.jaw.JawProfile`) presses
+        the rim with its grooved solid (:func:`envs.model.jaw.jaw_gap`) and the groove's rounded
+        mouth edges (:mod:`envs.fem.contact`).
         The hub holds the disk where it was placed, at ``disk.center_m`` (off the axis when
         ``disk.offset_x_m`` is not 0).
     torques_nm
@@ -156,7 +159,8 @@ def fem_grasp(
         "al_iterations": int(al_iterations),
     }
     if any(jaw.depth_m > 0.0 for jaw in grip.jaws):  # (straight jaws keep their keys)
-        inputs["jaws"] = [jaw_row(jaw) for jaw in grip.jaws]
+        # (lists: the entry's inputs are compared after a JSON round trip)
+        inputs["jaws"] = [list(jaw_row(jaw)) for jaw in grip.jaws]
     if payload > 0.0:  # (keys of results without a payload stay as they were)
         inputs["payload_n"] = payload
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
@@ -293,8 +297,11 @@ def _solve_grasp(
             act = valid & (f > 0)
             if np.any(act):
                 pen = max(pen, float(np.max(-g[act])))
-        corner_pen = (corner_forces - system.corner_multipliers) / system.k_corner
-        pen = max(pen, float(np.max(np.where(corner_forces > 0, corner_pen, 0.0))))
+        # a tip's penetration from its force; a rounded mouth edge's (pure penalty, maybe on
+        # two rim segments) from its geometry
+        tip_pen = (tip - system.corner_multipliers[:2]) / system.k_corner
+        pen = max(pen, float(np.max(np.where(tip > 0, tip_pen, 0.0))),
+                  system.rounded_corner_penetration(x))
         extents, shares = rim_contact_shares(scene, rim, order, system.rim_positions(x),
                                              forces[:2], x[n:])
         fmat = body.deformation_gradient(x[:n])

@@ -347,6 +347,17 @@ class _System:
                 worst = max(worst, corner.radius_m - _corner_feature(poly, c)[0])
         return worst
 
+    def rounded_corner_penetration(self, x: np.ndarray) -> float:
+        """Largest penetration [m] of a rounded jaw corner (a groove's mouth edge) into the rim,
+        0 where there is none."""
+        worst = 0.0
+        poly = self.rim_positions(x)[self.rim_order] if self.corners else None
+        for corner in self.corners:
+            if corner.radius_m > 0.0:
+                c = corner.evaluate(float(x[self.n + corner.qi]))[0]
+                worst = max(worst, corner.radius_m - _corner_feature(poly, c)[0])
+        return worst
+
     def penetration_cap(self, x: np.ndarray) -> float:
         """Largest penetration a line-search trial point may have (anti-tunnelling guard)."""
         return max(self.pen_cap_m, 2.0 * self.penetration(x))
