@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -291,3 +292,26 @@ def test_plausible_objects_pass_silently_and_carry_their_density():
         warnings.simplefilter("error", UnitSlipWarning)
         for name in ("paper-r050", "paper-r100", "forceps-a"):
             Scene.preset(name)
+
+
+def test_a_cradle_lifts_the_water_like_disk_that_the_same_straight_jaws_cannot():
+    """The paper's r = 0.07 m disk as dense as water (examples/objects/water_disk.toml: 3.02 N
+    with the lift, friction 0.5, strain limit 0.10): the optimum of ``psm-grasp optimize
+    --jaw any --budget 800`` (a cradle of 68.8 mm, 20.1 mm deep) holds and lifts it within the
+    strain limit, its grip times the friction above the payload; the same gripper with straight
+    jaws needs more friction than the disk has."""
+    from envs.object_file import load_object
+
+    obj = load_object(Path(__file__).resolve().parents[1] / "examples/objects/water_disk.toml")
+    cradle = np.array([0.29015, 1.02507, 0.041456, 0.026958, 1.20842, 0.028904,
+                       0.020079, 0.068823, 1.20201, 0.088859])
+    rows = np.stack([cradle, np.r_[cradle[:6], 0.0, 0.0, 0.0, 0.0]])
+    out = evaluate_designs(rows, obj.disk, strain_limits=obj.strain_limit,
+                           friction_coefficients=obj.friction_coefficient,
+                           torsion_stiffness_nm_per_rad=0.073)
+    assert out["payload_n"][0] == pytest.approx(3.02, rel=1e-3)
+    assert out["holds"][0] and out["required_friction"][0] < obj.friction_coefficient
+    assert out["peak_compression"][0] < obj.strain_limit
+    assert obj.friction_coefficient * out["grip_force_n"][0] > out["payload_n"][0]
+    assert out["contact_score"][0] > 0.3
+    assert not out["holds"][1] and out["required_friction"][1] > obj.friction_coefficient
