@@ -320,3 +320,23 @@ def test_check_distance_agrees_with_the_kernel():
             mine = -rho if inside else math.hypot(s - ks, m - km) - rho
             worst = max(worst, abs(mine - jaw_gap(s, m, length, hw, rho, packed, 0)[0]))
         assert worst < 1e-12, (jaw, worst)
+
+
+def test_reach_distance_sees_the_groove():
+    """A point in front of a cradle's centre, ``D`` from the face line, is ``D`` from the
+    straight bar and ``D + h`` from the grooved finger (the arc's bottom, ``h`` deep); beside
+    the groove the two agree."""
+    from envs.model.geometry import distance_to_finger_bar, finger_frame
+
+    depth, a, gap = 0.004, 0.08, 0.01
+    jaw = JawProfile.cradle(0.05, depth, a)
+    angle = 0.5
+    joint, axis, normal = finger_frame(GRIP, 0, angle)
+    front = joint + a * axis + (HW + gap) * normal
+    beside = joint + 0.15 * axis + (HW + gap) * normal
+    straight = distance_to_finger_bar(GRIP, 0, angle, front)
+    grooved = distance_to_finger_bar(GRIP, 0, angle, front, jaw, 7e-5)
+    assert straight == pytest.approx(gap, abs=1e-15)
+    assert grooved == pytest.approx(gap + depth, abs=1e-12)
+    both = distance_to_finger_bar(GRIP, 0, np.array([angle, angle]), beside, jaw, 7e-5)
+    assert both == pytest.approx([gap, gap], abs=1e-12)
