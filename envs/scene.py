@@ -29,7 +29,7 @@ from .model.defaults import (
     TPU_DENSITY_KG_M3,
 )
 from .model.energy import bulk_modulus_2d
-from .model.geometry import closed_angle_rad, distance_to_finger_bar
+from .model.geometry import closed_angle_rad, corner_radius, distance_to_finger_bar
 from .model.jaw import (
     DESIGN_WIDTHS,
     JAW_FIELDS,
@@ -381,8 +381,10 @@ class Scene:
         # this runs for every Scene an optimizer builds; the farther finger decides (a displaced
         # disk may be in reach of one finger only)
         angles = np.linspace(closed_angle_rad(g), g.rest_angle_rad, 64)
-        reach = max(float(np.min(distance_to_finger_bar(g, side, angles, d.center_m)))
-                    for side in (0, 1))
+        rounding = corner_radius(g.finger_width_m, d.radius_m)
+        reach = max(float(np.min(distance_to_finger_bar(g, side, angles, d.center_m, jaw,
+                                                        rounding)))
+                    for side, jaw in zip((0, 1), g.jaws, strict=True))
         if reach > d.radius_m:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "

@@ -287,3 +287,56 @@ def test_baselines_refuse_a_grooved_jaw():
     scene = BASE.with_changes(jaw=JawProfile.vee(math.radians(120.0), 0.004, 0.05))
     with pytest.raises(ValueError, match="method = 'newton'"):
         simulate(scene, 0.1, method="slsqp")
+
+
+def test_check_distance_agrees_with_the_kernel():
+    """The independent check's grooved-finger distance (the groove as the points near a cone,
+    the nearest of the core's boundary pieces) and the shared kernel's agree to round-off on
+    points in and around a cradle, a sharp V and a rounded V: two formulas, one solid."""
+    from envs import check
+    from envs.model.jaw import jaw_gap, pack_groove
+
+    rng = np.random.default_rng(11)
+    length, hw, rho = 0.2, 0.005, 7e-5
+    for jaw in (JawProfile.cradle(0.05, 0.004, 0.08), JawProfile.vee(math.radians(100.0),
+                                                                    0.0035, 0.08),
+                JawProfile(0.003, 0.004, math.radians(120.0), 0.08)):
+        ck = np.zeros(check.N_CK)
+        ck[check.CK_LENGTH], ck[check.CK_HALF_WIDTH], ck[check.CK_RHO] = length, hw, rho
+        base = check.CK_JAW0
+        ck[base + check.JW_DEPTH] = jaw.depth_m
+        ck[base + check.JW_BOTTOM_RADIUS] = jaw.bottom_radius_m
+        ck[base + check.JW_OPENING] = jaw.opening_angle_rad
+        ck[base + check.JW_POSITION] = jaw.position_m
+        packed = np.zeros(N_GROOVE)
+        pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m,
+                    rho, 1.0, packed, 0)
+        half = jaw.mouth_half_width_m
+        worst = 0.0
+        for _ in range(3000):
+            s = jaw.position_m + rng.uniform(-1.5, 1.5) * half
+            m = hw - rng.uniform(-0.01, jaw.depth_m * 1.2)
+            ks, km, inside = check._groove_nearest(ck, 0, s, m)
+            mine = -rho if inside else math.hypot(s - ks, m - km) - rho
+            worst = max(worst, abs(mine - jaw_gap(s, m, length, hw, rho, packed, 0)[0]))
+        assert worst < 1e-12, (jaw, worst)
+
+
+def test_reach_distance_sees_the_groove():
+    """A point in front of a cradle's centre, ``D`` from the face line, is ``D`` from the
+    straight bar and ``D + h`` from the grooved finger (the arc's bottom, ``h`` deep); beside
+    the groove the two agree."""
+    from envs.model.geometry import distance_to_finger_bar, finger_frame
+
+    depth, a, gap = 0.004, 0.08, 0.01
+    jaw = JawProfile.cradle(0.05, depth, a)
+    angle = 0.5
+    joint, axis, normal = finger_frame(GRIP, 0, angle)
+    front = joint + a * axis + (HW + gap) * normal
+    beside = joint + 0.15 * axis + (HW + gap) * normal
+    straight = distance_to_finger_bar(GRIP, 0, angle, front)
+    grooved = distance_to_finger_bar(GRIP, 0, angle, front, jaw, 7e-5)
+    assert straight == pytest.approx(gap, abs=1e-15)
+    assert grooved == pytest.approx(gap + depth, abs=1e-12)
+    both = distance_to_finger_bar(GRIP, 0, np.array([angle, angle]), beside, jaw, 7e-5)
+    assert both == pytest.approx([gap, gap], abs=1e-12)

@@ -22,8 +22,8 @@ import numpy as np
 from numba import njit, vectorize
 
 from .defaults import CORNER_ROUNDING
-from .jaw import jaw_gap
-from .layout import G_DEPTH
+from .jaw import jaw_gap, pack_groove
+from .layout import G_DEPTH, N_GROOVE
 
 __all__ = [
     "FingerBars",
@@ -180,11 +180,26 @@ def surface_curvature_per_m(g, g_s, g_m, g_ss, g_sm, g_mm):
     return -gtt / (1.0 - gap * gtt)
 
 
-def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point):
+def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point, jaw=None,
+                           rounding_m: float = 0.0):
     """Distance from ``point`` to the rectangular finger bar (0 inside) [m].
 
-    ``angle_rad`` may be an array of finger angles: one distance per angle.
+    ``angle_rad`` may be an array of finger angles: one distance per angle. ``jaw``: the
+    :class:`~envs.model.jaw.JawProfile` cut into this finger's face, its edges rounded by
+    ``rounding_m`` [m] (:func:`corner_radius`); a groove moves the surface away from a point in
+    front of it, and the distance is then the grooved finger's
+    (:func:`jaw_finger_gap`, 0 inside).
     """
+    if jaw is not None and jaw.depth_m > 0.0:
+        packed = np.zeros(N_GROOVE)
+        pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m,
+                    float(rounding_m), 1.0, packed, 0)
+        x, y = float(point[0]), float(point[1])
+        dist = np.array([max(0.0, jaw_finger_gap(
+            x, y, 0 if side == 0 else 1, float(a), gripper.joint_offset_m,
+            gripper.finger_length_m, gripper.finger_width_m, float(rounding_m), packed, 0)[0])
+            for a in np.atleast_1d(angle_rad)])
+        return float(dist[0]) if np.ndim(angle_rad) == 0 else dist
     joint, axis, normal = finger_frame(gripper, side, angle_rad)
     rx = float(point[0]) - joint[0]
     ry = float(point[1]) - joint[1]

@@ -1,6 +1,11 @@
 """Contact constraints of the compiled solver: gaps of contour points to the finger bars, of the
 rounded corners to contour edges, their gradients and Hessians, and the anti-tunnelling tests.
 
+A finger with a jaw groove takes its points' gaps from the shared kernel
+:func:`envs.model.jaw.jaw_gap` (:func:`_solver_jaw_gap`), and its groove's two rounded mouth
+edges are corners 4 and 5 (``C_MOUTH_TIP``, ``C_MOUTH_ROOT``); a straight bar keeps its own
+fast path and never has those corners as candidates.
+
 Constraint m has a kind (0 face, 1 corner, 2 stop), a finger j and an index (point i, or corner
 c and edge k packed as c n + k). The gaps are distances, positive again on the far side of a
 thin bar or an edge, so line-search steps that would jump across one are refused.
