@@ -475,3 +475,19 @@ def test_gripper_design_v2_keeps_six_actions():
     assert env.action_space.shape == (6,)
     assert {k: len(v) for k, v in JAW_COLUMNS.items()} == {"straight": 0, "cradle": 3,
                                                            "vee": 3, "any": 4}
+
+
+def test_design_with_the_jaw_policy_writes_a_groove(tmp_path):
+    """``psm-grasp design --jaw any``: the shipped jaw policy's design, with its groove by name
+    in the result and the run's jaws recorded."""
+    from cli.main import main
+
+    obj = tmp_path / "bead.toml"
+    obj.write_text('[object]\nradius_m = 0.01\nyoungs_modulus_pa = 1e5\npoisson_ratio = 0.4\n'
+                   'thickness_m = 0.01\ndensity_kg_m3 = 100\n')
+    code = main(["design", "--object", str(obj), "--jaw", "any", "--no-progress", "--out",
+                 str(tmp_path / "out")])
+    assert code in (0, 3)
+    result = json.loads((tmp_path / "out" / "design_result.json").read_text())
+    assert result["extra"]["jaw"] == "any"
+    assert list(result["best_design"]) == list(design_fields(10))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from cli.main import main
-from envs import DesignBounds
+from envs import DesignBounds, Scene
 from envs.design_env import evaluate_objects
 from envs.object_file import load_object
 from optim import DesignProblem, optimize
@@ -182,3 +182,23 @@ def test_the_policy_refuses_what_it_cannot_answer(tmp_path, capsys, monkeypatch)
     problem = DesignProblem(spec.disk, bounds=DesignBounds(high=(7.0, 1.0, 0.6, 0.4, 0.3, 1.2)))
     with pytest.raises(ValueError, match="is not the one the policy designs in"):
         load_policy().run(problem)
+
+
+def test_the_shipped_jaw_policy_designs_a_groove_in_one_forward_pass():
+    """``load_policy(jaw="any")``: the shipped policy of GripperDesign-v3's action space gives
+    a design with the four jaw fields, a groove that fits its finger, for an object it never
+    saw; the straight policy's design has none."""
+    from envs.model.jaw import JAW_FIELDS, JawProfile
+    from envs.scene import Gripper
+    from optim.rl import load_policy
+
+    disk = Scene.preset("paper-r070").disk
+    policy = load_policy(jaw="any")
+    assert policy.jaw == "any" and policy.bounds.n_var == 10
+    design = policy.design(disk, 0.1, 0.5)
+    jaw = JawProfile(*(design[k] for k in JAW_FIELDS))
+    Gripper(design["finger_length_m"], design["rest_angle_rad"], design["joint_offset_m"],
+            design["finger_width_m"], 0.073, jaw=jaw)  # fits its finger (or raises)
+    assert not set(JAW_FIELDS) & set(load_policy().design(disk, 0.1, 0.5))
+    with pytest.raises(ValueError, match="jaw"):
+        load_policy(jaw="vee")

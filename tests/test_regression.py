@@ -116,3 +116,18 @@ def test_default_model_preset_answers_unchanged(corpus, gen):
         scale = max(float(np.abs(face).max()), 1e-30)
         np.testing.assert_allclose(res.contact_forces_n, face, rtol=0, atol=1e-7 * scale,
                                    err_msg=where)
+
+
+def test_shaped_jaw_answers_unchanged(corpus, gen):
+    """Random designs of the ``any`` jaw box (cradles, V-grooves, rounded grooves) with the
+    default model: inputs reproducible, answers pinned."""
+    designs, names = gen.jaw_design_inputs()
+    np.testing.assert_array_equal(designs, corpus["jaw_designs"])
+    np.testing.assert_array_equal(names, corpus["jaw_disks"])
+    out = gen.evaluate_default_designs(designs, names)
+    _assert_design_rows(out, corpus, "jaw_", ("jaw_angles_rad", "peak_strain", "reward",
+                                              "peak_compression", "contact_score",
+                                              "pin_force_n", "required_friction", "payload_n",
+                                              "grip_force_n"))
+    # not trivial: grooves are cut in most rows, and most of them grasp
+    assert (designs[:, 6] > 0).mean() > 0.9 and corpus["jaw_design_converged"].mean() > 0.9
