@@ -16,7 +16,10 @@ Stores in ``tests/data/regression_corpus.npz``:
   also the peak compression, the contact score, the pin force, the required friction (the
   default payload, the weight plus a lift at 1 g, included), the payload and the grip. The
   ring meshes have their own kernels (element energies, the scalar banded factor), which these
-  rows pin beside the fan's.
+  rows pin beside the fan's;
+* shaped jaws with the default model: 240 random designs of the ``any`` jaw box (cradles,
+  V-grooves and the rounded grooves between them, :class:`envs.DesignBounds` ``jaw="any"``) on
+  the three paper disks, with the default model's design answers (keys ``jaw_*``).
 
 ``tests/test_regression.py`` recomputes every answer and compares. Rerun this script only for
 an intended change of answers, and say in the commit which rows changed and why.
@@ -47,6 +50,8 @@ DEFAULT_DESIGN_ROWS = {"paper-r070": 300, "paper-r050": 200, "paper-r100": 200}
 DEFAULT_TORQUES_REL = (0.2, 0.5, 1.0)  # of the preset's reference torque
 DEFAULT_DESIGN_KEYS = DESIGN_KEYS + ("peak_compression", "contact_score", "pin_force_n",
                                      "required_friction", "payload_n", "grip_force_n")
+JAW_SEED = 20261127
+JAW_DESIGN_ROWS = {"paper-r070": 120, "paper-r050": 60, "paper-r100": 60}
 
 
 def design_inputs() -> tuple[np.ndarray, np.ndarray]:
@@ -87,6 +92,17 @@ def default_design_inputs() -> tuple[np.ndarray, np.ndarray]:
     rows, names = [], []
     for name, count in DEFAULT_DESIGN_ROWS.items():
         rows.append(envs.DesignBounds().sample(rng, count, envs.Scene.preset(name).disk))
+        names.extend([name] * count)
+    return np.concatenate(rows), np.array(names)
+
+
+def jaw_design_inputs() -> tuple[np.ndarray, np.ndarray]:
+    """Designs (B, 10) of the ``any`` jaw box and the preset name of each row's disk."""
+    rng = np.random.default_rng(JAW_SEED)
+    bounds = envs.DesignBounds(jaw="any")
+    rows, names = [], []
+    for name, count in JAW_DESIGN_ROWS.items():
+        rows.append(bounds.sample(rng, count, envs.Scene.preset(name).disk))
         names.extend([name] * count)
     return np.concatenate(rows), np.array(names)
 
@@ -152,11 +168,20 @@ def default_model_data() -> dict[str, np.ndarray]:
     return data
 
 
+def jaw_data() -> dict[str, np.ndarray]:
+    """The shaped jaws' rows of the corpus (keys ``jaw_*``)."""
+    designs, names = jaw_design_inputs()
+    out = evaluate_default_designs(designs, names)
+    data = {"jaw_designs": designs, "jaw_disks": names}
+    data.update({f"jaw_design_{k}": out[k] for k in DEFAULT_DESIGN_KEYS})
+    return data
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="tests/data/regression_corpus.npz")
     args = parser.parse_args()
-    data = {**fan_data(), **default_model_data()}
+    data = {**fan_data(), **default_model_data(), **jaw_data()}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
     print(f"{args.out}: {data['designs'].shape[0]} designs "
@@ -165,7 +190,9 @@ def main() -> None:
           f"{data['default_designs'].shape[0]} designs "
           f"({int(data['default_design_converged'].sum())} converged), "
           f"{data['default_case_names'].size} simulate cases "
-          f"({int(data['default_case_converged'].sum())} converged)")
+          f"({int(data['default_case_converged'].sum())} converged); shaped jaws: "
+          f"{data['jaw_designs'].shape[0]} designs "
+          f"({int(data['jaw_design_converged'].sum())} converged)")
 
 
 if __name__ == "__main__":
