@@ -101,8 +101,8 @@ def test_vectorised_assembly_matches_skfem_asm():
         assert abs(k - k_ref).max() <= 1e-12 * abs(k_ref).max()
 
 
-def test_contact_tangent_matches_finite_differences_of_gradient():
-    """Exact derivatives of the coupled (u, theta) system, faces and tip corners included."""
+def solve_spied(scene: Scene, torques, mesh_size_m: float):
+    """FEM grasps (no cache) and the system, state and load of the last Newton solve."""
     captured = {}
     original = fem.newton._newton
 
@@ -113,10 +113,15 @@ def test_contact_tangent_matches_finite_differences_of_gradient():
 
     fem.newton._newton = spy
     try:
-        fem.fem_grasp(Scene.preset("forceps-b"), [0.0004], mesh_size_m=2e-3 / 6, cache=False)
+        results = fem.fem_grasp(scene, torques, mesh_size_m=mesh_size_m, cache=False)
     finally:
         fem.newton._newton = original
-    system, x, load = captured["system"], captured["x"], captured["load"]
+    return results, captured["system"], captured["x"], captured["load"]
+
+
+def test_contact_tangent_matches_finite_differences_of_gradient():
+    """Exact derivatives of the coupled (u, theta) system, faces and tip corners included."""
+    _, system, x, load = solve_spied(Scene.preset("forceps-b"), [0.0004], 2e-3 / 6)
     _, tip = system.contact_forces(x, load)
     assert np.all(tip > 0)  # tip-corner contact is active at this state
     rng = np.random.default_rng(2)

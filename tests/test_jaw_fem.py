@@ -25,6 +25,7 @@ from envs.model.contact_width import (
 from envs.model.geometry import finger_frame
 from envs.model.jaw import STRAIGHT, JawProfile
 from envs.scene import Scene
+from tests.test_fem import solve_spied
 
 R070 = Scene.preset("paper-r070")
 RINGS = 12
@@ -74,21 +75,7 @@ def _small_cradle_scene():
 def _solve(scene: Scene, torques, rings: int = RINGS):
     """FEM grasp (no cache) on ``rings`` rings and the system and state of its last Newton
     solve."""
-    captured = {}
-    original = fem.newton._newton
-
-    def spy(system, x, load):
-        out = original(system, x, load)
-        captured.update(system=system, x=out[0], load=load)
-        return out
-
-    fem.newton._newton = spy
-    try:
-        results = fem.fem_grasp(scene, torques, mesh_size_m=scene.disk.radius_m / rings,
-                                cache=False)
-    finally:
-        fem.newton._newton = original
-    return results, captured["system"], captured["x"], captured["load"]
+    return solve_spied(scene, torques, scene.disk.radius_m / rings)
 
 
 @pytest.fixture(scope="module")
