@@ -1,13 +1,14 @@
 """What shaped jaws buy: the best robust reward with shaped jaws against straight jaws at an
 equal budget, each optimum confirmed by the FEM.
 
-For each object (a scene preset or an object file, with its scenarios and payload), CMA-ES
-designs the gripper ``--seeds`` times with ``--budget`` evaluations in the straight design
-space and in the shaped one (``--jaw``, default ``any``: the rounded V-groove family whose
-limits are the cradle and the V-groove). The better seed of each is the run's optimum as
-``psm-grasp optimize`` reports it (re-scored by the finer member, :mod:`optim.finish`) and the
-FEM re-scores it (:func:`optim.verify.verify_result`, in its worst scenario where the object
-has scenarios): confirmed when within 10 % of the FEM's reward (plus 1e-4).
+For each object (a scene preset or an object file, with its scenarios and payload), each of
+``--methods`` (default CMA-ES) designs the gripper ``--seeds`` times with ``--budget``
+evaluations in the straight design space and in the shaped one (``--jaw``, default ``any``:
+the rounded V-groove family whose limits are the cradle and the V-groove). The best run of
+each is the optimum as ``psm-grasp optimize`` reports it (re-scored by the finer member,
+:mod:`optim.finish`) and the FEM re-scores it (:func:`optim.verify.verify_result`, in its
+worst scenario where the object has scenarios): confirmed when within 10 % of the FEM's reward
+(plus 1e-4).
 
 Prints a table and writes ``out/jaw_comparison.json`` and ``out/jaw_comparison.png`` (the
 reported and the FEM's reward per object, straight against shaped).
@@ -15,6 +16,7 @@ reported and the FEM's reward per object, straight against shaped).
 Usage::
 
     python scripts/jaw_comparison.py [--budget 1000] [--seeds 2] [--jaw any]
+        [--methods cmaes nsga2]
         [--objects paper-r070 examples/objects/strawberry.toml ...] [--out out]
 """
 
@@ -56,29 +58,32 @@ def _target(name: str) -> dict:
     return {"obj": load_object(path)}
 
 
-def best_run(name: str, jaw: str, budget: int, seeds: int, out: Path):
-    """The better of ``seeds`` CMA-ES runs (finished, as ``optimize`` reports it)."""
+def best_run(name: str, jaw: str, budget: int, seeds: int, out: Path,
+             methods: tuple[str, ...] = ("cmaes",)):
+    """The best of ``seeds`` runs of each method (finished, as ``optimize`` reports it)."""
     best = None
-    for seed in range(seeds):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NoGraspWarning)
-            result, _ = run_optimize("cmaes", **_target(name), budget=budget, seed=seed,
-                                     out=out, jaw=jaw, progress=False, verbose=False,
-                                     prefix=f"{Path(name).stem}_{jaw}_{seed}")
-        if best is None or result.best_reward > best.best_reward:
-            best = result
+    for method in methods:
+        for seed in range(seeds):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", NoGraspWarning)
+                result, _ = run_optimize(method, **_target(name), budget=budget, seed=seed,
+                                         out=out, jaw=jaw, progress=False, verbose=False,
+                                         prefix=f"{Path(name).stem}_{jaw}_{method}_{seed}")
+            if best is None or result.best_reward > best.best_reward:
+                best = result
     return best
 
 
-def row_of(name: str, jaw: str, budget: int, seeds: int, out: Path) -> dict:
+def row_of(name: str, jaw: str, budget: int, seeds: int, out: Path,
+           methods: tuple[str, ...] = ("cmaes",)) -> dict:
     """One object and one design space: the reported optimum and the FEM's verdict."""
     t0 = time.perf_counter()
-    result = best_run(name, jaw, budget, seeds, out)
+    result = best_run(name, jaw, budget, seeds, out, methods)
     report = verify_result(result, top=1)
     summary = report["summary"]
     design = result.best_design
     return {
-        "object": result.object.get("name", name), "jaw": jaw,
+        "object": result.object.get("name", name), "jaw": jaw, "method": result.method,
         "reported_reward": summary["reported_reward"],
         "fem_reward": summary["fem_reward_of_reported"],
         "confirmed": bool(summary["best_confirmed"]),
@@ -121,7 +126,10 @@ def chart(rows: list[dict], path: Path, title: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--budget", type=int, default=1000, help="evaluations per run")
-    ap.add_argument("--seeds", type=int, default=2, help="CMA-ES seeds per design space")
+    ap.add_argument("--seeds", type=int, default=2, help="seeds per method and design space")
+    ap.add_argument("--methods", nargs="+", default=["cmaes"],
+                    choices=("cmaes", "ga", "nsga2", "random"),
+                    help="the methods whose best run is the optimum (default cmaes)")
     ap.add_argument("--jaw", default="any", choices=("cradle", "vee", "any"),
                     help="the shaped design space compared with the straight one")
     ap.add_argument("--objects", nargs="+", default=list(DEFAULT_OBJECTS))
@@ -135,9 +143,11 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as scratch:
         for name in args.objects:
             for jaw in ("straight", args.jaw):
-                row = row_of(name, jaw, args.budget, args.seeds, Path(scratch))
+                row = row_of(name, jaw, args.budget, args.seeds, Path(scratch),
+                             tuple(args.methods))
                 rows.append(row)
-                print(f"{row['object']:>22s} {jaw:>8s}: reported {row['reported_reward']:+.4f}"
+                print(f"{row['object']:>22s} {jaw:>8s} ({row['method']}): reported "
+                      f"{row['reported_reward']:+.4f}"
                       f"  FEM {row['fem_reward']:+.4f}  "
                       f"{'confirmed' if row['confirmed'] else 'NOT confirmed'}  contact "
                       f"{row['contact_score']:.3f}  compression {row['peak_compression']:.4f}"
@@ -149,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             gains[name] = pair[args.jaw]["fem_reward"] - pair["straight"]["fem_reward"]
     print("\nFEM reward gained by shaped jaws: "
           + ", ".join(f"{k} {v:+.4f}" for k, v in gains.items()))
-    title = (f"CMA-ES, {args.budget} evaluations x {args.seeds} seeds per design space; "
+    title = (f"best of {', '.join(args.methods)}: {args.budget} evaluations x {args.seeds} "
+             f"seeds per design space; "
              f"straight vs {args.jaw} jaws; bars: reported, marks: FEM")
     chart(rows, out / "jaw_comparison.png", title)
     payload = {"config": vars(args), "rows": rows, "fem_gain": gains,
