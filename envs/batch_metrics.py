@@ -6,7 +6,6 @@ the rest violation and the fingers' gaps.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -19,20 +18,18 @@ from .model.contact_width import (
 )
 from .model.geometry import bar_distance, corner_radius, jaw_finger_gap
 from .model.holding import (
-    H_GRIP,
     H_LIMIT,
     H_LIMIT_ANGLE,
-    H_MU,
-    H_PAYLOAD,
     H_PIN_MOMENT,
     H_PIN_X,
     H_PIN_Y,
+    HOLDING_SCALARS,
     N_HOLD,
 )
-from .model.jaw import JAW_FIELDS, JawProfile, pack_groove
+from .model.jaw import JAW_FIELDS, pack_groove
 from .model.layout import G_DEPTH, N_GROOVE
 from .model.problem import SceneColumns, _clearance
-from .scene import DESIGN_FIELDS, N_DESIGN, Design, Scene, SoftDisk
+from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
 from .solver.pipeline import BatchSolution
 from .solver.status import FEM_FAILED, OK
@@ -183,10 +180,8 @@ def _fill_holding(out: dict[str, np.ndarray], rows: np.ndarray, hold: np.ndarray
     """Write the holding rows (layout ``H_*``) of ``rows``; the limit's angle 0 where no
     in-plane payload sets the friction (the outputs are never NaN)."""
     out["pin_force_n"][rows] = hold[:, H_PIN_X : H_PIN_Y + 1]
-    out["pin_moment_nm"][rows] = hold[:, H_PIN_MOMENT]
-    out["required_friction"][rows] = hold[:, H_MU]
-    out["payload_n"][rows] = hold[:, H_PAYLOAD]
-    out["grip_force_n"][rows] = hold[:, H_GRIP]
+    for name, slot in HOLDING_SCALARS:
+        out[name][rows] = hold[:, slot]
     out["friction_limit"][rows] = hold[:, H_LIMIT].astype(np.int64)
     out["friction_limit_angle_rad"][rows] = np.nan_to_num(hold[:, H_LIMIT_ANGLE])
 
@@ -263,18 +258,6 @@ def _soft_disk(row: np.ndarray) -> SoftDisk:
     return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
 
 
-def _with_jaws(scene: Scene, cols: SceneColumns, k: int) -> Scene:
-    """The scene with the jaw profiles of row ``k`` of ``cols`` (unchanged where the columns
-    carry none: straight bars)."""
-    if cols.jaw_depth_m is None:
-        return scene
-    right, left = (JawProfile(*(float(c[k, side]) for c in (
-        cols.jaw_depth_m, cols.jaw_bottom_radius_m, cols.jaw_opening_angle_rad,
-        cols.jaw_position_m))) for side in (0, 1))
-    gripper = replace(scene.gripper, jaw=right, left_jaw=None if left == right else left)
-    return replace(scene, gripper=gripper)
-
-
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
               kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray
               ) -> None:
@@ -283,9 +266,9 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     :func:`evaluate_designs`)."""
     from .fem.designs import fem_design_grasps, fem_metrics
 
-    scenes = [_with_jaws(Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i])),
-                         cols, k)
-              for k, i in enumerate(rows.tolist())]
+    # (a design row carries its jaws: Design.from_array reads them)
+    scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
+              for i in rows.tolist()]
     fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings,
                                         payloads_n=payload_n),
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
@@ -321,10 +304,8 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
         }
         hold = np.empty((rows.size, N_HOLD))
         hold[:, H_PIN_X : H_PIN_Y + 1] = fem["pin_force_n"]
-        for k, key in ((H_PIN_MOMENT, "pin_moment_nm"), (H_MU, "required_friction"),
-                       (H_PAYLOAD, "payload_n"), (H_GRIP, "grip_force_n"),
-                       (H_LIMIT, "friction_limit"), (H_LIMIT_ANGLE, "friction_limit_angle_rad")):
-            hold[:, k] = fem[key]
+        for key, slot in (*HOLDING_SCALARS, ("friction_limit", H_LIMIT)):
+            hold[:, slot] = fem[key]
     # (an infinite required friction is an answer, one finger touching: not a failure)
     floats = np.column_stack([np.reshape(v, (rows.size, -1)) for v in metrics.values()
                               if v.dtype.kind == "f"] + [hold[:, H_PIN_X : H_PIN_MOMENT + 1]])

@@ -404,17 +404,18 @@ def test_segment_hertz_cap_follows_the_jaws_curvature():
 
 
 def test_fem_fidelity_scenes_carry_the_rows_jaws():
-    """The FEM fidelity of the design evaluator grasps with each row's jaw profiles (the
-    scene columns' jaw slots, right and left), straight where they are 0."""
-    from envs.batch_metrics import _with_jaws
-    from envs.model.problem import SceneColumns
+    """The FEM fidelity of the design evaluator grasps with each row's jaw profiles (a design
+    row's jaw columns, right and left), straight where there are none."""
+    from envs.scene import Design
 
     scene, _ = _vee_scene()
     left = JawProfile.cradle(0.05, DEPTH_M, 0.09)
     scene = replace(scene, gripper=replace(scene.gripper, left_jaw=left))
-    cols = SceneColumns.from_rows(np.vstack([scene.rows(0.1), R070.rows(0.1)]))
-    assert _with_jaws(R070, cols, 0).gripper.jaws == (scene.gripper.jaw, left)
-    assert _with_jaws(R070, cols, 1).gripper.jaws == (STRAIGHT, STRAIGHT)
+    grooved = Design.from_scene(scene, 0.1).to_array(14)
+    straight = Design.from_scene(R070, 0.1).to_array()
+    assert Design.from_array(grooved).to_scene(R070.disk).gripper.jaws == (
+        scene.gripper.jaw, left)
+    assert Design.from_array(straight).to_scene(R070.disk).gripper.jaws == (STRAIGHT, STRAIGHT)
 
 
 def test_rounded_corner_presses_both_segments_of_a_notch_smoothly():

@@ -97,6 +97,17 @@ class _Obstacle:
         raise NotImplementedError
 
 
+def _finger_coords(gripper, side: int, p: np.ndarray, q: float):
+    """Finger ``side`` at angle ``q``: its axis ``e`` and inward normal ``n``, the points'
+    coordinates ``s = e.(p - J)`` and ``m = n.(p - J)`` [m], and whether ``0 <= s <= l`` (a
+    point beside the gripping face)."""
+    joint, axis, normal = finger_frame(gripper, side, q)
+    rel = p - joint
+    s = rel @ axis
+    m = rel @ normal
+    return axis, normal, s, m, (s >= 0.0) & (s <= gripper.finger_length_m)
+
+
 class _JawFace(_Obstacle):
     """Gripping face of one finger (docs/model.md): ``g = n.(p - J) - w/2``, 0 <= e.(p-J) <= l."""
 
@@ -106,12 +117,8 @@ class _JawFace(_Obstacle):
         self.qi = qi
 
     def evaluate(self, p: np.ndarray, q: float):
-        joint, axis, normal = finger_frame(self.gripper, self.side, q)
-        rel = p - joint
-        s = rel @ axis
-        m = rel @ normal
+        axis, normal, s, m, valid = _finger_coords(self.gripper, self.side, p, q)
         g = m - 0.5 * self.gripper.finger_width_m
-        valid = (s >= 0.0) & (s <= self.gripper.finger_length_m)
         # dn/dtheta = e and de/dtheta = -n for both fingers
         dgdp = np.broadcast_to(normal, p.shape)
         return g, valid, dgdp, s, -m, np.broadcast_to(axis, p.shape), None
@@ -205,14 +212,10 @@ class _JawSolid(_Obstacle):
         self.jaw = jaw
 
     def evaluate(self, p: np.ndarray, q: float):
-        joint, axis, normal = finger_frame(self.gripper, self.side, q)
-        rel = p - joint
-        s = rel @ axis
-        m = rel @ normal
+        axis, normal, s, m, valid = _finger_coords(self.gripper, self.side, p, q)
         d = jaw_gaps_local(self.scene, self.side, self.jaw, s, m)
         gs, gm = d[:, JG_S], d[:, JG_M]
         gss, gsm, gmm = d[:, JG_SS], d[:, JG_SM], d[:, JG_MM]
-        valid = (s >= 0.0) & (s <= self.gripper.finger_length_m)
         dgdp = gs[:, None] * axis + gm[:, None] * normal
         dgdq = -m * gs + s * gm
         d2q = -s * gs - m * gm + m * m * gss - 2.0 * m * s * gsm + s * s * gmm

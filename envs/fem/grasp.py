@@ -16,15 +16,8 @@ import numpy as np
 
 from envs.model.geometry import closed_angle_rad
 from envs.model.holding import (
-    H_GRIP,
-    H_LIMIT,
-    H_LIMIT_ANGLE,
-    H_MU,
-    H_PAYLOAD,
-    H_PIN_MOMENT,
-    H_PIN_X,
-    H_PIN_Y,
     hertz_half_width,
+    holding_fields,
     holding_row,
 )
 from envs.model.jaw import jaw_row
@@ -333,13 +326,7 @@ def _solve_grasp(
                 contact_shares=shares,
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
-                pin_force_n=(float(hold[H_PIN_X]), float(hold[H_PIN_Y])),
-                pin_moment_nm=float(hold[H_PIN_MOMENT]),
-                required_friction=float(hold[H_MU]),
-                payload_n=float(hold[H_PAYLOAD]),
-                grip_force_n=float(hold[H_GRIP]),
-                friction_limit=int(hold[H_LIMIT]),
-                friction_limit_angle_rad=float(hold[H_LIMIT_ANGLE]),
+                **holding_fields(hold),
                 **common,
             )
         )

@@ -72,6 +72,8 @@ __all__ = [
     "payload_friction",
     "holding_of_contacts",
     "holding_row",
+    "HOLDING_SCALARS",
+    "holding_fields",
 ]
 
 # layout of a holding row: the pin force on the object (x, y) [N], its moment about the centre
@@ -625,3 +627,21 @@ def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
                         float(length_scale_m), float(pin_force_n[0]), float(pin_force_n[1]),
                         float(pin_moment_nm), float(payload_n), float(half_width), gens, out)
     return out
+
+
+# the one-slot fields of a holding row by the names grasp results and batch outputs give them
+# (beside them: the pin force "pin_force_n", slots H_PIN_X..H_PIN_Y, and the limit's code
+# "friction_limit", slot H_LIMIT, an integer)
+HOLDING_SCALARS: tuple[tuple[str, int], ...] = (
+    ("pin_moment_nm", H_PIN_MOMENT), ("required_friction", H_MU), ("payload_n", H_PAYLOAD),
+    ("grip_force_n", H_GRIP), ("friction_limit_angle_rad", H_LIMIT_ANGLE))
+
+
+def holding_fields(row) -> dict:
+    """One holding row (layout ``H_*``) as the named fields of a grasp's result: the pin force
+    ``pin_force_n`` as ``(x, y)`` floats [N], the :data:`HOLDING_SCALARS` as floats and the
+    limit's code ``friction_limit`` as an int."""
+    fields = {"pin_force_n": (float(row[H_PIN_X]), float(row[H_PIN_Y]))}
+    fields.update({name: float(row[slot]) for name, slot in HOLDING_SCALARS})
+    fields["friction_limit"] = int(row[H_LIMIT])
+    return fields

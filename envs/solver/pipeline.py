@@ -23,15 +23,10 @@ from numba import njit
 
 from envs import check
 from envs.model.holding import (
-    H_GRIP,
-    H_LIMIT,
-    H_LIMIT_ANGLE,
-    H_MU,
-    H_PAYLOAD,
-    H_PIN_MOMENT,
     H_PIN_X,
     H_PIN_Y,
     N_HOLD,
+    holding_fields,
 )
 from envs.model.layout import (
     I_ITERATIONS,
@@ -443,11 +438,6 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         model_scale=float(model_scale),
         interior_points_m=sol.interior_points_m[i],
         peak_compression=float(sol.peak_compression[i]),
-        pin_force_n=sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy(),
-        pin_moment_nm=float(sol.holding[i, H_PIN_MOMENT]),
-        required_friction=float(sol.holding[i, H_MU]),
-        payload_n=float(sol.holding[i, H_PAYLOAD]),
-        grip_force_n=float(sol.holding[i, H_GRIP]),
-        friction_limit=int(sol.holding[i, H_LIMIT]),
-        friction_limit_angle_rad=float(sol.holding[i, H_LIMIT_ANGLE]),
+        **{**holding_fields(sol.holding[i]),
+           "pin_force_n": sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy()},
     )
