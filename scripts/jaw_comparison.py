@@ -35,6 +35,7 @@ from matplotlib.figure import Figure
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from envs.model.jaw import JAW_FIELDS  # noqa: E402
 from envs.object_file import load_object  # noqa: E402
 from envs.scene import PRESETS  # noqa: E402
 from optim import NoGraspWarning  # noqa: E402
@@ -46,8 +47,6 @@ ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OBJECTS = ("paper-r070", "examples/objects/strawberry.toml",
                    "examples/objects/tomatoes_10_15mm.toml", "examples/objects/liver_sample.toml",
                    "examples/objects/silicone_puck.toml", "examples/objects/water_disk.toml")
-JAW_DESIGN_KEYS = ("jaw_depth_m", "jaw_bottom_radius_m", "jaw_opening_angle_rad",
-                   "jaw_position_m")
 
 
 def _target(name: str) -> dict:
@@ -91,7 +90,7 @@ def row_of(name: str, jaw: str, budget: int, seeds: int, out: Path,
         "contact_score": result.best_metrics.get("contact_score"),
         "peak_compression": result.best_metrics.get("peak_compression"),
         "required_friction": result.best_metrics.get("required_friction"),
-        "jaw_profile": {k: design[k] for k in JAW_DESIGN_KEYS if k in design},
+        "jaw_profile": {k: design[k] for k in JAW_FIELDS if k in design},
         "design": design, "wall_time_s": time.perf_counter() - t0,
     }
 
