@@ -12,11 +12,15 @@
    evaluation of the line search (:func:`envs.solver.assembly._merit`) and the
    anti-tunnelling test (:func:`envs.solver.contact._tunnels`); and one whole grasp
    (:func:`envs.solver.driver.solve_one`) from the same start, for the sum to be compared with.
-3. ``scaling``: designs per second on 1 and on every thread
-   (:func:`envs.parallel.set_solver_threads`) and with worker processes of one thread each
-   (:class:`optim.executors.ProcessExecutor`), with each one's efficiency against one thread.
+3. ``scaling``: designs per second on 1 thread and on each count of ``--workers`` threads
+   (:func:`envs.parallel.set_solver_threads`) and worker processes of one thread each
+   (:class:`optim.executors.ProcessExecutor`), each the median of ``--repeats`` evaluations of
+   the batch, with each one's efficiency against one thread.
+4. ``copies`` (``--copies``): as many independent single-thread processes as each count,
+   every one solving the whole batch at once: the machine's own ceiling for the scaling.
 
-Usage: ``python scripts/solver_profile.py [--batch 2048] [--element nhquad] [--out out/x.json]``
+Usage: ``python scripts/solver_profile.py [--batch 2048] [--element nhquad] [--workers 2 4]
+[--skip-parts] [--out out/x.json]``
 """
 
 from __future__ import annotations
@@ -209,34 +213,79 @@ def iteration_parts(seen: dict, states: int) -> dict:
     return {key: statistics.median(v) for key, v in parts.items()}
 
 
-def scaling(designs: np.ndarray, model: dict, workers: int) -> dict:
-    """Designs per second on one thread, on ``workers`` threads and ``workers`` processes."""
+def _designs_per_s(designs: np.ndarray, model: dict, repeats: int, **kwargs) -> float:
+    """Median designs per second of ``repeats`` evaluations of the batch (after a warm-up)."""
+    evaluate_designs(designs[:64], DISK, **model, **kwargs)
+    rates = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        evaluate_designs(designs, DISK, **model, **kwargs)
+        rates.append(len(designs) / (time.perf_counter() - t0))
+    return statistics.median(rates)
+
+
+def scaling(designs: np.ndarray, model: dict, counts: list[int], repeats: int = 3) -> dict:
+    """Designs per second on 1 thread and on each of ``counts`` threads and worker processes
+    (one solver thread each), with each one's efficiency against one thread."""
     from optim.executors import ProcessExecutor
 
     out: dict[str, float] = {}
     default = solver_threads()
     try:
-        for threads in sorted({1, workers}):
+        for threads in sorted({1, *counts}):
             set_solver_threads(threads)
-            evaluate_designs(designs[:4], DISK, **model)
-            t0 = time.perf_counter()
-            evaluate_designs(designs, DISK, **model)
-            out[f"threads_{threads}_designs_per_s"] = len(designs) / (time.perf_counter() - t0)
+            out[f"threads_{threads}_designs_per_s"] = _designs_per_s(designs, model, repeats)
     finally:
         set_solver_threads(None if default == solver_threads() else default)
-    pool = ProcessExecutor(workers)
-    try:
-        chunk = max(64, len(designs) // (4 * workers))
-        evaluate_designs(designs[: 2 * chunk], DISK, executor=pool, chunk_size=chunk, **model)
-        t0 = time.perf_counter()
-        evaluate_designs(designs, DISK, executor=pool, chunk_size=chunk, **model)
-        out[f"processes_{workers}_designs_per_s"] = len(designs) / (time.perf_counter() - t0)
-    finally:
-        pool.close()
+    for workers in sorted(c for c in set(counts) if c > 1):
+        pool = ProcessExecutor(workers)
+        try:
+            chunk = max(64, len(designs) // (4 * workers))
+            out[f"processes_{workers}_designs_per_s"] = _designs_per_s(
+                designs, model, repeats, executor=pool, chunk_size=chunk)
+        finally:
+            pool.close()
     one = out["threads_1_designs_per_s"]
-    out[f"threads_{workers}_efficiency"] = out[f"threads_{workers}_designs_per_s"] / (workers * one)
-    out[f"processes_{workers}_efficiency"] = (out[f"processes_{workers}_designs_per_s"]
-                                              / (workers * one))
+    for key in [k for k in out if k != "threads_1_designs_per_s"]:
+        count = int(key.split("_")[1])
+        out[key.replace("designs_per_s", "efficiency")] = out[key] / (count * one)
+    return out
+
+
+def _independent_copy(barrier, queue, model: dict, batch: int, seed: int) -> None:
+    """One worker of :func:`independent_copies`: the whole batch on one thread, timed after
+    every copy has loaded its kernels and warmed up."""
+    set_solver_threads(1)
+    designs = DesignBounds().sample(np.random.default_rng(seed), batch, DISK)
+    evaluate_designs(designs[:64], DISK, **model)
+    barrier.wait()
+    t0 = time.perf_counter()
+    evaluate_designs(designs, DISK, **model)
+    queue.put(time.perf_counter() - t0)
+
+
+def independent_copies(model: dict, batch: int, seed: int, counts: list[int]) -> dict:
+    """The machine's own ceiling: ``k`` processes each solving the same whole batch on one
+    thread at once, sharing nothing; designs per second of all of them together, and their
+    efficiency against one copy alone. What a batch split over ``k`` threads loses beyond this
+    is the package's; what this loses is the cores' (shared caches, clocks, hyperthreads)."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    out: dict[str, float] = {}
+    for k in sorted({1, *counts}):
+        barrier, queue = ctx.Barrier(k), ctx.Queue()
+        procs = [ctx.Process(target=_independent_copy, args=(barrier, queue, model, batch, seed))
+                 for _ in range(k)]
+        for proc in procs:
+            proc.start()
+        seconds = [queue.get() for _ in procs]
+        for proc in procs:
+            proc.join()
+        out[f"copies_{k}_designs_per_s"] = k * batch / max(seconds)
+    one = out["copies_1_designs_per_s"]
+    for k in sorted({1, *counts}):
+        out[f"copies_{k}_efficiency"] = out[f"copies_{k}_designs_per_s"] / (k * one)
     return out
 
 
@@ -246,7 +295,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--element", default="nhquad", choices=("nhquad", "spring"),
                         help="nhquad: the default model; spring: the paper's fan")
     parser.add_argument("--states", type=int, default=8)
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--workers", type=int, nargs="+", default=[os.cpu_count() or 1],
+                        help="thread and process counts of the scaling (e.g. 2 4 8 16)")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="evaluations of the batch per scaling figure (their median)")
+    parser.add_argument("--copies", action="store_true",
+                        help="also run --workers independent single-thread copies of the "
+                             "batch at once: the machine's own scaling ceiling")
+    parser.add_argument("--skip-parts", action="store_true",
+                        help="skip the batch breakdown and the iteration's parts")
     parser.add_argument("--skip-scaling", action="store_true")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--out", type=Path, default=None)
@@ -254,20 +311,25 @@ def main(argv: list[str] | None = None) -> None:
     model = {} if args.element == "nhquad" else {"element": "spring"}
     designs = DesignBounds().sample(np.random.default_rng(args.seed), args.batch, DISK)
     report: dict = {"cores": os.cpu_count(), "load_before": _load(), "element": args.element}
-    default = solver_threads()
-    set_solver_threads(1)
-    try:
-        report["batch"], seen = batch_breakdown(designs, model)
-    finally:
-        set_solver_threads(None if default == 1 else default)
-    print("batch (one thread):", {k: round(v, 4) for k, v in report["batch"].items()},
-          flush=True)
-    report["parts"] = iteration_parts(seen, min(args.states, len(designs)))
-    print("parts (median over states):", {k: round(v, 2) for k, v in report["parts"].items()},
-          flush=True)
+    if not args.skip_parts:
+        default = solver_threads()
+        set_solver_threads(1)
+        try:
+            report["batch"], seen = batch_breakdown(designs, model)
+        finally:
+            set_solver_threads(None if default == 1 else default)
+        print("batch (one thread):", {k: round(v, 4) for k, v in report["batch"].items()},
+              flush=True)
+        report["parts"] = iteration_parts(seen, min(args.states, len(designs)))
+        print("parts (median over states):",
+              {k: round(v, 2) for k, v in report["parts"].items()}, flush=True)
     if not args.skip_scaling:
-        report["scaling"] = scaling(designs, model, args.workers)
+        report["scaling"] = scaling(designs, model, args.workers, args.repeats)
         print("scaling:", {k: round(v, 3) for k, v in report["scaling"].items()}, flush=True)
+    if args.copies:
+        report["copies"] = independent_copies(model, args.batch, args.seed, args.workers)
+        print("independent copies:", {k: round(v, 3) for k, v in report["copies"].items()},
+              flush=True)
     report["load_after"] = _load()
     print(f"load {report['load_before']} -> {report['load_after']}")
     if args.out is not None:
