@@ -44,6 +44,15 @@ def _check_options(popsize: int | None, sigma0: float, x0: Any, dim: int):
     return x0
 
 
+def _check_stds(stds: Any, dim: int) -> np.ndarray | None:
+    if stds is None:
+        return None
+    stds = np.asarray(stds, dtype=np.float64)
+    if stds.shape != (dim,) or not np.all((stds > 0.0) & (stds <= 20.0)):
+        raise ValueError(f"stds must be {dim} values in (0, 20], got {stds.tolist()}")
+    return stds
+
+
 def run_cmaes(
     problem: DesignProblem,
     *,
@@ -53,6 +62,7 @@ def run_cmaes(
     sigma0: float = 0.4,
     x0: Any = None,
     restarts: bool = True,
+    stds: Any = None,
 ) -> OptimResult:
     """Maximize the reward with CMA-ES until ``budget`` evaluations are spent.
 
@@ -74,6 +84,9 @@ def run_cmaes(
         Initial mean in [-1, 1]^6 (default the centre of the box); restarts draw a uniform one.
     restarts
         Restart with a doubled population when CMA-ES stops before the budget is spent.
+    stds
+        Per-coordinate factors of ``sigma0`` (``n_var`` values in (0, 20]; default all 1):
+        a start trusted in some coordinates more than in others.
 
     Returns
     -------
@@ -82,6 +95,7 @@ def run_cmaes(
     """
     budget, seed = check_budget(budget), check_seed(seed)
     x0 = _check_options(popsize, sigma0, x0, problem.n_var)
+    stds = _check_stds(stds, problem.n_var)
     cma = _import_cma()
     rng = np.random.default_rng(seed)
     lam = default_popsize(problem.n_var) if popsize is None else int(popsize)
@@ -98,6 +112,7 @@ def run_cmaes(
             "verb_log": 0,
             "verb_disp": 0,
             "tolflatfitness": 10,  # invalid designs share one penalty: give sigma time to grow
+            **({} if stds is None or n_restarts else {"CMA_stds": stds}),
         })
         while problem.remaining > 0 and not es.stop():
             xs = es.ask()
@@ -114,6 +129,8 @@ def run_cmaes(
         mean = rng.uniform(-1.0, 1.0, problem.n_var)
     options = {"popsize": default_popsize(problem.n_var) if popsize is None else int(popsize),
                "sigma0": sigma0, "restarts": restarts}
+    if stds is not None:
+        options["stds"] = stds.tolist()
     return problem.result("cmaes", seed, options=options,
                           extra={"n_restarts": n_restarts, "final_sigma": sigma,
                                  "final_popsize": lam})

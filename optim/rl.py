@@ -78,6 +78,9 @@ SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
 SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
 SHIPPED_JAWS = {"straight": SHIPPED_POLICY, "any": SHIPPED_JAW_POLICY}
 REFINE_SIGMA = 0.1  # CMA-ES step size around the policy's design, in the normalized box
+# the step size in the jaw columns: a cold CMA-ES's (its sigma0), since the jaw policy's
+# grooves are where its designs miss most (scripts/bench_policy.py --jaw any)
+REFINE_JAW_SIGMA = 0.4
 
 
 class PolicyMismatchError(ValueError):
@@ -257,8 +260,8 @@ class DesignPolicy:
 
     def run(self, problem: DesignProblem, *, budget: int = 1, seed: int = 0) -> OptimResult:
         """The policy's design for a problem's object, then ``budget - 1`` evaluations of
-        CMA-ES started at it (step size :data:`REFINE_SIGMA`): an :class:`OptimResult` with
-        method ``"policy"``."""
+        CMA-ES started at it (step size :data:`REFINE_SIGMA`, :data:`REFINE_JAW_SIGMA` in the
+        jaw columns, :func:`refine_stds`): an :class:`OptimResult` with method ``"policy"``."""
         from .cmaes import run_cmaes
 
         budget, seed = check_budget(budget), check_seed(seed)
@@ -270,11 +273,13 @@ class DesignPolicy:
         problem.start(budget)
         problem.evaluate(x0[None, :])
         first = (problem.best_reward, problem.n_evaluations)
+        stds = refine_stds(self.bounds)
         if budget > 1:
             run_cmaes(_Continue(problem), budget=budget - 1, seed=seed,
-                      x0=np.clip(x0, -1.0, 1.0), sigma0=REFINE_SIGMA)
+                      x0=np.clip(x0, -1.0, 1.0), sigma0=REFINE_SIGMA, stds=stds)
         return problem.result("policy", seed, options={"refine": budget - 1,
-                                                       "sigma0": REFINE_SIGMA},
+                                                       "sigma0": REFINE_SIGMA,
+                                                       "stds": stds.tolist()},
                               extra={"policy_reward": first[0],
                                      "policy": self.meta.get("name", "policy")})
 
@@ -292,6 +297,15 @@ class DesignPolicy:
                 "n_layers": len(self.layers)}
         (folder / "policy.json").write_text(json.dumps(meta, indent=1) + "\n")
         return folder
+
+
+def refine_stds(bounds: DesignBounds) -> np.ndarray:
+    """Per-column factors of :data:`REFINE_SIGMA` for the refinement of a policy's design:
+    1 in the six gripper columns, :data:`REFINE_JAW_SIGMA` / :data:`REFINE_SIGMA` in the jaw
+    columns."""
+    stds = np.ones(bounds.n_var)
+    stds[len(bounds.fields) - len(bounds.jaw_fields):] = REFINE_JAW_SIGMA / REFINE_SIGMA
+    return stds
 
 
 def problem_tolerance_rel(problem: DesignProblem) -> float:

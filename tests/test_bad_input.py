@@ -164,7 +164,7 @@ def test_the_other_parameter_dataclasses_refuse_strings():
 def test_optimize_refuses_an_unknown_option_naming_the_allowed_ones():
     problem = DesignProblem.from_scene("paper-r070")
     with pytest.raises(ValueError, match=r"unknown option 'foo' for method 'cmaes'; allowed: "
-                                         r"popsize, sigma0, x0, restarts$"):
+                                         r"popsize, sigma0, x0, restarts, stds$"):
         optimize("cmaes", problem, budget=5, foo=1)
     with pytest.raises(ValueError, match=r"unknown options 'bar', 'foo' for method 'random'; "
                                          r"allowed: batch_size$"):

@@ -202,3 +202,24 @@ def test_the_shipped_jaw_policy_designs_a_groove_in_one_forward_pass():
     assert not set(JAW_FIELDS) & set(load_policy().design(disk, 0.1, 0.5))
     with pytest.raises(ValueError, match="jaw"):
         load_policy(jaw="vee")
+
+
+def test_the_jaw_policys_refine_steps_wider_in_the_jaw_columns_and_spends_its_budget():
+    """The refinement of a policy's design keeps the policy's step in the six gripper columns
+    and a cold CMA-ES's in the jaw columns (where the jaw policy misses most): the run records
+    those factors, spends exactly its budget and never reports worse than the policy's own
+    design; bad factors are refused by name."""
+    from optim.cmaes import run_cmaes
+    from optim.rl import REFINE_JAW_SIGMA, REFINE_SIGMA, load_policy, refine_stds
+
+    policy = load_policy(jaw="any")
+    stds = refine_stds(policy.bounds)
+    assert stds[:6].tolist() == [1.0] * 6
+    assert np.allclose(stds[6:], REFINE_JAW_SIGMA / REFINE_SIGMA) and len(stds) == 10
+    assert refine_stds(load_policy().bounds).tolist() == [1.0] * 6
+    problem = DesignProblem(Scene.preset("paper-r070").disk, bounds=policy.bounds)
+    result = policy.run(problem, budget=20, seed=0)
+    assert result.n_evaluations == 20 and result.options["stds"] == stds.tolist()
+    assert result.best_reward >= result.extra["policy_reward"]
+    with pytest.raises(ValueError, match=r"stds must be 10 values in \(0, 20\]"):
+        run_cmaes(problem, budget=5, stds=np.zeros(10))
