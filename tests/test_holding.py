@@ -329,3 +329,26 @@ def test_a_flat_flank_jittered_by_the_gap_tolerance_keeps_the_exact_flank_s_answ
                                    half_width)[H_MU])
     with pytest.raises(ValueError, match="patches"):
         holding_row(normals, points, forces, centre, r, pin, 0.0, 1.0, half_width, labels[:3])
+
+
+def test_the_point_spring_runs_name_consecutive_pressed_points():
+    # the labels of envs.solver.reaction: a run of consecutive pressed points (wrapping round
+    # the contour's ends) shares its first point's label, per finger; a mouth edge joins the run
+    # of a pressed end of its edge, else is a patch of its own; the bar's corners keep the
+    # flat-face rule
+    from envs.model.holding import NO_PATCH
+    from envs.model.layout import C_FACE_TIP, C_MOUTH_ROOT, C_MOUTH_TIP
+    from envs.solver.reaction import _corner_label, _run_label
+
+    n = 10
+    lam = np.zeros((2, n))
+    lam[0, [0, 1, 2, 5, 6, 9]] = 1.0
+    labels = [_run_label(lam, 0, i, n) for i in (9, 0, 1, 2, 5, 6)]
+    assert labels == [9, 9, 9, 9, 5, 5]
+    lam[1, :] = 1.0  # pressed all round: one run
+    assert {_run_label(lam, 1, i, n) for i in range(n)} == {n}
+    assert _corner_label(lam, 0, C_MOUTH_TIP, 2, 3, n) == 9  # the edge 2-3 ends the run 9..2
+    assert _corner_label(lam, 0, C_MOUTH_ROOT, 4, 5, n) == 5
+    free = _corner_label(lam, 0, C_MOUTH_TIP, 3, 4, n)
+    assert free >= 2 * n and free != _corner_label(lam, 0, C_MOUTH_ROOT, 3, 4, n)
+    assert _corner_label(lam, 0, C_FACE_TIP, 2, 3, n) == NO_PATCH

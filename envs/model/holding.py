@@ -689,7 +689,8 @@ def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
     out = np.empty(N_HOLD)
     holding_of_contacts(normals, points, forces, labels, count, float(centre_m[0]),
                         float(centre_m[1]), float(length_scale_m), float(pin_force_n[0]),
-                        float(pin_force_n[1]), float(pin_moment_nm), float(payload_n), float(half_width), gens, out)
+                        float(pin_force_n[1]), float(pin_moment_nm), float(payload_n),
+                        float(half_width), gens, out)
     return out
 
 
