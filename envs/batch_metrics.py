@@ -172,8 +172,7 @@ def grooves_m(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
         for j in range(2):
             pack_groove(float(cols.jaw_depth_m[i, j]), float(cols.jaw_bottom_radius_m[i, j]),
                         float(cols.jaw_opening_angle_rad[i, j]), float(cols.jaw_position_m[i, j]),
-                        float(cols.finger_length_m[i]), float(rounding[i]), 1.0, out[i],
-                        N_GROOVE * j)
+                        float(rounding[i]), 1.0, out[i], N_GROOVE * j)
     return out, rounding
 
 

@@ -39,16 +39,14 @@ offset              meaning                                                     
 ``CK_AREA_STIFF``   area stiffness ``kappa t`` of the area energy (0: none)      N/m
 ``CK_REST_AREA``    rest area ``A0`` of a fan triangle                           m^2
 ``CK_JAW0/1``       each finger's jaw groove (right, left): ``JW_*`` slots of    m, rad
-                    depth, bottom radius, full opening angle, position from
-                    the joint and the mouth edges' radius ``R_e``; depth 0 is
-                    the straight bar
+                    depth, bottom radius, full opening angle and position from
+                    the joint; depth 0 is the straight bar
 ==================  ===========================================================  =====
 
-A grooved finger's solid is the bar minus its groove with its convex edges rounded: near the
-groove by the mouth edges' radius ``R_e``, the points within ``R_e`` of the core ``K``, the
-core rectangle ``[0, l] x [-(w/2 - R_e), w/2 - R_e]`` less the groove grown by ``R_e``; away
-from it and beyond the bar's ends the bar rounded by ``rho``. The check writes the grown
-groove in its own way, as the points within ``R_b + R_e`` of a solid cone (apex at the
+A grooved finger's solid is the bar minus its groove with every convex edge rounded by
+``rho``: the points within ``rho`` of the core ``K``, the core rectangle
+``[0, l] x [-(w/2 - rho), w/2 - rho]`` less the groove grown by ``rho``. The check writes the
+grown groove in its own way, as the points within ``R_b + rho`` of a solid cone (apex at the
 bottom arc's centre, opening out of the face, half-angle half the opening angle), and measures
 the distance to ``K`` as the nearest of its boundary pieces (straight segments and one arc).
 
@@ -97,7 +95,6 @@ __all__ = [
     "JW_BOTTOM_RADIUS",
     "JW_OPENING",
     "JW_POSITION",
-    "JW_EDGE",
     "N_CK",
     "OUT_PASSED",
     "OUT_FORCE_RES",
@@ -151,10 +148,10 @@ CK_QUAD = 23  # nh-quad: s lambda t [N/m] of the volumetric energy of each quad 
 CK_SPACING = 24  # ring radii: 0 geometric from the hub, 1 evenly spaced
 # each finger's jaw groove, SI: depth [m], bottom radius [m], full opening angle [rad] and
 # position of its centre line from the joint [m] at CK_JAW0 + JW_* (right finger), CK_JAW1 (left)
-JW_DEPTH, JW_BOTTOM_RADIUS, JW_OPENING, JW_POSITION, JW_EDGE = range(5)
+JW_DEPTH, JW_BOTTOM_RADIUS, JW_OPENING, JW_POSITION = range(4)
 CK_JAW0 = 25
-CK_JAW1 = 30
-N_CK = 35
+CK_JAW1 = 29
+N_CK = 33
 
 # output vector layout
 OUT_PASSED = 0
@@ -431,28 +428,19 @@ def _groove_depth(prm, j):
     return prm[(CK_JAW0 if j == 0 else CK_JAW1) + JW_DEPTH]
 
 
-@njit(inline="always", **_FLAGS)
-def _edge_radius(prm, j):
-    """Radius ``R_e`` of finger j's rounded mouth edges [m] (a parameter of the model, like the
-    corner radius: :func:`envs.model.jaw.mouth_edge_radius`)."""
-    base = CK_JAW0 if j == 0 else CK_JAW1
-    return prm[base + JW_EDGE]
-
-
 @njit(**_FLAGS)
 def _groove_shape(prm, j):
     """Finger j's grown groove: ``a`` (centre line), ``vc`` (depth of the cone's apex, the
-    bottom arc's centre), ``grow`` (``R_b + R_e``, ``R_e`` the mouth edges' radius), ``sb``,
-    ``cb`` (sine and cosine of the half opening angle) and ``ue``, the half-width at which the
-    grown groove meets the core's face line ``v = R_e`` (the centres of the rounded mouth
-    edges)."""
+    bottom arc's centre), ``grow`` (``R_b + rho``), ``sb``, ``cb`` (sine and cosine of the
+    half opening angle) and ``ue``, the half-width at which the grown groove meets the core's
+    face line ``v = rho`` (the centres of the rounded mouth edges)."""
     base = CK_JAW0 if j == 0 else CK_JAW1
-    rho = _edge_radius(prm, j)
+    rho = prm[CK_RHO]
     vc = prm[base + JW_DEPTH] - prm[base + JW_BOTTOM_RADIUS]
     grow = prm[base + JW_BOTTOM_RADIUS] + rho
     half = 0.5 * prm[base + JW_OPENING]
     sb, cb = math.sin(half), math.cos(half)
-    # on v = R_e the axis height above the apex is h = vc - R_e; a flank's offset line
+    # on v = rho the axis height above the apex is h = vc - rho; a flank's offset line
     # |u| cb - h sb = grow holds where the foot on the cone's edge ray is beyond the apex
     # (|u| sb + h cb > 0), else the arc about the apex
     h = vc - rho
@@ -489,24 +477,21 @@ def _nearer_segment(px, py, ax, ay, bx, by, best, qx, qy):
 
 @njit(**_FLAGS)
 def _groove_nearest(prm, j, s, m):
-    """Nearest point (s, m) of a grooved finger's core to the point (s, m) and the radius its
-    surface lies from that core: near the groove the core ``K`` of the mouth edges' radius
-    ``R_e`` (the nearest of its boundary pieces for a point outside it), elsewhere and beyond
-    the bar's ends the rounded bar's core rectangle (corner radius ``rho``)."""
+    """Nearest point (s, m) of a grooved finger's core ``K`` to the point (s, m) and whether the
+    point lies in ``K``; the nearest of ``K``'s boundary pieces for a point outside."""
     rho, ln = prm[CK_RHO], prm[CK_LENGTH]
     hw = prm[CK_HALF_WIDTH]
-    edge = _edge_radius(prm, j)
-    core = hw - edge
+    core = hw - rho
     a, vc, grow, sb, cb, ue = _groove_shape(prm, j)
     u, v = s - a, hw - m
     in_groove = _cone_distance(u, v, vc, sb, cb) < grow
     qs, qm = _npclip(s, 0.0, ln), _npclip(m, -core, core)
-    if (not in_groove and not _cone_distance(qs - a, hw - qm, vc, sb, cb) < grow) or (
-            not in_groove and qs != s):
-        # the groove does not matter (or the point is beyond a bar's end): the rounded bar
-        return qs, _npclip(m, -(hw - rho), hw - rho), rho
+    if not in_groove and qs == s and qm == m:
+        return s, m, True
+    if not _cone_distance(qs - a, hw - qm, vc, sb, cb) < grow:
+        return qs, qm, False  # the core rectangle's nearest point is outside the groove
     # pieces in (u, v): the core's back and ends, its face on either side of the mouth
-    back, face = hw + core, edge
+    back, face = hw + core, rho
     best, bu, bv = math.inf, 0.0, 0.0
     best, bu, bv = _nearer_segment(u, v, -a, back, ln - a, back, best, bu, bv)
     best, bu, bv = _nearer_segment(u, v, -a, face, -a, back, best, bu, bv)
@@ -534,7 +519,7 @@ def _groove_nearest(prm, j, s, m):
         d = _hypot(u - ex, v - ey)
         if d < best:
             best, bu, bv = d, ex, ey
-    return bu + a, hw - bv, edge
+    return bu + a, hw - bv, False
 
 
 # --------------------------------------------------------------------------------------------
@@ -605,8 +590,7 @@ def _face_contacts(prm, p, face, j, theta, force, acc):
 
     The body is the bar ``0 <= s <= l``, ``|m| <= w/2`` with its corners rounded to ``rho``: the
     rectangle ``[0, l] x [-(w/2 - rho), w/2 - rho]`` grown by ``rho``, less a jaw groove
-    (:func:`_groove_nearest`, its mouth edges rounded by their own radius). A point's force
-    acts along
+    (:func:`_groove_nearest`). A point's force acts along
     the outward normal of the body at the nearest surface point, about which the moment is
     taken.
     """
@@ -618,16 +602,14 @@ def _face_contacts(prm, p, face, j, theta, force, acc):
         rx, ry = p[i, 0] - jx, p[i, 1] - jy
         s = rx * ex + ry * ey
         m = rx * nx + ry * ny
-        radius = rho
         if grooved:
-            ks, km, radius = _groove_nearest(prm, j, s, m)
+            ks, km, _ = _groove_nearest(prm, j, s, m)
             ds, dm = s - ks, m - km
         else:
             ds = s - _npclip(s, 0.0, ln)
             dm = m - _npclip(m, -core, core)
         dist = _hypot(ds, dm)
-        # deeper inside than the bar's corner radius: -rho, as in the bar's core
-        gap = _pymax(dist - radius, -rho)
+        gap = dist - rho
         acc[_ACC_PEN] = _pymax(acc[_ACC_PEN], -gap)
         lam = face[j, i]
         if lam != 0.0:
@@ -666,7 +648,6 @@ def _corner_contacts(prm, p, corner, j, c, theta, force, acc):
             return
         a, _, _, _, _, ue = _groove_shape(prm, j)
         sc = a + ue if c == _BAR_CORNERS else a - ue
-        rho = _edge_radius(prm, j)  # a mouth edge's own radius
         off = prm[CK_HALF_WIDTH] - rho
     else:
         sc = prm[CK_LENGTH] if c % 2 == 0 else 0.0
@@ -1126,7 +1107,6 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
         vals[base + JW_BOTTOM_RADIUS] = jaw.bottom_radius_m
         vals[base + JW_OPENING] = jaw.opening_angle_rad
         vals[base + JW_POSITION] = jaw.position_m
-        vals[base + JW_EDGE] = jaw.edge_radius_m(g.finger_length_m, vals[CK_RHO])
     return np.array(vals, dtype=np.float64)
 
 

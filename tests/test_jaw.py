@@ -24,8 +24,8 @@ LENGTH, HALF_WIDTH = 4.0, 0.2
 
 def _gap(jaw: JawProfile):
     groove = np.zeros(N_GROOVE)
-    pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m, LENGTH,
-                RHO, 1.0, groove, 0)
+    pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m, RHO,
+                1.0, groove, 0)
     return lambda s, m: jaw_gap(s, m, LENGTH, HALF_WIDTH, RHO, groove, 0)
 
 

@@ -27,22 +27,13 @@ from envs.design_space import (
 from envs.evaluate import evaluate_designs
 from envs.model.geometry import corner_radius
 from envs.model.jaw import (
-    EDGE_OF_DEPTH,
     JAW_FIELDS,
     LEFT_JAW_FIELDS,
     MAX_DEPTH_OF_WIDTH,
     STRAIGHT,
     JawProfile,
 )
-from envs.model.layout import (
-    G_DEPTH,
-    G_EDGE,
-    G_POSITION,
-    G_RADIUS,
-    N_GROOVE,
-    P_GROOVE0,
-    P_GROOVE1,
-)
+from envs.model.layout import G_DEPTH, G_POSITION, G_RADIUS, N_GROOVE, P_GROOVE0, P_GROOVE1
 from envs.model.problem import REST_JAW, REST_OK, pack_params, rest_codes
 from envs.object_file import parse_object
 from envs.scenarios import Scenarios, evaluate_scenarios, place
@@ -141,16 +132,12 @@ def test_each_width_packs_its_grooves_into_the_solver_parameters(width):
     left = VEE if width == 14 else right
     for slot, jaw in ((P_GROOVE0, right), (P_GROOVE1, left)):
         groove = prm[slot : slot + N_GROOVE]
-        # lengths in disk radii; the grown groove's radius is the bottom's plus the mouth
-        # edges' radius
+        # lengths in disk radii; the grown groove's radius is the bottom's plus the rounding
         assert groove[G_DEPTH] == pytest.approx(jaw.depth_m / R, rel=1e-14)
         assert groove[G_POSITION] == pytest.approx(jaw.position_m / R, rel=1e-14)
         if jaw.depth_m > 0:
             rho = corner_radius(PAPER.finger_width_m, R)
-            edge = jaw.edge_radius_m(PAPER.finger_length_m, rho)
-            assert rho <= edge <= EDGE_OF_DEPTH * jaw.depth_m
-            assert groove[G_RADIUS] == pytest.approx((jaw.bottom_radius_m + edge) / R)
-            assert groove[G_EDGE] == pytest.approx(edge / R)
+            assert groove[G_RADIUS] == pytest.approx((jaw.bottom_radius_m + rho) / R)
         else:
             assert not groove.any()
 

@@ -264,7 +264,7 @@ def test_solver_gap_smooths_only_the_ridge_of_a_vee():
         prm = np.zeros(N_PARAMS)
         prm[P_HW], prm[P_LMAX], prm[P_RHO] = 0.5, 10.0, 0.02
         depth = 0.7
-        pack_groove(depth, bottom, opening, 5.0, 10.0, 0.02, 1.0, prm, P_GROOVE0)
+        pack_groove(depth, bottom, opening, 5.0, 0.02, 1.0, prm, P_GROOVE0)
         lowered = 0
         for _ in range(4000):
             s = 5.0 + rng.uniform(-2.0, 2.0)
@@ -308,18 +308,16 @@ def test_check_distance_agrees_with_the_kernel():
         ck[base + check.JW_BOTTOM_RADIUS] = jaw.bottom_radius_m
         ck[base + check.JW_OPENING] = jaw.opening_angle_rad
         ck[base + check.JW_POSITION] = jaw.position_m
-        ck[base + check.JW_EDGE] = jaw.edge_radius_m(length, rho)
-        assert ck[base + check.JW_EDGE] > rho  # the mouth edges' own radius
         packed = np.zeros(N_GROOVE)
         pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m,
-                    length, rho, 1.0, packed, 0)
+                    rho, 1.0, packed, 0)
         half = jaw.mouth_half_width_m
         worst = 0.0
         for _ in range(3000):
             s = jaw.position_m + rng.uniform(-1.5, 1.5) * half
             m = hw - rng.uniform(-0.01, jaw.depth_m * 1.2)
-            ks, km, radius = check._groove_nearest(ck, 0, s, m)
-            mine = max(math.hypot(s - ks, m - km) - radius, -rho)
+            ks, km, inside = check._groove_nearest(ck, 0, s, m)
+            mine = -rho if inside else math.hypot(s - ks, m - km) - rho
             worst = max(worst, abs(mine - jaw_gap(s, m, length, hw, rho, packed, 0)[0]))
         assert worst < 1e-12, (jaw, worst)
 

@@ -35,7 +35,6 @@ from envs.model.jaw import (
     G_CENTRE,
     G_COS,
     G_DEPTH,
-    G_EDGE,
     G_MOUTH,
     G_POSITION,
     G_RADIUS,
@@ -139,9 +138,6 @@ def _core_gap(s, m, hw, rho, groove):
     face = hw - rho - m
     if not groove[G_DEPTH] > 0.0:
         return -rho - face, 0.0, 1.0, 0.0, 0.0, 0.0
-    # near the groove the solid's core is the one of the mouth edges' radius
-    rho = groove[G_EDGE]
-    face = hw - rho - m
     u = s - groove[G_POSITION]
     wv = hw - m - groove[G_CENTRE]
     radius, cb, sb = groove[G_RADIUS], groove[G_COS], groove[G_SIN]
@@ -181,8 +177,8 @@ def packed_groove(scene: Scene, jaw: JawProfile) -> tuple[np.ndarray, float]:
     grip = scene.gripper
     rho = float(corner_radius(grip.finger_width_m, scene.disk.radius_m))
     groove = np.zeros(N_GROOVE)
-    pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m,
-                grip.finger_length_m, rho, 1.0, groove, 0)
+    pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m, rho,
+                1.0, groove, 0)
     return groove, rho
 
 
@@ -286,20 +282,17 @@ def _JawTip(scene: Scene, side: int, qi: int) -> _JawCorner:
 
 def jaw_corners(scene: Scene) -> list[_JawCorner]:
     """The convex corners of both fingers pressed against the rim: the two tip corners (first,
-    finger 0 then 1), then each grooved finger's two rounded mouth edges of radius ``R_e``,
-    centred at ``(a -+ u_E, w/2 - R_e)`` in finger coordinates (:data:`envs.model.layout.G_MOUTH`,
-    ``G_EDGE``)."""
+    finger 0 then 1), then each grooved finger's two rounded mouth edges, centred at
+    ``(a -+ u_E, w/2 - rho)`` in finger coordinates (:data:`envs.model.layout.G_MOUTH`)."""
     corners = [_JawTip(scene, 0, 0), _JawTip(scene, 1, 1)]
     hw = 0.5 * scene.gripper.finger_width_m
     for side, jaw in enumerate(scene.gripper.jaws):
         if jaw.depth_m == 0.0:
             continue
-        groove, _ = packed_groove(scene, jaw)
-        edge = groove[G_EDGE]
+        groove, rho = packed_groove(scene, jaw)
         for sign in (-1.0, 1.0):
             corners.append(_JawCorner(scene, side, side,
-                                      groove[G_POSITION] + sign * groove[G_MOUTH], hw - edge,
-                                      edge))
+                                      groove[G_POSITION] + sign * groove[G_MOUTH], hw - rho, rho))
     return corners
 
 

@@ -193,7 +193,7 @@ def distance_to_finger_bar(gripper: FingerBars, side: int, angle_rad, point, jaw
     if jaw is not None and jaw.depth_m > 0.0:
         packed = np.zeros(N_GROOVE)
         pack_groove(jaw.depth_m, jaw.bottom_radius_m, jaw.opening_angle_rad, jaw.position_m,
-                    gripper.finger_length_m, float(rounding_m), 1.0, packed, 0)
+                    float(rounding_m), 1.0, packed, 0)
         x, y = float(point[0]), float(point[1])
         dist = np.array([max(0.0, jaw_finger_gap(
             x, y, 0 if side == 0 else 1, float(a), gripper.joint_offset_m,

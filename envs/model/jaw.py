@@ -10,21 +10,18 @@ limits are the shapes gripper designers cut:
 * the **V-groove** (``R_b = 0``): two straight flanks meeting at a sharp bottom.
 
 The straight bar is the groove of depth 0. The finger's solid is the bar minus the groove, its
-convex edges rounded so the gap to it is continuous: the bar's end corners with the corner
-radius ``rho`` of :data:`envs.model.defaults.CORNER_ROUNDING`, the groove's two mouth edges
-with the edge radius ``R_e`` of :func:`mouth_edge_radius`, a fillet of the cutout
-(:data:`EDGE_OF_DEPTH` of its depth) that gives an edge contact a width of its own.
+convex edges (the bar's end corners and the groove's two mouth edges) rounded with the corner
+radius ``rho`` of :data:`envs.model.defaults.CORNER_ROUNDING`, so the gap to it is continuous.
 
 How the gap is computed (one definition for both fidelities; the independent check of
-:mod:`envs.check` keeps its own copy). Rounding the convex edges of a solid ``S`` by ``R_e`` is
-its opening ``(S - R_e) + R_e`` (erode, then dilate): near the groove the solid is the set
-within ``R_e`` of its *core* ``K = B' \\ G'``, with ``B'`` the bar shrunk by ``R_e`` and ``G'``
-the groove grown by ``R_e`` (a rounded V of bottom radius ``R_b + R_e`` with the same centre
-and flank angle). The gap of a point is its distance to ``K`` minus ``R_e``; away from the
-groove, and beyond the bar's ends, it is the rounded bar's (corner radius ``rho``). ``K``'s
-boundary near the groove is the grown groove's wall below the core face and the two *mouth
-corners* ``E`` where that wall meets the core face: the centres of the rounded mouth edges,
-which the solver also treats as corners (of radius ``R_e``) against the contour's edges.
+:mod:`envs.check` keeps its own copy). Rounding the convex edges of a solid ``S`` by ``rho`` is
+its opening ``(S - rho) + rho`` (erode, then dilate): the solid is the set within ``rho`` of its
+*core* ``K = B' \\ G'``, with ``B'`` the bar shrunk by ``rho`` (the core rectangle of the
+straight bar) and ``G'`` the groove grown by ``rho`` (a rounded V of bottom radius ``R_b + rho``
+with the same centre and flank angle). The gap of a point is its distance to ``K`` minus
+``rho``. ``K``'s boundary near the groove is the grown groove's wall below the core face and the
+two *mouth corners* ``E`` where that wall meets the core face: the centres of the rounded mouth
+edges, which the solver also treats as corners against the contour's edges.
 
 Coordinates: ``s`` along the finger from its joint, ``m`` along the gripping face's inward
 normal (the face at ``m = w/2``); for the groove ``u = s - a`` and ``v = w/2 - m`` (depth below
@@ -40,17 +37,7 @@ from dataclasses import dataclass
 from numba import njit
 
 from ..validation import check_range
-from .layout import (
-    G_CENTRE,
-    G_COS,
-    G_DEPTH,
-    G_EDGE,
-    G_MOUTH,
-    G_POSITION,
-    G_RADIUS,
-    G_SIN,
-    N_GROOVE,
-)
+from .layout import G_CENTRE, G_COS, G_DEPTH, G_MOUTH, G_POSITION, G_RADIUS, G_SIN, N_GROOVE
 
 __all__ = [
     "MAX_OPENING_RAD",
@@ -65,10 +52,7 @@ __all__ = [
     "G_COS",
     "G_SIN",
     "G_MOUTH",
-    "G_EDGE",
     "N_GROOVE",
-    "EDGE_OF_DEPTH",
-    "mouth_edge_radius",
     "pack_groove",
     "jaw_gap",
     "jaw_row",
@@ -83,16 +67,12 @@ __all__ = [
 # the scaled groove of one finger (pack_groove, layout G_* of envs.model.layout), lengths in
 # the unit of the caller
 GROOVE_FIELDS = ("position", "depth", "centre_depth", "grown_radius", "cos_half_opening",
-                 "sin_half_opening", "mouth_half_width", "edge_radius")
+                 "sin_half_opening", "mouth_half_width")
 
 # a groove may cut at most this share of the finger's width (the rest is the jaw's back wall)
 MAX_DEPTH_OF_WIDTH = 0.75
 # largest full opening angle of a V [rad]: at 180 deg its flanks would lie in the face
 MAX_OPENING_RAD = math.radians(170.0)
-# the radius of a groove's two mouth edges (the fillet of the cutout's edges) as a share of the
-# groove's depth, at least the bar's corner radius and at most what the face beside the mouth
-# leaves (mouth_edge_radius)
-EDGE_OF_DEPTH = 0.15
 
 
 @dataclass(frozen=True)
@@ -166,14 +146,6 @@ class JawProfile:
     def mouth_half_width_m(self) -> float:
         """Half-width of the groove's mouth in the gripping face (sharp edges) [m]."""
         return mouth_half_width_m(self.depth_m, self.bottom_radius_m, self.opening_angle_rad)
-
-    def edge_radius_m(self, finger_length_m: float, rounding_m: float) -> float:
-        """Radius of the groove's two rounded mouth edges on a finger of length
-        ``finger_length_m`` whose corners are rounded by ``rounding_m`` [m]
-        (:func:`mouth_edge_radius`); ``rounding_m`` for the straight bar."""
-        return float(mouth_edge_radius(self.depth_m, self.bottom_radius_m,
-                                       self.opening_angle_rad, self.position_m,
-                                       float(finger_length_m), float(rounding_m)))
 
     def check_fits(self, finger_length_m: float, finger_width_m: float,
                    rounding_m: float = 0.0) -> None:
@@ -251,44 +223,12 @@ def mouth_half_width_m(depth_m: float, bottom_radius_m: float, opening_angle_rad
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def mouth_edge_radius(depth, bottom_radius, opening, position, length, rho):
-    """Radius ``R_e`` of a groove's two rounded mouth edges (one unit for the lengths).
+def pack_groove(depth, bottom_radius, opening, position, rho, unit, out, base):
+    """Write one finger's scaled groove (:data:`GROOVE_FIELDS`) into ``out[base:base + 7]``.
 
-    A fillet of the cutout's edges: :data:`EDGE_OF_DEPTH` of the groove's depth ``h``, so an
-    edge contact has a width of its own and the edge's normal turns over a length a contour
-    resolves, at least the bar's corner radius ``rho`` (a shallow groove's edges are rounded
-    like the bar's corners) and at most what the face beside the mouth leaves: the fillet
-    meets the face ``R_e tan(delta / 2)`` beyond the sharp mouth (``delta`` the angle the wall
-    turns from the face: ``cos delta = (R_b - h) / R_b`` where the arc reaches the face, the
-    flank's ``pi/2 - phi/2`` otherwise), which must stay between the bar's ends. The fit of
-    the groove (:meth:`JawProfile.check_fits`) leaves ``rho`` there, so ``R_e = rho`` always
-    fits. ``position`` and ``length``: the groove's centre ``a`` and the finger's ``l``.
-    """
-    if not depth > 0.0:
-        return rho
-    half = 0.5 * opening
-    cb, sb = math.cos(half), math.sin(half)
-    sharp = groove_mouth(depth, depth - bottom_radius, bottom_radius, cb, sb, 0.0)
-    if bottom_radius > 0.0 and bottom_radius * (1.0 - sb) >= depth:
-        turn_cos = (bottom_radius - depth) / bottom_radius  # the arc meets the face
-    else:
-        turn_cos = sb  # a flank meets the face
-    slope = math.sqrt(max(1.0 - turn_cos, 0.0) / (1.0 + turn_cos))  # tan(delta / 2)
-    edge = EDGE_OF_DEPTH * depth
-    room = min(position, length - position) - sharp
-    if slope * edge > room:
-        edge = room / slope
-    return max(edge, rho)
-
-
-@njit(cache=True, error_model="numpy", _nrt=False)
-def pack_groove(depth, bottom_radius, opening, position, length, rho, unit, out, base):
-    """Write one finger's scaled groove (:data:`GROOVE_FIELDS`) into ``out[base:base + 8]``.
-
-    ``depth``, ``bottom_radius``, ``position``, the finger's ``length`` and the corner radius
-    ``rho`` in metres (or any one unit), ``opening`` the full opening angle [rad]; ``unit``
-    divides the lengths (the disk radius for the scaled solver, 1 for SI). Depth 0 writes
-    zeros: the straight bar.
+    ``depth``, ``bottom_radius``, ``position`` and the corner radius ``rho`` in metres (or any
+    one unit), ``opening`` the full opening angle [rad]; ``unit`` divides the lengths (the disk
+    radius for the scaled solver, 1 for SI). Depth 0 writes zeros: the straight bar.
     """
     for k in range(N_GROOVE):
         out[base + k] = 0.0
@@ -296,18 +236,16 @@ def pack_groove(depth, bottom_radius, opening, position, length, rho, unit, out,
         return
     half = 0.5 * opening
     cb, sb = math.cos(half), math.sin(half)
-    edge = mouth_edge_radius(depth, bottom_radius, opening, position, length, rho)
     centre = (depth - bottom_radius) / unit
-    grown = (bottom_radius + edge) / unit
+    grown = (bottom_radius + rho) / unit
     out[base + G_POSITION] = position / unit
     out[base + G_DEPTH] = depth / unit
     out[base + G_CENTRE] = centre
     out[base + G_RADIUS] = grown
     out[base + G_COS] = cb
     out[base + G_SIN] = sb
-    # the mouth corners: where the grown groove meets the core face (depth R_e)
-    out[base + G_MOUTH] = groove_mouth(depth / unit, centre, grown, cb, sb, edge / unit)
-    out[base + G_EDGE] = edge / unit
+    # the mouth corners: where the grown groove meets the core face (depth rho)
+    out[base + G_MOUTH] = groove_mouth(depth / unit, centre, grown, cb, sb, rho / unit)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -364,7 +302,7 @@ def jaw_gap(s, m, lmax, hw, rho, groove, base):
     -------
     tuple
         ``(g, g_s, g_m, g_ss, g_sm, g_mm)``: the gap (distance to the rounded solid, ``-rho``
-        deeper inside than ``rho``) and its first and second derivatives. The gradient
+        deep inside its core) and its first and second derivatives. The gradient
         ``(g_s, g_m)`` is the unit normal of the nearest surface point, pointing to the point.
     """
     hc = hw - rho
@@ -378,29 +316,23 @@ def jaw_gap(s, m, lmax, hw, rho, groove, base):
     cb = groove[base + G_COS]
     sb = groove[base + G_SIN]
     ue = groove[base + G_MOUTH]
-    re = groove[base + G_EDGE]
     u, v = s - a, hw - m
-    # the nearest point of the core rectangle (the bar shrunk by the edge radius): the groove
-    # matters if it or the point lies in the grown groove
-    hce = hw - re
+    # the nearest point of the core rectangle: the groove matters if it or the point lies in
+    # the grown groove
     qs = min(max(s, 0.0), lmax)
-    qm = min(max(m, -hce), hce)
+    qm = min(max(m, -hc), hc)
     q_in, _ = _inside(qs - a, hw - qm, centre, radius, cb, sb)
     p_in, sector = _inside(u, v, centre, radius, cb, sb)
     if not (q_in or p_in):
         return bar
     # the candidates are distances to points of the core K; the nearest is among them: the
-    # nearer mouth corner E = (+-ue, re) in (u, v), the core rectangle's nearest point where it
+    # nearer mouth corner E = (+-ue, rho) in (u, v), the core rectangle's nearest point where it
     # lies outside the groove, the groove's wall below the core face where the point is inside
     side = 1.0 if u >= 0.0 else -1.0
-    d, du, dv, duu, duv, dvv = _point(u - side * ue, v - re)
-    if not q_in:
-        # along the face the rectangle of the edge radius; beyond the bar's ends its own
-        # corners (radius rho): the same gap where the two meet (ds = 0)
-        near = _bar(s, m, lmax, hce, re) if qs == s else bar
-        if near[0] + re < d:
-            # (s, m) -> (u, v): d/du = d/ds, d/dv = -d/dm
-            d, du, dv, duu, duv, dvv = near[0] + re, near[1], -near[2], near[3], -near[4], near[5]
+    d, du, dv, duu, duv, dvv = _point(u - side * ue, v - rho)
+    if not q_in and bar[0] + rho < d:
+        # (s, m) -> (u, v): d/du = d/ds, d/dv = -d/dm
+        d, du, dv, duu, duv, dvv = bar[0] + rho, bar[1], -bar[2], bar[3], -bar[4], bar[5]
     if p_in:
         # the grown groove's wall, from inside: its bottom arc or a flank
         if sector:
@@ -408,16 +340,12 @@ def jaw_gap(s, m, lmax, hw, rho, groove, base):
             dist, pu, pv, puu, puv, pvv = _point(u, wv)
             inner = radius - dist
             foot = centre + radius * (wv / dist if dist > 0.0 else 1.0)
-            if foot >= re and inner < d:
+            if foot >= rho and inner < d:
                 d, du, dv, duu, duv, dvv = inner, -pu, -pv, -puu, -puv, -pvv
         else:
             inner = radius - (cb * side * u + sb * (v - centre))
             foot = v + inner * sb
-            if foot >= re and inner < d:
+            if foot >= rho and inner < d:
                 d, du, dv, duu, duv, dvv = inner, -cb * side, -sb, 0.0, 0.0, 0.0
-    if d - re < -rho:
-        # deeper inside than the bar's corner radius: -rho, as inside the bar's core (the gap
-        # is continuous into the bar's deep inside)
-        return -rho, 0.0, 0.0, 0.0, 0.0, 0.0
     # (u, v) -> (s, m): d/ds = d/du, d/dm = -d/dv
-    return d - re, du, -dv, duu, -duv, dvv
+    return d - rho, du, -dv, duu, -duv, dvv

@@ -50,8 +50,8 @@ P_KR, P_KC, P_H, P_C0X, P_C0Y, P_C1X, P_C1Y, P_HW, P_LMAX = range(9)
 P_TAU, P_KAPPA, P_TH0, P_THMIN, P_PHASE, P_RHO, P_KA, P_A0, P_RINGS = range(9, 18)
 P_MU, P_LAM, P_QUAD, P_SPACING = 18, 19, 20, 21
 # the groove of each finger's jaw, N_GROOVE slots a finger (envs.model.jaw.pack_groove, G_*)
-G_POSITION, G_DEPTH, G_CENTRE, G_RADIUS, G_COS, G_SIN, G_MOUTH, G_EDGE = range(8)
-N_GROOVE = 8
+G_POSITION, G_DEPTH, G_CENTRE, G_RADIUS, G_COS, G_SIN, G_MOUTH = range(7)
+N_GROOVE = 7
 P_GROOVE0 = 22  # right finger's groove (P_GROOVE0 + G_*)
 P_GROOVE1 = P_GROOVE0 + N_GROOVE  # left finger's
 N_PARAMS = P_GROOVE1 + N_GROOVE

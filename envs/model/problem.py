@@ -432,7 +432,7 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_A0] = 0.5 * math.sin(2 * math.pi / n)
     for base, slot in ((S_JAW0, P_GROOVE0), (S_JAW1, P_GROOVE1)):
         pack_groove(s[base + J_DEPTH], s[base + J_BOTTOM_RADIUS], s[base + J_OPENING],
-                    s[base + J_POSITION], s[S_LENGTH], p[P_RHO] * r, r, p, slot)
+                    s[base + J_POSITION], p[P_RHO] * r, r, p, slot)
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:

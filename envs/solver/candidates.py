@@ -13,13 +13,13 @@ from ..model.layout import (
     N_CORNERS,
     P_C0X,
     P_POLICY,
+    P_RHO,
     P_THMIN,
 )
 from .contact import (
     _corner_active,
     _corner_centre,
     _corner_gap,
-    _corner_radius,
     _face_gap,
     _inside,
     _seg_dist,
@@ -35,17 +35,6 @@ CORNER_NEAR = 0.25  # corner-edge constraints for edges this close to a corner's
 # the next round (_grow_candidates), which costs 0.3 iterations on the mean
 FACE_NEAR = 1.0
 CORNER_SWEEP = 12  # samples of the arc a corner sweeps from its start to the closed jaws
-
-
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _largest_corner_radius(prm):
-    """The largest corner radius of either finger (the bar's, the mouth edges')."""
-    largest = 0.0
-    for j in range(2):
-        for c in range(N_CORNERS):
-            if _corner_active(j, c, prm):
-                largest = max(largest, _corner_radius(j, c, prm))
-    return largest
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -68,7 +57,7 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
         ey = q0[k1, 1] - q0[k, 1]
         edges[k, 0] = 0.5 * (q0[k, 0] + q0[k1, 0])
         edges[k, 1] = 0.5 * (q0[k, 1] + q0[k1, 1])
-        far = 0.5 * math.sqrt(ex * ex + ey * ey) + _largest_corner_radius(prm) + CORNER_NEAR
+        far = 0.5 * math.sqrt(ex * ex + ey * ey) + prm[P_RHO] + CORNER_NEAR
         edges[k, 2] = far * far
     for j in range(2):
         th = x0[nb + j]
@@ -115,7 +104,7 @@ def _initial_candidates(x0, n, prm, face_cand, corner_cand, edges, sweep):
                     mx = edges[k, 0] - kx
                     my = edges[k, 1] - ky
                     if mx * mx + my * my < edges[k, 2]:
-                        if _seg_dist(q0, k, kx, ky) - _corner_radius(j, c, prm) < CORNER_NEAR:
+                        if _seg_dist(q0, k, kx, ky) - prm[P_RHO] < CORNER_NEAR:
                             corner_cand[j, c, k] = True
                             break
 

@@ -24,7 +24,6 @@ from ..model.layout import (
     G_CENTRE,
     G_COS,
     G_DEPTH,
-    G_EDGE,
     G_MOUTH,
     G_POSITION,
     G_SIN,
@@ -62,28 +61,18 @@ def _corner_active(j, c, prm):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _corner_radius(j, c, prm):
-    """Radius of the rounded corner c of finger j: the bar's corner radius rho, a groove's
-    mouth edge's own ``R_e`` (:func:`envs.model.jaw.mouth_edge_radius`)."""
-    if c >= N_BAR_CORNERS:
-        return prm[_groove_base(j) + G_EDGE]
-    return prm[P_RHO]
-
-
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _corner_local(j, c, prm):
     """Centre (s, m) of the rounded corner c of finger j in finger coordinates.
 
     The bar's corners sit at s = l (tip, even c) or 0 (root), m = +-(w/2 - rho) (face, c < 2;
-    back); a groove's mouth edges at s = a +- u_E (tip side ``C_MOUTH_TIP``), m = w/2 - R_e
+    back); a groove's mouth edges at s = a +- u_E (tip side ``C_MOUTH_TIP``), m = w/2 - rho
     (:func:`envs.model.jaw.pack_groove`).
     """
     hc = prm[P_HW] - prm[P_RHO]
     if c >= N_BAR_CORNERS:
         base = _groove_base(j)
         ue = prm[base + G_MOUTH]
-        return (prm[base + G_POSITION] + (ue if c == C_MOUTH_TIP else -ue),
-                prm[P_HW] - prm[base + G_EDGE])
+        return prm[base + G_POSITION] + (ue if c == C_MOUTH_TIP else -ue), hc
     sc = prm[P_LMAX] if c % 2 == 0 else 0.0
     if c >= 2:
         hc = -hc
@@ -291,7 +280,7 @@ def _corner_eval(q, k, j, sj, cj, c, prm, grad, hess, want_hess):
     n = q.shape[0]
     k1 = k + 1 if k + 1 < n else 0
     ex, ey, nx, ny = finger_axes(j, sj, cj)
-    rho = _corner_radius(j, c, prm)
+    rho = prm[P_RHO]
     sc, hw = _corner_local(j, c, prm)  # centre of the rounded corner, finger coordinates
     cx = prm[P_C0X + 2 * j]
     cy = prm[P_C0X + 2 * j + 1]
@@ -423,9 +412,9 @@ def _seg_dist(q, k, px, py):
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _corner_gap(q, k, j, sj, cj, c, prm):
-    """Value of :func:`_corner_eval` only: corner centre to segment distance minus its radius."""
+    """Value of :func:`_corner_eval` only: corner centre to segment distance minus rho."""
     kx, ky = _corner_centre(j, sj, cj, c, prm)
-    return _seg_dist(q, k, kx, ky) - _corner_radius(j, c, prm)
+    return _seg_dist(q, k, kx, ky) - prm[P_RHO]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

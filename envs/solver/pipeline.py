@@ -29,7 +29,6 @@ from envs.model.holding import (
     holding_fields,
 )
 from envs.model.layout import (
-    G_EDGE,
     I_ITERATIONS,
     I_ROUNDS,
     I_STABLE,
@@ -39,10 +38,8 @@ from envs.model.layout import (
     J_OPENING,
     J_POSITION,
     N_CORNERS,
-    N_GROOVE,
     N_INFO,
     P_A0,
-    P_GROOVE0,
     P_H,
     P_KA,
     P_KC,
@@ -193,9 +190,6 @@ def _check_row(s, prm, n, ck):
         ck[base + check.JW_BOTTOM_RADIUS] = s[jaw + J_BOTTOM_RADIUS]
         ck[base + check.JW_OPENING] = s[jaw + J_OPENING]
         ck[base + check.JW_POSITION] = s[jaw + J_POSITION]
-    for base, j in ((check.CK_JAW0, 0), (check.CK_JAW1, 1)):
-        # the mouth edges' radius: a parameter of the model (envs.model.jaw.mouth_edge_radius)
-        ck[base + check.JW_EDGE] = prm[P_GROOVE0 + N_GROOVE * j + G_EDGE] * r
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
