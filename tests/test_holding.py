@@ -161,7 +161,8 @@ def test_corner_and_face_contacts_match_a_linear_program():
         row = np.empty(N_HOLD)
         count = holding_one(rows[b], prm[b], n, sol.state_scaled[b], sol.face_scaled[b],
                             sol.corner_forces_n[b] / force_unit, 0.0, np.empty(5),
-                            np.empty((5, 5)), normals, points, forces, np.empty((k, 3)), row)
+                            np.empty((5, 5)), normals, points, forces,
+                            np.empty(k, dtype=np.int64), np.empty((k, 3)), row)
         np.testing.assert_array_equal(row, sol.holding[b])
         normals, points, forces = normals[:count], points[:count], forces[:count]
         # the pin carries what the contact forces leave: minus their sum
@@ -246,3 +247,108 @@ def test_the_reported_optimum_is_the_fem_s_within_ten_percent(argv, tmp_path, ca
     assert abs(s["reported_reward"] - s["fem_reward_of_reported"]) <= (
         0.10 * abs(s["fem_reward_of_reported"]) + 1e-4)
     assert s["reward_model"]["n_rings"] == 6
+
+
+def _arc_grasp(nodes_per_finger, jitter_m=0.0, seed=0):
+    """Two fingers each pressing the disk (r = 0.07 m, centre C) along an arc of 20 deg about
+    -/+ 75 deg from the top with a parabolic pressure, resolved by ``nodes_per_finger``
+    contacts of radial normals; the pin carries the net force. Returns the contact list, the
+    pin force and each contact's run label (one run per finger)."""
+    rng = np.random.default_rng(seed)
+    centre, r = np.array([0.0, 0.1]), 0.07
+    normals, points, forces, labels = [], [], [], []
+    for side, mid in enumerate((math.radians(-15.0), math.radians(195.0))):
+        phi = mid + math.radians(10.0) * np.linspace(-1, 1, nodes_per_finger + 2)[1:-1]
+        weight = 1.0 - ((phi - mid) / math.radians(10.0)) ** 2
+        f = 3.0 * weight / weight.sum()
+        out = np.c_[np.cos(phi), np.sin(phi)]
+        points.append(centre + (r + jitter_m * rng.standard_normal(phi.size))[:, None] * out)
+        normals.append(-out)
+        forces.append(f)
+        labels.append(np.full(phi.size, side))
+    normals, points, forces = np.concatenate(normals), np.concatenate(points), np.concatenate(
+        forces)
+    pin = -(forces[:, None] * normals).sum(axis=0)
+    return centre, r, normals, points, forces, pin, np.concatenate(labels)
+
+
+def test_a_run_on_a_curved_jaw_is_one_pressure_patch_at_any_mesh():
+    # the same pressure on an arc, resolved by 3 to 48 contacts, a sideways payload to carry:
+    # as one patch a run's pressure shift is its total force's, so the required friction
+    # converges with the mesh; with each contact a face of its own (the flat-face rule) the
+    # shift shrinks like 1/sqrt(nodes) and the friction keeps growing with the mesh
+    half_width = hertz_half_width(0.07, 0.01, 1e5, 0.45)
+    patch, single = {}, {}
+    for nodes in (3, 12, 48):
+        centre, r, normals, points, forces, pin, labels = _arc_grasp(nodes)
+        patch[nodes] = holding_row(normals, points, forces, centre, r, pin, 0.0, 0.3,
+                                   half_width, labels)[H_MU]
+        single[nodes] = holding_row(normals, points, forces, centre, r, pin, 0.0, 0.3,
+                                    half_width)[H_MU]
+        # the reaction alone: the closed form of faces at 75 deg, the patches aside
+        alone = holding_row(normals, points, forces, centre, r, pin, 0.0, 0.0, half_width,
+                            labels)[H_MU]
+        assert alone == pytest.approx(math.tan(math.radians(15.0)), rel=1e-9)
+    assert abs(patch[48] - patch[12]) < 0.005 * patch[48]
+    assert abs(patch[48] - patch[3]) < 0.02 * patch[48]
+    assert single[48] - single[12] > 0.05
+    assert all(single[k] > patch[k] for k in patch)
+
+
+def test_a_flat_flank_jittered_by_the_gap_tolerance_keeps_the_exact_flank_s_answer():
+    # a flat flank seen by the FEM: its nodes off the flank's line by the penalty's
+    # penetration (~1e-7 m); as one patch of one normal they are one generator and the answer
+    # is the exact line's. Two flat flanks cannot take the moment of a heavy sideways payload
+    # (infinite friction); each node its own generator, the jitter opens a sliver facet whose
+    # tiny support reads as a huge finite friction instead
+    centre, r = np.array([0.0, 0.1]), 0.07
+    theta = 0.2
+    normals, points, forces, labels = [], [], [], []
+    for side, sign in enumerate((1.0, -1.0)):
+        n = np.array([-sign * math.cos(theta), math.sin(theta)])
+        axis = np.array([sign * math.sin(theta), math.cos(theta)])
+        foot = centre - r * n
+        for k in range(6):
+            normals.append(n)
+            points.append(foot + (k - 2.5) * 0.002 * axis)
+            forces.append(1.0 + 0.1 * k)
+            labels.append(side)
+    normals, points, forces = np.array(normals), np.array(points), np.array(forces)
+    labels = np.array(labels)
+    pin = -(forces[:, None] * normals).sum(axis=0)
+    jittered = points + 1e-7 * np.random.default_rng(1).standard_normal(points.shape)
+    half_width = hertz_half_width(r, 0.01, 1e6, 0.45)
+    for payload in (0.1, 1.0):
+        exact = holding_row(normals, points, forces, centre, r, pin, 0.0, payload, half_width,
+                            labels)[H_MU]
+        noisy = holding_row(normals, jittered, forces, centre, r, pin, 0.0, payload,
+                            half_width, labels)[H_MU]
+        assert noisy == exact
+    assert exact == math.inf
+    assert np.isfinite(holding_row(normals, jittered, forces, centre, r, pin, 0.0, 1.0,
+                                   half_width)[H_MU])
+    with pytest.raises(ValueError, match="patches"):
+        holding_row(normals, points, forces, centre, r, pin, 0.0, 1.0, half_width, labels[:3])
+
+
+def test_the_point_spring_runs_name_consecutive_pressed_points():
+    # the labels of envs.solver.reaction: a run of consecutive pressed points (wrapping round
+    # the contour's ends) shares its first point's label, per finger; a mouth edge joins the run
+    # of a pressed end of its edge, else is a patch of its own; the bar's corners keep the
+    # flat-face rule
+    from envs.model.holding import NO_PATCH
+    from envs.model.layout import C_FACE_TIP, C_MOUTH_ROOT, C_MOUTH_TIP
+    from envs.solver.reaction import _corner_label, _run_label
+
+    n = 10
+    lam = np.zeros((2, n))
+    lam[0, [0, 1, 2, 5, 6, 9]] = 1.0
+    labels = [_run_label(lam, 0, i, n) for i in (9, 0, 1, 2, 5, 6)]
+    assert labels == [9, 9, 9, 9, 5, 5]
+    lam[1, :] = 1.0  # pressed all round: one run
+    assert {_run_label(lam, 1, i, n) for i in range(n)} == {n}
+    assert _corner_label(lam, 0, C_MOUTH_TIP, 2, 3, n) == 9  # the edge 2-3 ends the run 9..2
+    assert _corner_label(lam, 0, C_MOUTH_ROOT, 4, 5, n) == 5
+    free = _corner_label(lam, 0, C_MOUTH_TIP, 3, 4, n)
+    assert free >= 2 * n and free != _corner_label(lam, 0, C_MOUTH_ROOT, 3, 4, n)
+    assert _corner_label(lam, 0, C_FACE_TIP, 2, 3, n) == NO_PATCH

@@ -23,6 +23,7 @@ from envs.model.contact_width import (
     segment_hertz_cap,
 )
 from envs.model.geometry import finger_frame
+from envs.model.holding import H_MU, NO_PATCH, hertz_half_width, holding_row
 from envs.model.jaw import STRAIGHT, JawProfile
 from envs.scene import Scene
 from tests.test_fem import solve_spied
@@ -319,6 +320,29 @@ def test_fitted_cradle_touches_along_its_arc_at_a_small_torque(cradle):
     # inside the contact's edges carries a fair part of it
     inner = np.argsort(ang)[2:-2]
     assert pressure[inner].min() > 0.2 * pressure[inner].max()
+
+
+def test_a_cradle_s_arc_of_rim_nodes_is_one_pressure_patch(cradle):
+    """The FEM's contact list labels each finger's run of loaded rim nodes on the cradle as
+    one pressure patch (the rule the point-spring model applies to its contour points), the
+    two fingers' runs apart, and the holding row is the one of those labels."""
+    scene, onset, (res,), system, x, load = cradle
+    normals, points, forces, net, moment, patches = system.contact_list(
+        x, load, with_patches=True)
+    right = points[:, 0] > scene.disk.center_m[0]
+    for side in (right, ~right):
+        labels = np.unique(patches[side])
+        assert labels.size == 1 and labels[0] != NO_PATCH
+        assert np.sum(side) >= 5  # a conforming arc: many nodes, one patch
+    assert patches[right][0] != patches[~right][0]
+    disk = scene.disk
+    centre = np.asarray(disk.center_m, dtype=float)
+    moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
+    half = hertz_half_width(disk.radius_m, disk.thickness_m, disk.youngs_modulus_pa,
+                            disk.poisson_ratio)
+    row = holding_row(normals, points, forces, centre, disk.radius_m, -net, -moment_c, 0.0,
+                      half, patches)
+    assert res.required_friction == pytest.approx(row[H_MU], rel=1e-9, abs=1e-12)
 
 
 def test_fitted_cradle_is_not_capped_when_pressed_hard():

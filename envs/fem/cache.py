@@ -20,8 +20,9 @@ from .result import FemResult
 # lateral offset in the key (every disk field but the point-spring calibration scales); fem-6:
 # the payload, the grip force and what limits the friction; fem-7: the pressure shift within the
 # faces' Hertz patches; fem-8: the contact fractions interpolated between rim nodes
-# (envs.model.contact_width)
-FEM_VERSION = "fem-8"
+# (envs.model.contact_width); fem-9: a grooved jaw's runs of loaded rim nodes are pressure
+# patches in the holding (envs.model.holding)
+FEM_VERSION = "fem-9"
 
 
 def fem_cache_dir() -> Path:

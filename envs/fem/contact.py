@@ -204,6 +204,8 @@ class _JawSolid(_Obstacle):
     node position and the finger angle exactly (the kernel's Hessian gives the curvature terms).
     """
 
+    grooved = True  # its runs of loaded nodes are pressure patches (FemSystem.contact_list)
+
     def __init__(self, scene: Scene, side: int, qi: int, jaw: JawProfile) -> None:
         self.scene = scene
         self.gripper = scene.gripper

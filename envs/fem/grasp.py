@@ -279,11 +279,13 @@ def _solve_grasp(
         finger_corner_n = [float(sum(f for c, f in zip(system.corners, corner_forces,
                                                        strict=True) if c.side == side))
                            for side in (0, 1)]
-        normals, points, node_forces, net, moment = system.contact_list(x, load)
+        normals, points, node_forces, net, moment, patches = system.contact_list(
+            x, load, with_patches=True)
         # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
         moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
         hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c, payload,
-                           hertz_half_width(r, t, disk.youngs_modulus_pa, disk.poisson_ratio))
+                           hertz_half_width(r, t, disk.youngs_modulus_pa, disk.poisson_ratio),
+                           patches)
         gaps = system.gaps(x)
         pen = 0.0
         for (g, valid), f in zip(gaps, forces, strict=True):

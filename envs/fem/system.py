@@ -14,6 +14,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from envs.model.holding import NO_PATCH
+
 from .body import _Body
 from .contact import (
     _corner_feature,
@@ -241,7 +243,8 @@ class _System:
         out = self._contact(x, load, False)
         return out[3], out[4]
 
-    def contact_list(self, x: np.ndarray, load: float) -> tuple[np.ndarray, ...]:
+    def contact_list(self, x: np.ndarray, load: float, with_patches: bool = False
+                     ) -> tuple[np.ndarray, ...]:
         """The contacts on the body and their net force and moment about the origin.
 
         Returns ``(normals (k, 2), points (k, 2) [m], forces (k,) [N], net_force (2,) [N],
@@ -249,14 +252,19 @@ class _System:
         face's on a straight jaw, the force the node's penalty force) and each loaded jaw corner
         (its normal the direction of the force it puts on the rim nodes it presses, at the
         corner's point of contact); the net force and moment sum the forces on the rim nodes
-        (the hub carries their opposite at equilibrium).
+        (the hub carries their opposite at equilibrium). With ``with_patches``, a sixth array
+        (k,) of each contact's pressure-patch label (:func:`envs.model.holding.holding_row`):
+        on a grooved jaw the run of consecutive loaded rim nodes it belongs to (a groove's
+        rounded mouth edge joins the run of a node it presses), else
+        :data:`envs.model.holding.NO_PATCH`.
         """
         p = self.rim_positions(x)
         nodes, corner_forces = self.contact_forces(x, load)
-        normals, points, forces = [], [], []
+        normals, points, forces, patches = [], [], [], []
         net = np.zeros(2)
         moment = 0.0
-        for ob, f in zip(self.obstacles, nodes, strict=True):
+        node_patch = np.full(p.shape[0], NO_PATCH)  # the run label of each loaded grooved node
+        for index, (ob, f) in enumerate(zip(self.obstacles, nodes, strict=True)):
             _, _, dgdp, *_ = ob.evaluate(p, x[self.n + ob.qi])
             act = np.flatnonzero(f > 0)
             # the obstacle pushes a node along its normal (the gap's gradient)
@@ -266,6 +274,11 @@ class _System:
             normals.append(dgdp[act])
             points.append(p[act])
             forces.append(f[act])
+            labels = np.full(act.size, NO_PATCH)
+            if getattr(ob, "grooved", False) and self.rim_order is not None:
+                labels = _run_labels(f > 0, self.rim_order, index)[act]
+                node_patch[act] = labels
+            patches.append(labels)
         if self.corners:
             poly = p[self.rim_order]
             k = self.k_corner
@@ -276,6 +289,7 @@ class _System:
                 c = corner.evaluate(float(x[self.n + corner.qi]))[0]
                 lam = 0.0 if corner.radius_m > 0.0 else lam_c
                 total = np.zeros(2)
+                pressed = []  # the rim nodes (rim indices) this corner pushes
                 for gap, kind, idx, sign in _corner_terms(poly, c, corner.radius_m):
                     trial = lam - k * gap
                     if not trial > 0:
@@ -289,6 +303,7 @@ class _System:
                         _, gz = _vertex_distance_gradient(np.concatenate((poly[idx], c)))
                     gz = sign * np.real(gz[: 2 * len(ends)]).reshape(-1, 2)
                     vec = trial * gz  # the force on each rim node the corner presses
+                    pressed.extend(int(self.rim_order[e]) for e in ends)
                     net += vec.sum(axis=0)
                     moment += float(np.sum(poly[ends, 0] * vec[:, 1] - poly[ends, 1] * vec[:, 0]))
                     total += vec.sum(axis=0)
@@ -297,9 +312,16 @@ class _System:
                 # a rounded corner touches the rim its radius from its centre, along the push
                 points.append((c + corner.radius_m * total / size)[None, :])
                 forces.append(np.array([size]))
-        return (np.concatenate(normals) if normals else np.zeros((0, 2)),
-                np.concatenate(points) if points else np.zeros((0, 2)),
-                np.concatenate(forces) if forces else np.zeros(0), net, moment)
+                patches.append(np.array([_corner_patch(corner, pressed, node_patch,
+                                                       len(self.obstacles) * p.shape[0]
+                                                       + len(patches))]))
+        out = (np.concatenate(normals) if normals else np.zeros((0, 2)),
+               np.concatenate(points) if points else np.zeros((0, 2)),
+               np.concatenate(forces) if forces else np.zeros(0), net, moment)
+        if with_patches:
+            return (*out, np.concatenate(patches).astype(np.int64) if patches
+                    else np.zeros(0, dtype=np.int64))
+        return out
 
     def gaps(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         p = self.rim_positions(x)
@@ -372,3 +394,42 @@ class _System:
 
     def converged(self, g: np.ndarray) -> bool:
         return self.residual_ratio(g) <= 1.0
+
+
+def _run_labels(loaded: np.ndarray, order: np.ndarray, obstacle: int) -> np.ndarray:
+    """Pressure-patch label of each rim node (rim indices) for one obstacle: the run of
+    consecutive loaded nodes along the rim (``order``: the rim counter-clockwise) that the node
+    belongs to, named ``obstacle * m + first`` by the run's first node's place in ``order``;
+    :data:`envs.model.holding.NO_PATCH` for a free node."""
+    m = order.size
+    on = loaded[order]
+    labels = np.full(loaded.size, NO_PATCH)
+    if not on.any():
+        return labels
+    if on.all():
+        labels[order] = obstacle * m
+        return labels
+    start = int(np.argmin(on))  # a free node: no run wraps round the walk's start
+    first = -1
+    for k in range(1, m + 1):
+        place = (start + k) % m
+        if on[place]:
+            if first < 0:
+                first = place
+            labels[order[place]] = obstacle * m + first
+        else:
+            first = -1
+    return labels
+
+
+def _corner_patch(corner, pressed: list[int], node_patch: np.ndarray, own: int) -> int:
+    """Pressure-patch label of a loaded jaw corner: a groove's rounded mouth edge joins the run
+    of a grooved node among those it presses; the tips (sharp, radius 0) and a mouth edge
+    pressing no loaded node are patches of their own (``own``), the tips by the flat-face rule
+    (:data:`envs.model.holding.NO_PATCH`)."""
+    if not corner.radius_m > 0.0:
+        return NO_PATCH
+    for node in pressed:
+        if node_patch[node] != NO_PATCH:
+            return int(node_patch[node])
+    return own

@@ -22,7 +22,10 @@ pressed or released). Without it, the two faces' tangential forces could balance
 force but, in general, not its moment too, and a grasp turned a hair off its mirror symmetry, or
 an object placed off the axis, would need infinite friction; with it, the required friction
 changes continuously with the grasp. A corner's patch is given the same width (an upper bound:
-the rounded corner is more curved than a face).
+the rounded corner is more curved than a face). On a grooved jaw a patch is a *run* of contacts
+along the object's contour (a cradle's arc, a flank, the rounded mouth edge beside them), one
+patch of the run's total force however many nodes the mesh puts in it, the same rule at both
+fidelities; the contacts of a run that share a normal (a flat flank) are one generator.
 
 The *required friction* is the smallest such ``mu``: 0 when nothing is carried, infinite when
 no tangential forces can carry it (one finger touching: its tangent cannot balance its own
@@ -67,6 +70,7 @@ __all__ = [
     "LIMIT_IN_PLANE",
     "LIMIT_NAMES",
     "SPAN_TOL",
+    "NO_PATCH",
     "in_plane_friction",
     "lift_friction",
     "payload_friction",
@@ -93,6 +97,9 @@ LIMIT_NAMES = ("none", "reaction", "out of plane", "in plane")
 # point-spring model) and ~1e-6 (the FEM's Newton), while a reaction no friction can carry (one
 # finger touching) lies outside by a share of order 1
 SPAN_TOL = 1e-5
+# the patch label of a contact that the flat-face rule groups (one normal on one line): a
+# straight finger's contacts and the bar's corners (envs.model.holding._pressure_shift)
+NO_PATCH = -1
 _PARALLEL = 1e-12  # generators this close to parallel (sine of their angle) are merged
 
 
@@ -503,18 +510,23 @@ def payload_friction(gens, count, cx, cy, cz, shift, weight, tol, out):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _pressure_shift(normals, points, forces, count, length_scale, half_width):
+def _pressure_shift(normals, points, forces, patches, count, length_scale, half_width):
     """How far the normal forces' moment about the centre can change [N·m] when the pressure
     on each face shifts within its contact patch, total fixed: (low <= 0, high >= 0).
 
     A face is the contacts of one normal on one line (a finger's gripping face; a corner is a
-    face of one point). Its patch is the Hertz line contact of its total force ``F``, half-width
-    ``a = half_width sqrt(F)`` [m] (:func:`hertz_half_width`) about the resultant: moving the
-    resultant along the face by ``s`` changes its moment by ``F s``, so the face adds ``-F a``
-    to ``low`` and ``F a`` to ``high``. The patch, not the pressed points, bounds the shift: it
-    is the physical width, the same at every mesh and at both fidelities, and it shrinks
+    face of one point), or the contacts of one patch label (``patches[i] >= 0``: a run of
+    contacts along the object's contour on a grooved jaw, :data:`NO_PATCH` otherwise). Its
+    patch is the Hertz line contact of its total force ``F``, half-width ``a = half_width
+    sqrt(F)`` [m] (:func:`hertz_half_width`) about the resultant: moving the resultant along
+    the face by ``s`` changes its moment by ``F s``, so the face adds ``-F a`` to ``low`` and
+    ``F a`` to ``high``. The patch, not the pressed points, bounds the shift: it is the
+    physical width, the same at every mesh and at both fidelities, and it shrinks
     continuously to nothing as a contact is released (the points' span jumps by a spacing when
-    one point more is pressed)."""
+    one point more is pressed). A run on a curved surface (a cradle's arc, a flank and the
+    rounded mouth edge beside it) is one patch, as on a flat face: its nodes are the
+    discretization's, not contacts of their own (a mesh that puts ten nodes where another
+    puts two would otherwise shift its pressure by a third as much)."""
     low = high = 0.0
     # contacts of one face lie on its line to the solver's tolerance on the gap; two faces of
     # one normal lie far apart (a finger has one gripping face)
@@ -524,19 +536,28 @@ def _pressure_shift(normals, points, forces, count, length_scale, half_width):
             continue
         leader = True
         for j in range(i):
-            if forces[j] > 0.0 and _same_face(normals, points, i, j, tol):
+            if forces[j] > 0.0 and _same_patch(normals, points, patches, i, j, tol):
                 leader = False
                 break
         if not leader:
             continue
         total = 0.0
         for k in range(i, count):
-            if forces[k] > 0.0 and (k == i or _same_face(normals, points, i, k, tol)):
+            if forces[k] > 0.0 and (k == i or _same_patch(normals, points, patches, i, k, tol)):
                 total += forces[k]
         reach = total * half_width * math.sqrt(total)
         low -= reach
         high += reach
     return low, high
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _same_patch(normals, points, patches, i, j, tol):
+    """Contacts i and j share a pressure patch: the same label, or both unlabelled on one
+    flat face (:func:`_same_face`)."""
+    if patches[i] >= 0 or patches[j] >= 0:
+        return patches[i] == patches[j]
+    return _same_face(normals, points, i, j, tol)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -559,9 +580,22 @@ def _same_face(normals, points, i, j, tol):
                + (points[i, 1] - points[j, 1]) * normals[i, 1]) <= tol
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _same_normal(normals, i, j):
+    """Contacts i and j share a normal (to rounding)."""
+    return (abs(normals[i, 0] - normals[j, 0]) <= 1e-9
+            and abs(normals[i, 1] - normals[j, 1]) <= 1e-9)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _arm(points, i, centre_x, centre_y, tx, ty):
+    """Moment arm ``(p_i - C) x tau`` of a unit tangential force at contact i [m]."""
+    return (points[i, 0] - centre_x) * ty - (points[i, 1] - centre_y) * tx
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, length_scale,
-                        pin_x, pin_y, pin_moment, payload, half_width, gens, out):
+def holding_of_contacts(normals, points, forces, patches, count, centre_x, centre_y,
+                        length_scale, pin_x, pin_y, pin_moment, payload, half_width, gens, out):
     """The holding row of a contact list, a pin reaction and a payload.
 
     Parameters
@@ -569,6 +603,14 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
     normals, points, forces
         Contact ``i < count``: unit normal on the object (2,), the point where it acts [m]
         (2,), and its normal force [N] (>= 0; zero forces are skipped).
+    patches
+        Contact ``i``'s pressure patch (int): :data:`NO_PATCH` where the flat-face rule groups
+        it (one normal on one line), else a label shared by the contacts of one run along the
+        object's contour (:func:`_pressure_shift`). Contacts of one label and one normal are
+        one generator, at their force-weighted arm: the points of one flat flank differ only
+        by the solver's tolerance on the gap (the FEM's penalty), which would otherwise leave
+        generators a hair off parallel and the zonotope a sliver of a facet whose tiny support
+        reads as a huge required friction.
     centre_x, centre_y
         The fixed centre ``C`` [m].
     length_scale
@@ -594,7 +636,21 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
             continue
         total += f
         tx, ty = -normals[i, 1], normals[i, 0]
-        arm = (points[i, 0] - centre_x) * ty - (points[i, 1] - centre_y) * tx
+        arm = _arm(points, i, centre_x, centre_y, tx, ty)
+        if patches[i] >= 0:
+            # the patch's contacts of this normal: one generator at their force-weighted arm
+            first = True
+            weight = moment = 0.0
+            for k in range(count):
+                if forces[k] > 0.0 and patches[k] == patches[i] and _same_normal(normals, i, k):
+                    if k < i:
+                        first = False
+                        break
+                    weight += forces[k]
+                    moment += forces[k] * _arm(points, k, centre_x, centre_y, tx, ty)
+            if not first:
+                continue
+            f, arm = weight, moment / weight
         gens[m, 0] = f * tx
         gens[m, 1] = f * ty
         gens[m, 2] = f * arm / length_scale
@@ -604,7 +660,8 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
     out[H_PIN_MOMENT] = pin_moment
     out[H_PAYLOAD] = payload
     out[H_GRIP] = total
-    low, high = _pressure_shift(normals, points, forces, count, length_scale, half_width)
+    low, high = _pressure_shift(normals, points, forces, patches, count, length_scale,
+                                half_width)
     scale = max(total, math.sqrt(pin_x * pin_x + pin_y * pin_y))
     # the tangential forces carry the pin's moment less what the shifted pressure takes over:
     # anywhere in [pin_moment - high, pin_moment - low], over L
@@ -614,18 +671,26 @@ def holding_of_contacts(normals, points, forces, count, centre_x, centre_y, leng
 
 
 def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0) -> np.ndarray:
+                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
+                patches=None) -> np.ndarray:
     """:func:`holding_of_contacts` of plain arrays (the FEM's contact list), a row (N_HOLD,);
-    ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no shift)."""
+    ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no shift);
+    ``patches``: each contact's patch label (default: :data:`NO_PATCH` for all, the flat-face
+    rule)."""
     normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
     count = forces.size
+    labels = (np.full(count, NO_PATCH, dtype=np.int64) if patches is None
+              else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
+    if labels.size != count:
+        raise ValueError(f"patches needs one label per contact ({count}), got {labels.size}")
     gens = np.zeros((max(count, 1), 3))
     out = np.empty(N_HOLD)
-    holding_of_contacts(normals, points, forces, count, float(centre_m[0]), float(centre_m[1]),
-                        float(length_scale_m), float(pin_force_n[0]), float(pin_force_n[1]),
-                        float(pin_moment_nm), float(payload_n), float(half_width), gens, out)
+    holding_of_contacts(normals, points, forces, labels, count, float(centre_m[0]),
+                        float(centre_m[1]), float(length_scale_m), float(pin_force_n[0]),
+                        float(pin_force_n[1]), float(pin_moment_nm), float(payload_n),
+                        float(half_width), gens, out)
     return out
 
 

@@ -275,9 +275,10 @@ def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_s
     grad5, hess5 = np.empty(5), np.empty((5, 5))
     normals, contact_points = np.empty((k, 2)), np.empty((k, 2))
     forces, gens = np.empty(k), np.empty((k, 3))
+    patches = np.empty(k, dtype=np.int64)
     for b in range(start, stop_row):
         holding_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], payload[b], grad5,
-                    hess5, normals, contact_points, forces, gens, holding[b])
+                    hess5, normals, contact_points, forces, patches, gens, holding[b])
         st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                          infos[b], points[b], interior[b], face[b], corner[b], stop[b],
                          totals[b], edges[b], metrics[b], ck[b], verdict[b])

@@ -9,11 +9,10 @@ centre carries what they leave unbalanced (:mod:`envs.model.holding`).
 
 Jaw grooves need nothing more: a face contact's normal is its gap's gradient on the grooved
 finger too (:func:`envs.model.jaw.jaw_gap`), and a groove's two mouth edges are corners like
-the bar's ends. The pressure shift of :func:`envs.model.holding.holding_of_contacts` groups the
-contacts that share a normal and a line across it as one face: a V-groove's flank is a face of
-its own, and each contact on a curved surface (a cradle's arc, a rounded mouth edge) is a face
-by itself, whose pressure may shift by its own force's Hertz half-width only. That is
-conservative: a patch on an arc shifts less than the face it would share on a flat bar.
+the bar's ends. The pressure shift of :func:`envs.model.holding.holding_of_contacts` groups a
+straight finger's contacts that share a normal and a line across it as one face; on a grooved
+finger a run of consecutive pressed contour points (with a mouth edge pressing an edge of the
+run) is one patch, the rule the FEM applies to its runs of rim nodes.
 """
 
 from __future__ import annotations
@@ -22,8 +21,9 @@ import math
 
 from numba import njit
 
-from ..model.holding import hertz_half_width, holding_of_contacts
+from ..model.holding import NO_PATCH, hertz_half_width, holding_of_contacts
 from ..model.layout import (
+    N_BAR_CORNERS,
     N_CORNERS,
     S_DISTANCE,
     S_OFFSET_X,
@@ -34,7 +34,7 @@ from ..model.layout import (
     S_YOUNG,
 )
 from ..model.problem import stiffness_unit
-from .contact import _corner_eval, _face_eval, _sel, _trig
+from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
 
 __all__ = ["max_contacts", "holding_one"]
 
@@ -46,9 +46,38 @@ def max_contacts(n):
     return 2 * n * (1 + N_CORNERS)
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _run_label(lam_face, j, i, n):
+    """Pressure-patch label of face contact i on grooved finger j: the run of consecutive
+    pressed contour points it belongs to, named by the run's first point (``j n + first``;
+    ``j n`` for a contour pressed all round)."""
+    first = i
+    for _ in range(n):
+        before = first - 1 if first > 0 else n - 1
+        if not lam_face[j, before] > 0.0:
+            return j * n + first
+        first = before
+    return j * n
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _corner_label(lam_face, j, c, k, k1, n):
+    """Pressure-patch label of corner c of finger j on contour edge (k, k1): a groove's mouth
+    edge joins the run of a pressed end point of its edge (the rounded edge continues the
+    jaw's surface), else it is a patch of its own; the bar's corners keep the flat-face rule
+    (:data:`envs.model.holding.NO_PATCH`)."""
+    if c < N_BAR_CORNERS:
+        return NO_PATCH
+    if lam_face[j, k] > 0.0:
+        return _run_label(lam_face, j, k, n)
+    if lam_face[j, k1] > 0.0:
+        return _run_label(lam_face, j, k1, n)
+    return 2 * n + (j * N_CORNERS + c) * n + k
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, normals, points,
-                forces, gens, out):
+                forces, patches, gens, out):
     """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer.
 
     Parameters
@@ -60,8 +89,8 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
     payload
         The payload ``W`` [N] the grasp must carry in every direction of the load set
         (:mod:`envs.model.holding`), >= 0.
-    grad5, hess5, normals, points, forces, gens
-        Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / 3).
+    grad5, hess5, normals, points, forces, patches, gens
+        Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / - (int) / 3).
     out
         The holding row (layout ``H_*``), written: the pin force on the object [N], its
         moment about the centre [N·m], the required friction [-], the payload and the grip
@@ -92,6 +121,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
             normals[count, 0], normals[count, 1] = nx, ny
             points[count, 0], points[count, 1] = px + xc, py + yc
             forces[count] = f
+            patches[count] = _run_label(lam_face, j, i, n) if _grooved(j, prm) else NO_PATCH
             fx += f * nx
             fy += f * ny
             moment += f * (px * ny - py * nx)
@@ -123,10 +153,11 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
                 normals[count, 0], normals[count, 1] = tx / size, ty / size
                 points[count, 0], points[count, 1] = px + xc, py + yc
                 forces[count] = f * size
+                patches[count] = _corner_label(lam_face, j, c, k, k1, n)
                 count += 1
     # the centre carries what the contacts leave unbalanced
     # the faces' contact patches with the solved model's stiffness (its scale times E)
     half_width = hertz_half_width(r, s[S_THICKNESS], s[S_SCALE] * s[S_YOUNG], s[S_POISSON])
-    holding_of_contacts(normals, points, forces, count, xc, yc, r, -fx, -fy, -moment, payload,
-                        half_width, gens, out)
+    holding_of_contacts(normals, points, forces, patches, count, xc, yc, r, -fx, -fy, -moment,
+                        payload, half_width, gens, out)
     return count
