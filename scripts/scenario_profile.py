@@ -118,6 +118,7 @@ def scenarios(designs: np.ndarray, placement_m: float, repeats: int) -> dict:
         "fast_path_mean_steps_settled": float(fast_steps[settled].mean()) if settled.any()
         else 0.0,
         "fast_path_us_per_follower": 1e6 * stages.get("fast_path", 0.0) / max(1, infos.shape[0]),
+        "fast_path_us_per_step": 1e6 * stages.get("fast_path", 0.0) / max(1.0, fast_steps.sum()),
         "independent_us_per_grasp": 1e6 * independent / cold["converged"].size,
         "converged_independent": int(cold["converged"].sum()),
         "converged_warm": int(warm["converged"].sum()),
