@@ -52,6 +52,7 @@ from ..model.layout import (
 from ..model.rings import kernel_copy, mesh_band_index
 from ..parallel import run_rows
 from .candidates import _grow_candidates
+from .chord import _chord_polish
 from .contact import (
     _all_gaps,
     _build_constraints,
@@ -62,7 +63,6 @@ from .contact import (
     _trig,
 )
 from .driver import _finish
-from .polish import _polish
 from .status import CONTACT_CYCLE, OK, POLISH_FAIL
 
 __all__ = ["follow_one", "follow_rows", "follow_batch"]
@@ -192,7 +192,7 @@ def _polish_on(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, acti
     for _attempt in range(POLISH_ATTEMPTS):
         xp = x.copy()
         lp = lam[:mcount].copy()
-        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
+        okp, stable = _chord_polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
                               active, work_it)
         stable_out[0] = stable
         if not okp:
