@@ -210,7 +210,7 @@ def _solve_following(n: int, scene: np.ndarray, prm: np.ndarray, xs: np.ndarray,
     contact set (:mod:`envs.solver.follow`), in place on ``xs`` and ``lam_face``.
 
     Returns the answers of every row, the followers the fast path ran on and those it did not
-    (their leader did not end on a stable equilibrium: they still hold their start)."""
+    (their leader leads none, :func:`_settled`: they still hold their start)."""
     b = prm.shape[0]
     ans = _Answers(np.zeros((b, N_INFO)), np.zeros((b, 2, N_CORNERS, n)), np.zeros((b, 2)),
                    np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_),
