@@ -114,13 +114,14 @@ FIDELITIES = ("psm", "fem")
 def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs: np.ndarray,
                      kf: np.ndarray, weights: RewardWeights,
                      model: tuple[int, str, float] = (1, "spring", 1.0),
-                     fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS
-                     ) -> dict[str, np.ndarray]:
+                     fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS,
+                     leaders: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
     ``needs``: each object's strain limit, friction coefficient and payload (columns
     ``NEED_*``);
     ``model``: rings, element and the factor of the member's calibration on the disks'
-    stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``)."""
+    stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``);
+    ``leaders``: validated leader rows (see :func:`evaluate_designs`) or None."""
     batch = des.shape[0]
     n_rings, element, model_scale = model
     out = _empty_output(batch)
@@ -153,7 +154,8 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
-                            element=element, payload_n=needs[rows, NEED_PAYLOAD])
+                            element=element, payload_n=needs[rows, NEED_PAYLOAD],
+                            leaders=_group_leaders(leaders, rows))
         _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -167,11 +169,49 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     return out
 
 
+def _group_leaders(leaders: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
+    """The leaders of a group of ``rows`` (one N, valid at rest) in the group's own indices;
+    a row whose leader is outside the group has none."""
+    if leaders is None:
+        return None
+    position = np.full(leaders.shape[0], -1, dtype=np.int64)
+    position[rows] = np.arange(rows.size)
+    lead = leaders[rows]
+    return np.where(lead >= 0, position[np.maximum(lead, 0)], -1)
+
+
+def _check_leaders(leaders, batch: int) -> np.ndarray | None:
+    """``leaders`` of :func:`evaluate_designs` as (B,) int64, or a ValueError."""
+    if leaders is None:
+        return None
+    arr = np.asarray(leaders)
+    if arr.shape != (batch,) or not (arr.size == 0 or np.issubdtype(arr.dtype, np.integer)):
+        raise ValueError(f"leaders must be integers of shape ({batch},), got {arr.dtype} "
+                         f"{arr.shape}")
+    arr = arr.astype(np.int64)
+    bad = (arr < -1) | (arr >= batch)
+    if not bad.any():
+        bad = (arr >= 0) & (arr[np.maximum(arr, 0)] >= 0)
+    if bad.any():
+        raise ValueError(f"leaders must be -1 or the index in [0, {batch - 1}] of a row without "
+                         f"a leader; row {int(np.flatnonzero(bad)[0])} is not")
+    return arr
+
+
+def _chunk_leaders(leaders: np.ndarray | None, start: int, size: int) -> np.ndarray | None:
+    """The leaders of rows ``start .. start + size - 1`` in the chunk's own indices."""
+    if leaders is None:
+        return None
+    lead = leaders[start : start + size] - start
+    return np.where((lead >= 0) & (lead < size), lead, -1)
+
+
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
                     model: tuple[int, str, float] = (1, "spring", 1.0), fidelity: str = "psm",
                     fem_rings: int = FEM_DESIGN_RINGS) -> dict[str, np.ndarray]:
-    return _evaluate_arrays(*chunk, weights=weights, model=model, fidelity=fidelity,
-                            fem_rings=fem_rings)
+    *arrays, leaders = chunk
+    return _evaluate_arrays(*arrays, weights=weights, model=model, fidelity=fidelity,
+                            fem_rings=fem_rings, leaders=leaders)
 
 
 def _result_of(item):
@@ -199,6 +239,7 @@ def evaluate_designs(
     calibrated: bool | None = None,
     fidelity: str = "psm",
     fem_rings: int = FEM_DESIGN_RINGS,
+    leaders=None,
 ) -> dict[str, np.ndarray]:
     """Solve the grasp of every design and return its metrics and reward terms.
 
@@ -292,6 +333,17 @@ def evaluate_designs(
         ``n_triangles``, ``n_rings``, ``element`` and ``calibrated`` must be left ``None``.
     fem_rings
         Rings of the FEM mesh at ``fidelity="fem"``, in [2, 40].
+    leaders
+        Optional (B,) integers: for each row, a row of the same batch whose answer starts its
+        solve (its *leader*: the same design in a scenario a few percent away), or -1 for
+        none; a leader has none itself. Such a row is solved from its leader's answer on the
+        leader's contact set first (a few Newton steps) and keeps that answer only where the
+        independent check confirms it as a stable equilibrium; otherwise it is solved from
+        rest like any row (:func:`envs.solver.pipeline.solve_columns`). The answers agree
+        with independent solves within the solver's tolerance, except where a scene has
+        several stable grasps and the two starts find different ones. A row whose leader is
+        invalid at rest, has another ``N`` or lies in another chunk of an ``executor`` is
+        solved from rest. :func:`envs.scenarios.evaluate_scenarios` sets it.
 
     Returns
     -------
@@ -419,18 +471,20 @@ def evaluate_designs(
     if offsets_x_m is not None:
         disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
                                           math.inf, low_open=False)
+    leaders = _check_leaders(leaders, batch) if fidelity == "psm" else None
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     if executor is None:
         return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
-                                fem_rings)
+                                fem_rings, leaders)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     starts = range(0, batch, int(chunk_size))
-    chunks = [tuple(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf))
-              for s in starts]
+    # each chunk's leaders in its own rows (a leader in another chunk: none)
+    chunks = [(*(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf)),
+               _chunk_leaders(leaders, s, int(chunk_size))) for s in starts]
     fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
                            fem_rings=fem_rings)
     parts = [_result_of(p) for p in executor.map(fn, chunks)]

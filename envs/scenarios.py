@@ -339,6 +339,7 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
                        torsion_stiffness_nm_per_rad: float,
                        friction_coefficient: float,
                        robust: str = "worst",
+                       warm_start: bool = True,
                        **kwargs: Any) -> ScenarioTable:
     """Solve every design under every scenario, as one batch, and summarize it per design.
 
@@ -359,6 +360,11 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
         The nominal friction coefficient [-] (a scenario's range replaces it).
     robust
         The summary's ``reward``: one of :data:`ROBUST_MEASURES`.
+    warm_start
+        Solve each design's other scenarios from its nominal scenario's answer on that
+        answer's contact set, falling back to a solve from rest wherever the independent check
+        does not confirm a stable equilibrium (the ``leaders`` of
+        :func:`~envs.evaluate.evaluate_designs`); ``False``: every scenario from rest.
     **kwargs
         Passed to :func:`~envs.evaluate.evaluate_designs` (strain limits, the member, weights,
         executor, ...); not the per-row ``disks``, friction or offsets, which the scenarios set.
@@ -371,7 +377,9 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
         raise ValueError(f"scenarios must be a Scenarios, got {type(scenarios).__name__}")
     if robust not in ROBUST_MEASURES:
         raise ValueError(f"robust must be one of {ROBUST_MEASURES}, got {robust!r}")
-    for name in ("friction_coefficients", "offsets_x_m", "torsion_stiffness_rel"):
+    if not isinstance(warm_start, bool):
+        raise ValueError(f"warm_start must be True or False, got {warm_start!r}")
+    for name in ("friction_coefficients", "offsets_x_m", "torsion_stiffness_rel", "leaders"):
         if name in kwargs:
             raise ValueError(f"{name} is set by the scenarios; do not pass it")
     designs = np.asarray(designs, dtype=np.float64)
@@ -383,10 +391,16 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
     rows, disks, frictions, offsets = place(np.repeat(designs, len(cases), axis=0), disk,
                                             friction_coefficient, cases * designs.shape[0])
     extra = {"offsets_x_m": offsets} if np.any(offsets) else {}
+    k = len(cases)
+    if warm_start and k > 1:
+        # the nominal scenario (the first) of each design leads its other scenarios
+        lead = np.repeat(np.arange(designs.shape[0]) * k, k)
+        lead[::k] = -1
+        extra["leaders"] = lead
     flat = evaluate_designs(rows, disks, friction_coefficients=frictions,
                             torsion_stiffness_nm_per_rad=torsion_stiffness_nm_per_rad,
                             **extra, **kwargs)
-    b, k = designs.shape[0], len(cases)
+    b = designs.shape[0]
     table = {key: v.reshape(b, k, *v.shape[1:]) for key, v in flat.items()}
     return ScenarioTable(table, _summary(table, robust), cases)
 

@@ -65,13 +65,18 @@ def test_no_variation_is_the_plain_evaluation(paper_disk, designs):
         np.testing.assert_array_equal(table.summary[key], plain[key])
 
 
-def test_each_scenario_is_its_own_grasp(paper_disk, designs):
+@pytest.mark.parametrize("warm_start", [False, True])
+def test_each_scenario_is_its_own_grasp(paper_disk, designs, warm_start):
     """Every (design, scenario) answer equals an independent evaluate_designs of that object
-    placed there: the centre fixed where placed, a scenario's radius moving its nearest point."""
+    placed there: the centre fixed where placed, a scenario's radius moving its nearest point.
+    Solved from rest, bit for bit; from the nominal scenario's answer (the fast path of
+    envs.solver.follow), within the solver's tolerance."""
     sc = Scenarios.of({"radius_m": (0.06, 0.08), "friction_coefficient": (0.3, 0.7)},
                       (0.003, 0.002))
     table = evaluate_scenarios(designs, paper_disk, sc, torsion_stiffness_nm_per_rad=KF,
-                               friction_coefficient=0.5)
+                               friction_coefficient=0.5, warm_start=warm_start)
+    same = (np.testing.assert_array_equal if not warm_start
+            else lambda a, b: np.testing.assert_allclose(a, b, rtol=0.0, atol=1e-9))
     for j, s in enumerate(table.scenarios):
         radius = s.values.get("radius_m", paper_disk.radius_m)
         rows = designs.copy()
@@ -82,7 +87,9 @@ def test_each_scenario_is_its_own_grasp(paper_disk, designs):
                                  friction_coefficients=s.values.get("friction_coefficient",
                                                                     0.5),
                                  offsets_x_m=s.dx_m)
-        np.testing.assert_array_equal(table.per_scenario["reward"][:, j], alone["reward"])
+        same(table.per_scenario["reward"][:, j], alone["reward"])
+        same(table.per_scenario["jaw_angles_rad"][:, j], alone["jaw_angles_rad"])
+        np.testing.assert_array_equal(table.per_scenario["converged"][:, j], alone["converged"])
     r = table.per_scenario["reward"]
     np.testing.assert_array_equal(table.summary["reward"], r.min(axis=1))
     np.testing.assert_array_equal(table.summary["reward_nominal"], r[:, 0])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 from pathlib import Path
 
 import pytest
@@ -39,3 +40,20 @@ def test_one_measurement_has_every_figure():
     rows = [{"x_per_s": 1.0}, {"x_per_s": 3.0}, {"x_per_s": 2.0}]
     assert throughput._median(rows, "x_per_s") == 2.0
     assert throughput._median(rows, "missing") is None
+
+
+def test_the_scenario_profile_reports_both_paths(tmp_path):
+    """scripts/scenario_profile.py: both ways of a scenario batch timed and compared, and the
+    fast path's own figures; the answers of the two agree."""
+    profile = _script("scenario_profile")
+    out = tmp_path / "p.json"
+    profile.main(["--designs", "3", "--repeats", "1", "--neighbours", "--batch", "12",
+                  "--leaders", "4", "--out", str(out)])
+    row = json.loads(out.read_text())
+    sc = row["scenarios"]
+    assert sc["grasps"] == 27
+    assert sc["independent_cpu_s"] > 0.0 and sc["warm_cpu_s"] > 0.0
+    assert sc["converged_warm"] == sc["converged_independent"]
+    assert sc["max_jaw_angle_difference_rad"] < 1e-9
+    assert set(sc["warm_stages_cpu_s"]) == {"from_rest", "fast_path", "finish"}
+    assert row["neighbours"]["designs"] == 12

@@ -86,8 +86,8 @@ S_JAW1 = S_JAW0 + N_JAW
 N_SCENE = S_JAW1 + N_JAW
 
 # solver options
-O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE = range(6)
-N_OPTIONS = 6
+O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE, O_POLISH_STEPS = range(7)
+N_OPTIONS = 7
 
 # info vector written by the compiled solve of one grasp
 I_STATUS = 0  # status code (envs.solver.status)
@@ -114,7 +114,8 @@ def default_options() -> np.ndarray:
     """Solver options, indexed by the ``O_*`` names.
 
     Stationarity tolerance (relative to the force scale), interior-point iteration limit,
-    outer-round limit, initial barrier factor, polish on/off and gauge stiffness factor.
+    outer-round limit, initial barrier factor, polish on/off, gauge stiffness factor and the
+    Newton steps one polish may take.
     """
     opts = np.zeros(N_OPTIONS)
     opts[O_TOL] = 1e-12
@@ -123,4 +124,5 @@ def default_options() -> np.ndarray:
     opts[O_MU0] = 1e-2
     opts[O_POLISH] = 1.0
     opts[O_GAUGE] = 1.0
+    opts[O_POLISH_STEPS] = 40.0
     return opts

@@ -39,6 +39,7 @@ from envs.model.layout import (
     J_POSITION,
     N_CORNERS,
     N_INFO,
+    N_JAW,
     P_A0,
     P_H,
     P_KA,
@@ -80,7 +81,7 @@ from envs.model.problem import SceneColumns, pack_params, rest_state, stiffness_
 from envs.model.rings import HUB_RADIUS, kernel_copy
 
 from ..parallel import run_rows
-from . import driver
+from . import driver, follow
 from .reaction import holding_one, max_contacts
 from .result import GraspResult
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
@@ -136,20 +137,108 @@ def _prepare_kernels() -> None:
     announce_compile()
 
 
-def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray):
-    """Run the compiled solver in place; returns the info rows and the corner/stop forces."""
+class _Answers(NamedTuple):
+    """The compiled solver's raw answers of B rows (scaled), before the finish."""
+
+    infos: np.ndarray  # (B, N_INFO), layout I_*
+    lam_corner: np.ndarray  # (B, 2, N_CORNERS, N)
+    lam_stop: np.ndarray  # (B, 2)
+    corner_cand: np.ndarray  # (B, 2, N_CORNERS, N) bool: the corner constraints considered
+    face_cand: np.ndarray  # (B, 2, N) bool: the face constraints considered
+
+
+def _solve(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray) -> _Answers:
+    """Run the compiled solver in place on ``xs`` and ``lam_face``; returns the other
+    answers."""
     _prepare_kernels()
     b = prm.shape[0]
-    lam_corner = np.zeros((b, 2, N_CORNERS, n))
-    lam_stop = np.zeros((b, 2))
-    corner_cand = np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_)
-    face_cand = np.zeros((b, 2, n), dtype=np.bool_)
-    infos = np.zeros((b, N_INFO))
+    out = _Answers(np.zeros((b, N_INFO)), np.zeros((b, 2, N_CORNERS, n)), np.zeros((b, 2)),
+                   np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_),
+                   np.zeros((b, 2, n), dtype=np.bool_))
     # dynamic schedule in small blocks (envs.parallel.run_rows): solve times vary by 100x
     # between rows (a row hitting the iteration limit); one row runs in the calling thread
-    driver.solve_batch(n, prm, _OPTIONS, xs, lam_face, lam_corner, lam_stop, corner_cand,
-                       face_cand, infos)
-    return infos, lam_corner, lam_stop
+    driver.solve_batch(n, prm, _OPTIONS, xs, lam_face, out.lam_corner, out.lam_stop,
+                       out.corner_cand, out.face_cand, out.infos)
+    return out
+
+
+MIRROR_TOLERANCE_RAD = 1e-7  # finger angles of a mirror-symmetric answer agree within this
+
+
+def _settled(ans: _Answers, scene: np.ndarray, xs: np.ndarray, n: int,
+             rows: np.ndarray) -> np.ndarray:
+    """Which of ``rows`` may lead their followers: the solver ended on a stable equilibrium
+    it claims, and, for a mirror-symmetric scene, on the mirror-symmetric grasp.
+
+    Why the second: past a bifurcation a symmetric scene has two mirror-image grasps of equal
+    energy (the disk turned one way or the other); a solve from rest picks one by its escape
+    from the symmetric saddle, a follower would continue the leader's, and a scenario that
+    breaks the symmetry a little (a displacement) may end on either branch. Such designs are
+    solved from rest in every scenario, so that the answers stay those of independent solves.
+    """
+    info = ans.infos[rows]
+    claimed = (info[:, I_STATUS] == OK) & (info[:, I_STABLE] == 1.0)
+    s = scene[rows]
+    mirrored = (s[:, S_OFFSET_X] == 0.0) & np.all(
+        s[:, S_JAW0 : S_JAW0 + N_JAW] == s[:, S_JAW1 : S_JAW1 + N_JAW], axis=1)
+    angles = xs[rows, 2 * n : 2 * n + 2]
+    turned = np.abs(angles[:, 0] - angles[:, 1]) > MIRROR_TOLERANCE_RAD
+    return claimed & ~(mirrored & turned)
+
+
+def _solve_rows_of(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
+                   rows: np.ndarray, ans: _Answers, kernel=None) -> None:
+    """Solve ``rows`` of the batch in place (``xs``, ``lam_face`` and ``ans``): from their
+    start with :func:`_solve`, or with ``kernel`` (a batch function of the solver's
+    arguments, :func:`envs.solver.follow.follow_batch`) from what those rows hold."""
+    x, lam = xs[rows], lam_face[rows]  # (copies: written back below)
+    if kernel is None:
+        part = _solve(n, prm[rows], x, lam)
+    else:
+        part = _Answers(*(a[rows] for a in ans))
+        kernel(n, prm[rows], _OPTIONS, x, lam, part.lam_corner, part.lam_stop,
+               part.corner_cand, part.face_cand, part.infos)
+    xs[rows], lam_face[rows] = x, lam
+    for whole, piece in zip(ans, part, strict=True):
+        whole[rows] = piece
+
+
+def _solve_following(n: int, scene: np.ndarray, prm: np.ndarray, xs: np.ndarray,
+                     lam_face: np.ndarray, leaders: np.ndarray
+                     ) -> tuple[_Answers, np.ndarray, np.ndarray]:
+    """Solve the rows without a leader, then each follower from its leader's answer on its
+    contact set (:mod:`envs.solver.follow`), in place on ``xs`` and ``lam_face``.
+
+    Returns the answers of every row, the followers the fast path ran on and those it did not
+    (their leader leads none, :func:`_settled`: they still hold their start)."""
+    b = prm.shape[0]
+    ans = _Answers(np.zeros((b, N_INFO)), np.zeros((b, 2, N_CORNERS, n)), np.zeros((b, 2)),
+                   np.zeros((b, 2, N_CORNERS, n), dtype=np.bool_),
+                   np.zeros((b, 2, n), dtype=np.bool_))
+    _solve_rows_of(n, prm, xs, lam_face, np.flatnonzero(leaders < 0), ans)
+    followers = np.flatnonzero(leaders >= 0)
+    good = _settled(ans, scene, xs, n, leaders[followers])
+    fast, slow = followers[good], followers[~good]
+    if fast.size:
+        lead = leaders[fast]
+        xs[fast], lam_face[fast] = xs[lead], lam_face[lead]
+        for a in ans:
+            a[fast] = a[lead]
+        _solve_rows_of(n, prm, xs, lam_face, fast, ans, follow.follow_batch)
+    return ans, fast, slow
+
+
+def _merge(sol: BatchSolution, rows: np.ndarray, part: BatchSolution) -> BatchSolution:
+    """``sol`` with its ``rows`` replaced by the rows of ``part`` (in that order)."""
+    fields = {}
+    for name, whole in sol._asdict().items():
+        if name == "solve_time_s":
+            fields[name] = whole + part.solve_time_s
+            continue
+        whole = whole.copy()
+        whole[rows] = getattr(part, name)
+        fields[name] = whole
+    return BatchSolution(**fields)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -298,8 +387,8 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   stiffness_rule: str = "van_gelder",
                   phase_rad: float, x0: np.ndarray | None = None,
                   lam0: np.ndarray | None = None, n_rings: int = 1,
-                  element: str = "spring", payload_n: np.ndarray | None = None
-                  ) -> BatchSolution:
+                  element: str = "spring", payload_n: np.ndarray | None = None,
+                  leaders: np.ndarray | None = None) -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -321,6 +410,13 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     payload_n
         The payload ``W`` [N] of each row (B,) that holding judges (:mod:`envs.model.holding`);
         default 0: the reaction of the fixed centre alone.
+    leaders
+        Optional (B,) int: for each row the row of this batch whose answer starts it (its
+        *leader*, a scene a few percent away: the same design in another scenario), -1 for
+        none. A leader must have none itself. A row with a leader is solved from the leader's
+        answer on the leader's contact set (:mod:`envs.solver.follow`) and keeps that answer
+        where it is a stable equilibrium the independent check confirms; otherwise it is
+        solved from its start like a row without a leader (its ``iterations`` count both).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
@@ -331,10 +427,36 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3, order="C"))
     t0 = time.perf_counter()
-    infos, lam_corner, lam_stop = _solve(n, prm, xs, lam_face)
+    if leaders is None:
+        ans = _solve(n, prm, xs, lam_face)
+        return checked_solution(scene, n, prm, xs, lam_face, ans.lam_corner, ans.lam_stop,
+                                ans.infos, time.perf_counter() - t0, payload_n)
+    leaders = np.asarray(leaders, dtype=np.int64)
+    if leaders.shape != (scene.shape[0],):
+        raise ValueError(f"leaders must have shape ({scene.shape[0]},), got {leaders.shape}")
+    if (np.any(leaders < -1) or np.any(leaders >= scene.shape[0])
+            or np.any(leaders[leaders[leaders >= 0]] >= 0)):
+        raise ValueError("leaders must be -1 or the index of a row of the batch that has no "
+                         "leader itself")
+    start_x, start_lam = xs.copy(), lam_face.copy()
+    ans, fast, slow = _solve_following(n, scene, prm, xs, lam_face, leaders)
     elapsed = time.perf_counter() - t0
-    return checked_solution(scene, n, prm, xs, lam_face, lam_corner, lam_stop, infos, elapsed,
-                            payload_n)
+    payload = None if payload_n is None else np.broadcast_to(payload_n, (scene.shape[0],))
+    sol = checked_solution(scene, n, prm, xs, lam_face, ans.lam_corner, ans.lam_stop, ans.infos,
+                           elapsed, payload)
+    # the fast path's answers stand where the check confirms a stable equilibrium; the rest
+    # are solved from their own start, as without a leader
+    retry = np.concatenate([slow, fast[~(sol.converged[fast] & sol.stable[fast])]])
+    if not retry.size:
+        return sol
+    t0 = time.perf_counter()
+    x, lam = start_x[retry], start_lam[retry]
+    part = _solve(n, prm[retry], x, lam)
+    part.infos[:, I_ITERATIONS] += ans.infos[retry, I_ITERATIONS] * np.isin(retry, fast)
+    redo = checked_solution(scene[retry], n, prm[retry], x, lam, part.lam_corner,
+                            part.lam_stop, part.infos, time.perf_counter() - t0,
+                            None if payload is None else payload[retry])
+    return _merge(sol, retry, redo)
 
 
 def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,

@@ -10,6 +10,7 @@ import numpy as np
 from numba import njit
 
 from ..model.layout import (
+    O_POLISH_STEPS,
     O_TOL,
     P_KAPPA,
     P_KC,
@@ -122,7 +123,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     stable = True
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     kkt_best = math.inf
-    for _outer in range(40):
+    for _outer in range(int(opts[O_POLISH_STEPS])):
         work_it[0] += 1
         sn, cs = _trig(x, n)
         for m in range(mcount):

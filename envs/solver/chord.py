@@ -1,0 +1,199 @@
+"""The active-set polish with chord steps, for the fast path of :mod:`envs.solver.follow`.
+
+Why: from a neighbour's answer the polish of :mod:`envs.solver.polish` needs 5 to 6 Newton
+steps, each an assembly of the Newton matrix and a banded factor (~80 us at the default model).
+Once its full steps shrink the residual fast, the matrix changes little from one step to the
+next: a step with the last factor and the new gradient (a chord step) costs a gradient and a
+solve. A chord step that is not a descent direction, that the line search cuts, or that shrinks
+the residual less than :data:`CHORD_RATE` is followed by a fresh factor. The tests of
+convergence, of stability and the line search are the polish's own, so an answer it accepts is
+one the polish would accept.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..model.layout import (
+    O_POLISH_STEPS,
+    O_TOL,
+    P_KAPPA,
+    P_KC,
+    P_KR,
+)
+from .assembly import (
+    CH_BLOCK,
+    _energy,
+    _newton_matrix,
+    _rhs_to_band,
+    _stationarity,
+    _step_from_band,
+)
+from .banded import (
+    _factor_solve,
+    _solve_factored,
+    band_shape,
+)
+from .contact import (
+    _con_value,
+    _trig,
+)
+from .polish import NEUTRAL, _al_merit
+
+CHORD_RATE = 0.1  # a chord step follows a full step that shrank the residual at least this much
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _chord_polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
+    """:func:`envs.solver.polish._polish` with chord steps: the work arrays for
+    :func:`_chord_core`; returns (ok, stable)."""
+    nx = x.shape[0]
+    nbb, bw = band_shape(n, prm)
+    grad = np.zeros(nx)
+    ab = np.zeros((nbb, bw + 1))
+    lb = np.zeros((nbb, bw + 1))
+    bb = np.zeros((nbb, 2))
+    dd = np.zeros((2, 2))
+    ybuf = np.zeros((nbb, 2))
+    rb = np.zeros(nbb)
+    ob = np.zeros(nbb)
+    rt = np.zeros(2)
+    ot = np.zeros(2)
+    g = np.zeros(mcount)
+    sig = np.zeros(mcount)
+    lam_eff = np.zeros(mcount)
+    res = np.zeros(nx)
+    res_p = np.zeros(nx)
+    gbuf_p = np.zeros(nx)
+    xt = np.zeros(nx)
+    step = np.zeros(nx)
+    grad5 = np.zeros(5)
+    hess5 = np.zeros((5, 5))
+    dofs = np.zeros(5, dtype=np.int64)
+    cg = np.zeros((mcount, 5))
+    cd = np.zeros((mcount, 5), dtype=np.int64)
+    ch = np.zeros((mcount, CH_BLOCK + 1))
+    return _chord_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
+                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff,
+                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _chord_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
+                 grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
+                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
+    nb = 2 * n
+    nx = x.shape[0]
+    kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
+    rho = 1e2 * kscale
+    tol = max(opts[O_TOL] * fscale, 1e-15 * max(prm[P_KC], prm[P_KR]))
+    q = x[:nb].reshape(n, 2)
+    for m in range(mcount):
+        if not active[m]:
+            lam[m] = 0.0
+    stable = True
+    kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
+    kkt_best = math.inf
+    fresh = True
+    shift = kreg
+    slope = 0.0
+    for _outer in range(int(opts[O_POLISH_STEPS])):
+        work_it[0] += 1
+        sn, cs = _trig(x, n)
+        for m in range(mcount):
+            gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
+            g[m] = gm
+            if active[m]:
+                sig[m] = rho
+                lam_eff[m] = lam[m] - rho * gm
+            else:
+                sig[m] = 0.0
+                lam_eff[m] = 0.0
+        chord = False
+        if not fresh:
+            # a chord step: the last factor with this point's gradient (the augmented
+            # Lagrangian's: the stationarity residual at the effective multipliers)
+            _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam_eff, gbuf_p, grad5, hess5,
+                          dofs, grad)
+            _rhs_to_band(grad, bidx, nb, rb, rt)
+            chord = _solve_factored(lb, bb, dd, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            if chord:
+                slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+                chord = slope < 0.0
+        if not chord:
+            # psd=False as a runtime value, not a literal: the Hessian kernels compile once
+            # (assembly._spring_terms)
+            exact = n < 0
+            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab,
+                           bb, dd, g, grad5, hess5, dofs, 0.0, exact, gbuf_p, res_p, cg, cd, ch)
+            _rhs_to_band(grad, bidx, nb, rb, rt)
+            shift = kreg
+            ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            if not ok:
+                # the first shifted factor is also the stability test's
+                shift = NEUTRAL * kscale
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            stable = ok
+            while not ok:
+                shift *= 8.0
+                if shift > 1e6 * kscale:
+                    return False, False
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+        # the merit at x from the gaps above (what _al_merit would evaluate again)
+        m0 = _energy(x, n, prm)
+        for m in range(mcount):
+            if active[m]:
+                m0 += g[m] * (0.5 * rho * g[m] - lam[m])
+        alpha = 1.0
+        hit = False
+        for _ls in range(40):
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+            mt = _al_merit(xt, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g)
+            if mt <= m0 + 1e-4 * alpha * slope + 1e-13 * abs(m0):
+                break
+            hit = hit or mt == math.inf
+            alpha *= 0.5
+        if hit:
+            # the full step ran through contacts left out of the set: take them in (the
+            # caller drops them again should they come out pulling)
+            for d in range(nx):
+                xt[d] = x[d] + 2.0 * alpha * step[d]
+            qt = xt[:nb].reshape(n, 2)
+            snt, cst = _trig(xt, n)
+            for m in range(mcount):
+                if not active[m]:
+                    gm = _con_value(kinds[m], fj[m], fidx[m], xt, qt, n, prm, snt, cst)
+                    if gm < min(g[m], 0.0):
+                        active[m] = True
+                        lam[m] = 0.0
+            for d in range(nx):
+                xt[d] = x[d] + alpha * step[d]
+        for d in range(nx):
+            x[d] = xt[d]
+        # multiplier update
+        sn, cs = _trig(x, n)
+        for m in range(mcount):
+            if active[m]:
+                gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
+                lam[m] = lam[m] - rho * gm
+        kkt = _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, g, grad5, hess5, dofs,
+                            res)
+        viol = 0.0
+        for m in range(mcount):
+            if active[m]:
+                viol = max(viol, abs(g[m]))
+        if kkt <= 10.0 * tol and viol <= 1e-13:
+            return True, stable
+        if viol <= 1e-12 and ((_outer >= 8 and kkt <= 100.0 * tol)
+                              or (kkt >= 0.5 * kkt_best and kkt <= 1e3 * tol)):
+            # stagnating at round-off level (as the polish's own test)
+            return True, stable
+        # keep the factor while full steps shrink the residual fast; a fresh one otherwise
+        fresh = not (alpha == 1.0 and not hit and kkt <= CHORD_RATE * kkt_best)
+        kkt_best = min(kkt_best, kkt)
+    return False, stable
