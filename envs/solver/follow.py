@@ -52,7 +52,6 @@ from ..model.layout import (
 from ..model.rings import kernel_copy, mesh_band_index
 from ..parallel import run_rows
 from .candidates import _grow_candidates
-from .chord import _chord_polish
 from .contact import (
     _all_gaps,
     _build_constraints,
@@ -63,6 +62,7 @@ from .contact import (
     _trig,
 )
 from .driver import _finish
+from .polish import CHORD_RATE, _polish
 from .status import CONTACT_CYCLE, OK, POLISH_FAIL
 
 __all__ = ["follow_one", "follow_rows", "follow_batch"]
@@ -192,8 +192,8 @@ def _polish_on(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, acti
     for _attempt in range(POLISH_ATTEMPTS):
         xp = x.copy()
         lp = lam[:mcount].copy()
-        okp, stable = _chord_polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
-                              active, work_it)
+        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
+                              active, work_it, CHORD_RATE)
         stable_out[0] = stable
         if not okp:
             return POLISH_FAIL

@@ -26,6 +26,7 @@ from .assembly import (
 )
 from .banded import (
     _factor_solve,
+    _solve_factored,
     band_shape,
 )
 from .contact import (
@@ -46,6 +47,17 @@ from .status import (
 # each fallback repeated it. Random designs (12,000 fans, 3,000 of the default model) and the
 # regression corpus keep every answer and flag
 NEUTRAL = 1e-8
+
+# The polish's steps: a fresh factor each (FULL_STEPS), or the last factor again (a chord step:
+# a gradient and a solve, not an assembly and a factor) after a full step that shrank the
+# residual by at least the rate given. Why: from a neighbour's answer
+# (:mod:`envs.solver.follow`) the polish takes 5 to 6 steps, and once its full steps shrink the
+# residual fast the matrix changes little from one to the next. A chord step that is not a
+# descent direction, that the line search cuts, or that shrinks the residual less than the
+# rate is followed by a fresh factor; the tests of convergence, stability and the line search
+# are the same for both.
+FULL_STEPS = 0.0
+CHORD_RATE = 0.1
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -68,10 +80,13 @@ def _al_merit(x, n, prm, kinds, fj, fidx, mcount, lam, active, rho, g_ref):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it):
+def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
+            chord_rate):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 
     Allocates the work arrays for :func:`_polish_core` (compiled without reference counting).
+    ``chord_rate``: :data:`FULL_STEPS` (a fresh factor every step) or a rate such as
+    :data:`CHORD_RATE` (chord steps while full steps shrink the residual that fast).
 
     Returns (ok, stable) where stable means the final Newton matrix is positive definite up to
     :data:`NEUTRAL` of the stiffness scale.
@@ -103,14 +118,14 @@ def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
     cd = np.zeros((mcount, 5), dtype=np.int64)
     ch = np.zeros((mcount, CH_BLOCK + 1))
     return _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
-                        work_it, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff,
-                        res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch)
+                        work_it, chord_rate, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig,
+                        lam_eff, res, res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
-                 grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res, res_p,
-                 gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
+                 chord_rate, grad, ab, lb, bb, dd, ybuf, rb, ob, rt, ot, g, sig, lam_eff, res,
+                 res_p, gbuf_p, xt, step, grad5, hess5, dofs, cg, cd, ch):
     nb = 2 * n
     nx = x.shape[0]
     kscale = max(prm[P_KC], prm[P_KR], prm[P_KAPPA])
@@ -123,6 +138,9 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     stable = True
     kreg = 1e-10 * max(prm[P_KC], prm[P_KR])
     kkt_best = math.inf
+    fresh = True
+    shift = kreg
+    slope = 0.0
     for _outer in range(int(opts[O_POLISH_STEPS])):
         work_it[0] += 1
         sn, cs = _trig(x, n)
@@ -135,27 +153,37 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             else:
                 sig[m] = 0.0
                 lam_eff[m] = 0.0
-        # psd=False as a runtime value, not a literal: the Hessian kernels compile once
-        # (assembly._spring_terms)
-        exact = n < 0
-        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab, bb,
-                       dd, g, grad5, hess5, dofs, 0.0, exact, gbuf_p, res_p, cg, cd, ch)
-        _rhs_to_band(grad, bidx, nb, rb, rt)
-        shift = kreg
-        ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
-        if not ok:
-            # the first shifted factor is also the stability test's (and the step's if it holds)
-            shift = NEUTRAL * kscale
+        chord = False
+        if not fresh:
+            # a chord step: the last factor with this point's gradient (the augmented
+            # Lagrangian's: the stationarity residual at the effective multipliers)
+            _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam_eff, gbuf_p, grad5, hess5,
+                          dofs, grad)
+            _rhs_to_band(grad, bidx, nb, rb, rt)
+            chord = _solve_factored(lb, bb, dd, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            if chord:
+                slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+                chord = slope < 0.0
+        if not chord:
+            # psd=False as a runtime value, not a literal: the Hessian kernels compile once
+            # (assembly._spring_terms)
+            exact = n < 0
+            _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam_eff, sig, grad, ab,
+                           bb, dd, g, grad5, hess5, dofs, 0.0, exact, gbuf_p, res_p, cg, cd, ch)
+            _rhs_to_band(grad, bidx, nb, rb, rt)
+            shift = kreg
             ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
-        stable = ok
-        while not ok:
-            shift *= 8.0
-            if shift > 1e6 * kscale:
-                return False, False
-            ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
-        # backtracking on the augmented Lagrangian (its Hessian, possibly shifted, gave the
-        # step): a plain Newton step from an indefinite matrix can throw the iterate far off
-        slope = _step_from_band(ob, ot, bidx, nb, grad, step)
+            if not ok:
+                # the first shifted factor is also the stability test's
+                shift = NEUTRAL * kscale
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            stable = ok
+            while not ok:
+                shift *= 8.0
+                if shift > 1e6 * kscale:
+                    return False, False
+                ok = _factor_solve(ab, bb, dd, lb, ybuf, ab.shape[0], shift, rb, rt, ob, ot)
+            slope = _step_from_band(ob, ot, bidx, nb, grad, step)
         # the merit at x from the gaps above (what _al_merit would evaluate again)
         m0 = _energy(x, n, prm)
         for m in range(mcount):
@@ -208,6 +236,8 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             # The floor grows with the mesh (N = 1000: ~1e-10 of the force scale, where the
             # plain test spent 9 Newton steps on round-off)
             return True, stable
+        # keep the factor while full steps shrink the residual fast; a fresh one otherwise
+        fresh = not (alpha == 1.0 and not hit and kkt <= chord_rate * kkt_best)
         kkt_best = min(kkt_best, kkt)
     return False, stable
 
@@ -224,7 +254,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         xp = xs.copy()
         lp = lam[:mcount].copy()
         okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
-                              active, work_it)
+                              active, work_it, FULL_STEPS)
         stable_out[0] = stable
         if not okp:
             return POLISH_FAIL
