@@ -54,9 +54,27 @@ def _inside(inner, outer) -> bool:
     return inner[2] >= outer[2] and inner[3] <= outer[3]
 
 
+def _print_specializations(comp) -> None:
+    """Functions compiled more than once (one compilation per argument typing), with each
+    typing's own compile time: a second typing of the same kernel is compile work that one
+    signature would save."""
+    by_name: dict[str, list] = collections.defaultdict(list)
+    for r in comp:
+        if isinstance(r[1], dict) and "args" in r[1]:
+            by_name[_name(r[1])].append(r)
+    repeated = {k: v for k, v in by_name.items() if len(v) > 1}
+    print(f"functions compiled for more than one typing: {len(repeated)}")
+    for name, recs in sorted(repeated.items(), key=lambda kv: -len(kv[1])):
+        print(f"  {len(recs)}x {name}")
+        for r in recs:
+            print(f"      {r[3] - r[2]:6.2f} s  ({', '.join(map(str, r[1]['args']))})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--top", type=int, default=30, help="functions listed")
+    ap.add_argument("--specializations", action="store_true",
+                    help="also list every function compiled for more than one argument typing")
     args = ap.parse_args()
     rec = _Recorder()
     for kind in (COMPILE, LLVM):
@@ -86,6 +104,8 @@ def main() -> None:
     print("   own [s]  LLVM [s]  function")
     for name, sec in sorted(own.items(), key=lambda kv: -kv[1])[:args.top]:
         print(f"{sec:10.2f} {own_llvm[name]:9.2f}  {name}")
+    if args.specializations:
+        _print_specializations(comp)
     print("inclusive [s] of the entries and their callees over 2 s:")
     for r in sorted(comp, key=lambda r: r[2]):
         if r[4] <= 3 and r[3] - r[2] > 2.0:
