@@ -430,9 +430,7 @@ def _trig(x, n):
             (math.cos(x[2 * n]), math.cos(x[2 * n + 1])))
 
 
-# called, not inlined: numba would type its subtree again at each of its call sites
-# (seconds of the cold start, scripts/compile_profile.py); the call costs ~ns a constraint
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _con_value(kind, j, idx, x, q, n, prm, sn, cs):
     """Value of constraint (kind, j, idx) only (line searches, candidate checks); ``sn``, ``cs``
     hold the sines and cosines of the finger angles (:func:`_trig`)."""
@@ -444,9 +442,7 @@ def _con_value(kind, j, idx, x, q, n, prm, sn, cs):
     return x[2 * n + j] - prm[P_THMIN]
 
 
-# called, not inlined: numba would type its subtree again at each of its call sites
-# (seconds of the cold start, scripts/compile_profile.py); the call costs ~ns a constraint
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _con_eval(kind, j, idx, x, q, n, prm, sn, cs, grad5, hess5, dofs, want_hess=True):
     """Evaluate constraint; returns (value, number of local dofs); fills natural-order dofs."""
     th = x[2 * n + j]
