@@ -142,10 +142,14 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
     disk scale, without the member's calibration factor that ``cols.stiffness_scale`` carries
     (the contact width takes the material's modulus)."""
     grooves, rounding = grooves_m(cols)
+    # C order: these are columns of the solution's metrics table, strided views (numba's layout
+    # "A") but contiguous for a batch of one ("C"), and each layout would compile the kernel
+    # once more (a single design's step after a batch)
+    strains = [np.ascontiguousarray(a) for a in (sol.peak_strain, sol.peak_log_strain,
+                                                 sol.max_displacement_ratio, sol.peak_compression)]
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
-        sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm,
-        sol.peak_strain, sol.peak_log_strain, sol.max_displacement_ratio, sol.peak_compression,
+        sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, *strains,
         cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
         material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,

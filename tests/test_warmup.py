@@ -148,3 +148,16 @@ def test_a_pool_worker_announces_without_splitting(monkeypatch, capsys):
     assert warmup.announce_compile()
     assert "in this worker process" in capsys.readouterr().err
     assert split == []
+
+
+def test_a_batch_of_one_adds_no_specialization():
+    # a column of the solution's metrics table is a strided view (numba's layout "A"), but
+    # contiguous for a batch of one ("C"): the metrics kernel gets C-order copies, so a single
+    # design after a batch (the environment's step) compiles it no second time
+    from envs.scoring import psm_metrics_rows
+
+    disk = SoftDisk(0.07, 0.0)
+    designs = DesignBounds().sample(np.random.default_rng(2), 3, disk)
+    evaluate_designs(designs[:1], disk)
+    evaluate_designs(designs, disk)
+    assert len(psm_metrics_rows.signatures) == 1

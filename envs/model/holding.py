@@ -629,7 +629,9 @@ def holding_of_contacts(normals, points, forces, patches, count, centre_x, centr
         The holding row (layout ``H_*``), written.
     """
     total = 0.0
-    m = 0
+    # np.int64, not a literal 0: numba types the callees' calls before the loop's m += 1 is
+    # seen, and would compile payload_friction (and its callees) once more for Literal[int](0)
+    m = np.int64(0)
     for i in range(count):
         f = forces[i]
         if not f > 0.0:

@@ -88,6 +88,20 @@ ESCAPE_OPENING = 0.01  # first opening step of the fingers when leaving a saddle
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _copy_into(dst, src, count):
+    """The first ``count`` elements of ``src`` into ``dst`` (C-contiguous, in flat order).
+
+    Element by element rather than ``dst[:] = src``: numba compiles a slice assignment's shape
+    check with an error message that formats both shapes, a few seconds of the cold start for
+    each number of dimensions (``scripts/compile_profile.py``).
+    """
+    flat_dst = dst.reshape(dst.size)
+    flat_src = src.reshape(src.size)
+    for i in range(count):
+        flat_dst[i] = flat_src[i]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, attempt, gbuf, opening):
     """New start point near a saddle: rotate the contour about the pin, open the fingers."""
     nb = 2 * n
@@ -163,8 +177,8 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
     # site, so that _solve_attempt compiles into this function once (envs.solver.warmup)
     for attempt in range(3):
         if attempt > 0:
-            x[:] = x_in
-            lam_face[:, :] = lam_in
+            _copy_into(x, x_in, x.size)
+            _copy_into(lam_face, lam_in, lam_face.size)
         # flags as runtime values (n < 0 is False, n > 0 True): a literal True/False would
         # compile _solve_attempt and its callees once per value (assembly._spring_terms)
         _solve_attempt(n, prm_in, fast if attempt == 0 else opts, x, lam_face, lam_corner,
@@ -181,13 +195,13 @@ def solve_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, f
         elif info[I_STATUS] == OK or info[I_STATUS] == INVERTED:
             break
     if keep_fast and not (info[I_STATUS] == OK and info[I_STABLE] == 1.0):
-        x[:] = kept[0]
-        lam_face[:, :] = kept[1]
-        lam_corner[:, :, :] = kept[2]
-        lam_stop[:] = kept[3]
-        corner_cand[:, :, :] = kept[4]
-        face_cand[:, :] = kept[5]
-        info[:] = kept[6]
+        _copy_into(x, kept[0], x.size)
+        _copy_into(lam_face, kept[1], lam_face.size)
+        _copy_into(lam_corner, kept[2], lam_corner.size)
+        _copy_into(lam_stop, kept[3], lam_stop.size)
+        _copy_into(corner_cand, kept[4], corner_cand.size)
+        _copy_into(face_cand, kept[5], face_cand.size)
+        _copy_into(info, kept[6], info.size)
     info[I_ITERATIONS] = total
 
 
@@ -423,9 +437,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
         status, _ = _ipm(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, mu0,
                          work_it)
         last_m = mcount
-        last_kinds[:mcount] = kinds[:mcount]
-        last_fj[:mcount] = fj[:mcount]
-        last_fidx[:mcount] = fidx[:mcount]
+        _copy_into(last_kinds, kinds, mcount)
+        _copy_into(last_fj, fj, mcount)
+        _copy_into(last_fidx, fidx, mcount)
         if status == SADDLE and escapes < 3:
             escapes += 1
             if _escape(xs, x0, n, prm, kinds, fj, fidx, mcount, escapes, gbuf, ESCAPE_OPENING):
@@ -495,9 +509,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
     for d in range(x.shape[0]):
         x[d] = xs[d]
     mcount = last_m
-    kinds[:mcount] = last_kinds[:mcount]
-    fj[:mcount] = last_fj[:mcount]
-    fidx[:mcount] = last_fidx[:mcount]
+    _copy_into(kinds, last_kinds, mcount)
+    _copy_into(fj, last_fj, mcount)
+    _copy_into(fidx, last_fidx, mcount)
     _finish(xs, n, prm, kinds, fj, fidx, mcount, lam, gbuf, fscale, status, lam_face,
             lam_corner, lam_stop, info)
     info[I_ITERATIONS] = work_it[0]

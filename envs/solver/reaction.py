@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ..model.holding import NO_PATCH, hertz_half_width, holding_of_contacts
@@ -106,7 +107,8 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
     xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
-    count = 0
+    # np.int64, not a literal 0 (see holding_of_contacts: one compilation of it, not two)
+    count = np.int64(0)
     fx = fy = moment = 0.0
     for j in range(2):
         sj, cj = _sel(sn, j), _sel(cs, j)
@@ -131,7 +133,9 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
                 lam = lam_corner[j, c, k]
                 if not lam > 0.0:
                     continue
-                _corner_eval(q, k, j, sj, cj, c, prm, grad5, hess5, False)
+                # no Hessian, as a runtime flag (n < 0): a literal False would compile
+                # _corner_eval a second time beside the solver's runtime-flag calls
+                _corner_eval(q, k, j, sj, cj, c, prm, grad5, hess5, n < 0)
                 k1 = k + 1 if k + 1 < n else 0
                 # the force on the edge's two points, lam times the gap's gradient at each
                 ax, ay, bx, by = grad5[0], grad5[1], grad5[2], grad5[3]

@@ -7,11 +7,12 @@ machine, one process) with no output of its own; the command-line entry points c
 solver's largest independent compile units in two processes at once (:func:`precompile`).
 
 Why two processes: numba compiles in one thread, and a function it has cached is linked into a
-caller compiled later (its callees are not compiled again). The units below do not call one
-another, so a spawned process compiles one share into the cache while this one compiles the
-other; then this process compiles the batch entry over both (``scripts/compile_profile.py``
-shows the split: the Newton matrix alone is a quarter of the cold compile), so that the first
-solve after the notice compiles nothing.
+caller compiled later (its callees are not compiled again). A spawned process compiles one
+share of the units below into the cache while this one compiles the other (a unit calls only
+units compiled before it: earlier in its own share, or at the head of the other share, in the
+cache by the time it is reached); then this process compiles the batch entry over both
+(``scripts/compile_profile.py`` shows where the time goes), so that the first solve after the
+notice compiles nothing.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ import threading
 import warnings
 from pathlib import Path
 
+import numba
+import numpy as np
 from numba.core import types
 
 __all__ = ["kernels_cached", "announce_compile", "precompile"]
@@ -34,12 +37,18 @@ _ENTRIES = (("driver", "solve_rows"), ("pipeline", "_finish_rows"))
 
 # Compile units (module of envs.solver, function, argument types) that do not call one another,
 # in two shares of about equal compile time. Argument types: f/i/b = float64/int64/bool
-# scalars, with a digit: C-contiguous arrays of that many dimensions. They must be the types
-# the solver calls them with (tests/test_warmup.py checks that they add no specialization).
+# scalars, with a digit: C-contiguous arrays of that many dimensions; a capital letter: a named
+# tuple of _TUPLES. They must be the types the solver calls them with (tests/test_warmup.py
+# checks that they add no specialization). The interior point's iterations (_ipm_core, last in
+# the helper) call the Newton matrix compiled before them there and the curvature kernels of
+# this process's share, in the cache by then (this share's first unit, the finish of a row,
+# calls none of the solver); the curvature kernels in turn find the Newton matrix's callees
+# in the cache. The batch entry is left with little of its own (scripts/compile_profile.py).
 _HELPER_UNITS = (
     ("assembly", "_newton_matrix",
      "f1 i f1 i1 i1 i1 i1 i f1 f1 f1 f2 f2 f2 f1 f1 f2 i1 f b f1 f1 f2 i2 f2"),
     ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1"),
+    ("ipm", "_ipm_core", "f1 f1 i f1 f1 i1 i1 i1 i1 i f f i1 W"),
 )
 _MAIN_UNITS = (
     ("pipeline", "_finish_rows",
@@ -56,8 +65,14 @@ _MAIN_UNITS = (
     ("driver", "_finish", "f1 i f1 i1 i1 i1 i f1 f1 f i f2 f3 f1 f1"),
     ("driver", "_escape", "f1 f1 i f1 i1 i1 i1 i i f1 f"),
 )
-# Compiled last, here, once both shares are in the cache: the batch entry (the interior point
-# and the drivers inline into it). Inside the notice rather than in the first solve, so that an
+# The named tuples among the units' arguments: (module of envs.solver, class, its fields'
+# types in the codes above)
+_TUPLES = {
+    "W": ("ipm", "IpmWork", "f1 f1 f1 f1 f2 f2 f2 f2 f2 f1 f1 f1 f1 f1 f1 f1 f1 f1 f2 i1 f1 f2 "
+                            "i2 f2 f1 f1 f1 f1 f1"),
+}
+# Compiled last, here, once both shares are in the cache: the batch entry (the drivers inline
+# into it). Inside the notice rather than in the first solve, so that an
 # optimizer's progress bar, its ETA and its evaluations per second start after the compile
 _FINAL_UNITS = (
     ("driver", "solve_rows", "i i i f2 f1 f2 f3 f4 f2 b4 b3 f2"),
@@ -65,15 +80,28 @@ _FINAL_UNITS = (
 _announced = False  # announce_compile has run its compile in this process
 _lock = threading.Lock()
 _SCALARS = {"f": types.float64, "i": types.int64, "b": types.boolean}
+_DTYPES = {"f": np.float64, "i": np.int64, "b": np.bool_}
 
 
 def unit_signature(spec: str) -> tuple:
     """The numba argument types of a unit's spec string (see ``_HELPER_UNITS``)."""
-    out = []
-    for code in spec.split():
-        scalar = _SCALARS[code[0]]
-        out.append(types.Array(scalar, int(code[1:]), "C") if len(code) > 1 else scalar)
-    return tuple(out)
+    return tuple(_arg_type(code) for code in spec.split())
+
+
+def _arg_type(code: str):
+    if code in _TUPLES:
+        module, name, fields = _TUPLES[code]
+        # the type numba gives an instance: a sample of one-element arrays of the field types
+        sample = getattr(importlib.import_module(f"envs.solver.{module}"), name)(
+            *(_sample(field) for field in fields.split()))
+        return numba.typeof(sample)
+    scalar = _SCALARS[code[0]]
+    return types.Array(scalar, int(code[1:]), "C") if len(code) > 1 else scalar
+
+
+def _sample(code: str) -> np.ndarray:
+    """A C-contiguous array of an array code (``f2``: float64, two dimensions)."""
+    return np.zeros((1,) * int(code[1:]), dtype=_DTYPES[code[0]])
 
 
 def unit_dispatcher(module: str, name: str):
