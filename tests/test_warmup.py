@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from envs import DesignBounds, SoftDisk, evaluate_designs
+from envs.scenarios import Scenarios, evaluate_scenarios
 from envs.solver import warmup
 
 UNITS = warmup._HELPER_UNITS + warmup._MAIN_UNITS + warmup._FINAL_UNITS
@@ -19,11 +20,15 @@ UNITS = warmup._HELPER_UNITS + warmup._MAIN_UNITS + warmup._FINAL_UNITS
 
 @pytest.fixture(scope="module", autouse=True)
 def solved():
-    """A batch of the default model and of the fan has run (compiled or loaded the solver)."""
+    """A batch of the default model, of the fan and of placements has run (compiled or
+    loaded the solver)."""
     disk = SoftDisk(0.07, 0.0)
     designs = DesignBounds().sample(np.random.default_rng(1), 4, disk)
     evaluate_designs(designs, disk)
     evaluate_designs(designs, disk, element="spring", n_triangles=20)
+    # and a scenario batch, whose placements follow their nominal answers (the follow entry)
+    evaluate_scenarios(designs, disk, Scenarios.of(placement_tolerance_m=0.002),
+                       torsion_stiffness_nm_per_rad=0.073, friction_coefficient=0.5)
 
 
 @pytest.mark.parametrize(("module", "name", "spec"), UNITS, ids=[u[1] for u in UNITS])

@@ -76,6 +76,9 @@ _TUPLES = {
 # optimizer's progress bar, its ETA and its evaluations per second start after the compile
 _FINAL_UNITS = (
     ("driver", "solve_rows", "i i i f2 f1 f2 f3 f4 f2 b4 b3 f2"),
+    # the scenario fast path's entry (a design's other placements from its nominal answer),
+    # which every optimizer with a placement tolerance runs
+    ("follow", "follow_rows", "i i i f2 f1 f2 f3 f4 f2 b4 b3 f2"),
 )
 _announced = False  # announce_compile has run its compile in this process
 _lock = threading.Lock()
