@@ -66,6 +66,7 @@ from .ipm import (
     _ipm,
 )
 from .polish import (
+    FULL_STEPS,
     _polish_set,
 )
 from .start import (
@@ -249,8 +250,9 @@ def _release_gauge(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fsc
             active[m] = lam[m] > 0.0
     xkeep = xs.copy()
     lkeep = lam.copy()
+    # full steps, from the start each correction (runtime values: one compilation)
     good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
-                       fscale, active, work_it, gbuf, stable_out) == OK
+                       fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0) == OK
     stable = stable_out[0]
     if good:
         return OK, stable, False
@@ -467,7 +469,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                                                      blocked, n < 0)
         if opts[O_POLISH] > 0.0 and not blocked and not skip_gauge_polish:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
-                                 fscale, active, work_it, gbuf, stable_out)
+                                 fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0)
             stable = stable_out[0]
         # check the candidate set against the solution
         changed = False

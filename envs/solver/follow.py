@@ -62,8 +62,8 @@ from .contact import (
     _trig,
 )
 from .driver import _finish
-from .polish import CHORD_RATE, _polish
-from .status import CONTACT_CYCLE, OK, POLISH_FAIL
+from .polish import CHORD_RATE, _polish_set
+from .status import CONTACT_CYCLE, OK
 
 __all__ = ["follow_one", "follow_rows", "follow_batch"]
 
@@ -86,7 +86,6 @@ def _known_multipliers(kinds, fj, fidx, mcount, n, lam_face, lam_corner, lam_sto
 
 
 FOLLOW_POLISH_STEPS = 10.0  # Newton steps of one polish on the fast path (the solver's: 40)
-POLISH_ATTEMPTS = 6  # polishes on a corrected contact set before the fast path gives up
 SEAT_SECANTS = 2  # secant steps on each finger's angle when seating it on its contacts
 SEAT_OPENING = 1e-3  # first opening step of a finger that starts inside its contacts [rad]
 SEAT_STEP = 1e-6  # finger-angle step of the secant's slope [rad]
@@ -181,40 +180,6 @@ def _place_on_contacts(x, n, prm, kinds, fj, fidx, mcount, active):
 
 
 @njit(cache=True, error_model="numpy")
-def _polish_on(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
-               gbuf, stable_out):
-    """Polish on the contact set, correcting the set like
-    :func:`envs.solver.polish._polish_set` (drop a contact that comes out pulling, add a
-    constraint that comes out violated), but each correction goes on from the last polished
-    point rather than from the start: from a start a few millimetres off, a constraint
-    added after the first polish can be far open at the start, and the polish restarted there
-    diverged. Returns a status; on ``OK``, ``x`` and ``lam`` hold the polished answer."""
-    for _attempt in range(POLISH_ATTEMPTS):
-        xp = x.copy()
-        lp = lam[:mcount].copy()
-        okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
-                              active, work_it, CHORD_RATE)
-        stable_out[0] = stable
-        if not okp:
-            return POLISH_FAIL
-        _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, gbuf)
-        good = True
-        for m in range(mcount):
-            if active[m] and lp[m] < -1e-12 * fscale:
-                active[m] = False
-                good = False
-            elif (not active[m]) and gbuf[m] < -1e-10:
-                active[m] = True
-                good = False
-        x[:] = xp
-        for m in range(mcount):
-            lam[m] = max(lp[m], 0.0) if active[m] else 0.0
-        if good:
-            return OK
-    return POLISH_FAIL
-
-
-@njit(cache=True, error_model="numpy")
 def follow_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, face_cand,
                info):
     """Solve one grasp in place from a neighbour's answer on its contact set.
@@ -265,8 +230,9 @@ def follow_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, 
     fast = opts.copy()
     fast[O_POLISH_STEPS] = min(opts[O_POLISH_STEPS], FOLLOW_POLISH_STEPS)
     if opts[O_POLISH] > 0.0:
-        status = _polish_on(x, lam, n, prm, fast, bidx, kinds, fj, fidx, mcount, fscale,
-                            active, work_it, gbuf, stable_out)
+        # chord steps; each correction of the set goes on from the last polished point
+        status = _polish_set(x, lam, n, prm, fast, bidx, kinds, fj, fidx, mcount, fscale,
+                             active, work_it, gbuf, stable_out, CHORD_RATE, n > 0)
     # a point or corner edge the neighbour's sets left out now touches a finger: the set is
     # not this grasp's (commit=False as a runtime value: one compiled specialization)
     if status == OK and _grow_candidates(x, x0, n, prm, face_cand, corner_cand, n < 0, n < 0):

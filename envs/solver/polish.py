@@ -58,6 +58,7 @@ NEUTRAL = 1e-8
 # are the same for both.
 FULL_STEPS = 0.0
 CHORD_RATE = 0.1
+POLISH_ATTEMPTS = 6  # polishes on a corrected contact set before giving up
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -244,17 +245,21 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
 
 @njit(cache=True, error_model="numpy")
 def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
-                work_it, gbuf, stable_out):
+                work_it, gbuf, stable_out, chord_rate, carry):
     """Polish on a contact set, correcting the set (primal-dual active set) a few times.
 
     Drops contacts that come out with a pulling force and adds constraints that come out
     violated. On success ``xs`` and ``lam`` hold the polished answer; returns a status.
+    ``chord_rate`` as :func:`_polish`. ``carry``: each correction goes on from the last
+    polished point rather than from ``xs`` (the scenario fast path of
+    :mod:`envs.solver.follow`: from a start a few millimetres off, a constraint added after the
+    first polish can be far open at the start, and a polish restarted there diverged).
     """
-    for _attempt in range(6):
+    for _attempt in range(POLISH_ATTEMPTS):
         xp = xs.copy()
         lp = lam[:mcount].copy()
         okp, stable = _polish(xp, lp, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale,
-                              active, work_it, FULL_STEPS)
+                              active, work_it, chord_rate)
         stable_out[0] = stable
         if not okp:
             return POLISH_FAIL
@@ -267,10 +272,11 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             elif (not active[m]) and gbuf[m] < -1e-10:
                 active[m] = True
                 good = False
-        if good:
+        if good or carry:
             for d in range(xs.shape[0]):
                 xs[d] = xp[d]
             for m in range(mcount):
                 lam[m] = max(lp[m], 0.0) if active[m] else 0.0
+        if good:
             return OK
     return POLISH_FAIL
