@@ -106,3 +106,15 @@ def test_bad_leaders_are_named(disk, designs):
         evaluate_scenarios(designs[:2], disk, Scenarios(placement_along_m=0.001),
                            torsion_stiffness_nm_per_rad=KF, friction_coefficient=0.5,
                            warm_start="yes")
+
+
+def test_grooved_jaws_are_solved_from_rest_in_every_scenario(disk):
+    """The fast path places contacts on straight faces only: designs with a groove lead no
+    scenario, so their scenario answers are those of independent solves, bit for bit."""
+    designs = DesignBounds(jaw="any").sample(np.random.default_rng(2), 4, disk)
+    grid = Scenarios.of(placement_tolerance_m=0.002)
+    common = {"torsion_stiffness_nm_per_rad": KF, "friction_coefficient": 0.5}
+    cold = evaluate_scenarios(designs, disk, grid, warm_start=False, **common).per_scenario
+    warm = evaluate_scenarios(designs, disk, grid, warm_start=True, **common).per_scenario
+    for key in ("reward", "contact_score", "peak_compression", "required_friction"):
+        np.testing.assert_array_equal(np.asarray(warm[key]), np.asarray(cold[key]))

@@ -175,6 +175,11 @@ def _settled(ans: _Answers, scene: np.ndarray, xs: np.ndarray, n: int,
     from the symmetric saddle, a follower would continue the leader's, and a scenario that
     breaks the symmetry a little (a displacement) may end on either branch. Such designs are
     solved from rest in every scenario, so that the answers stay those of independent solves.
+
+    And its jaws are straight: the fast path seats the fingers and places the contacts on a
+    straight face only, so on a grooved one it falls back more often than it settles (96 random
+    grooved designs of the `any` box on paper-r070 under +-2 mm placements: 0.70x the CPU time
+    of the solves from rest, against 1.24x for straight jaws).
     """
     info = ans.infos[rows]
     claimed = (info[:, I_STATUS] == OK) & (info[:, I_STABLE] == 1.0)
@@ -183,7 +188,8 @@ def _settled(ans: _Answers, scene: np.ndarray, xs: np.ndarray, n: int,
         s[:, S_JAW0 : S_JAW0 + N_JAW] == s[:, S_JAW1 : S_JAW1 + N_JAW], axis=1)
     angles = xs[rows, 2 * n : 2 * n + 2]
     turned = np.abs(angles[:, 0] - angles[:, 1]) > MIRROR_TOLERANCE_RAD
-    return claimed & ~(mirrored & turned)
+    straight = (s[:, S_JAW0 + J_DEPTH] == 0.0) & (s[:, S_JAW1 + J_DEPTH] == 0.0)
+    return claimed & straight & ~(mirrored & turned)
 
 
 def _solve_rows_of(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
