@@ -13,7 +13,8 @@
    the first ``--leaders`` (:func:`envs.evaluate.evaluate_designs` with ``leaders=``), against
    the plain batch.
 
-Usage: ``python scripts/scenario_profile.py [--designs 128] [--neighbours] [--out out/x.json]``
+Usage: ``python scripts/scenario_profile.py [--designs 128] [--jaw straight] [--neighbours]
+[--out out/x.json]``
 """
 
 from __future__ import annotations
@@ -158,12 +159,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--batch", type=int, default=1024)
     parser.add_argument("--leaders", type=int, default=256)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--jaw", default="straight", choices=("straight", "cradle", "vee", "any"),
+                        help="the jaws of the placement batch's designs (grooved designs are "
+                             "solved from rest in every scenario)")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
     set_solver_threads(1)
     rng = np.random.default_rng(args.seed)
     out: dict = {"load_before": _load()}
-    out["scenarios"] = scenarios(DesignBounds().sample(rng, args.designs, DISK),
+    out["scenarios"] = scenarios(DesignBounds(jaw=args.jaw).sample(rng, args.designs, DISK),
                                  args.placement_mm * 1e-3, args.repeats)
     if args.neighbours:
         out["neighbours"] = neighbours(DesignBounds().sample(rng, args.batch, DISK),

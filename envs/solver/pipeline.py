@@ -175,11 +175,6 @@ def _settled(ans: _Answers, scene: np.ndarray, xs: np.ndarray, n: int,
     from the symmetric saddle, a follower would continue the leader's, and a scenario that
     breaks the symmetry a little (a displacement) may end on either branch. Such designs are
     solved from rest in every scenario, so that the answers stay those of independent solves.
-
-    And its jaws are straight: the fast path seats the fingers and places the contacts on a
-    straight face only, so on a grooved one it falls back more often than it settles (96 random
-    grooved designs of the `any` box on paper-r070 under +-2 mm placements: 0.70x the CPU time
-    of the solves from rest, against 1.24x for straight jaws).
     """
     info = ans.infos[rows]
     claimed = (info[:, I_STATUS] == OK) & (info[:, I_STABLE] == 1.0)
@@ -188,8 +183,7 @@ def _settled(ans: _Answers, scene: np.ndarray, xs: np.ndarray, n: int,
         s[:, S_JAW0 : S_JAW0 + N_JAW] == s[:, S_JAW1 : S_JAW1 + N_JAW], axis=1)
     angles = xs[rows, 2 * n : 2 * n + 2]
     turned = np.abs(angles[:, 0] - angles[:, 1]) > MIRROR_TOLERANCE_RAD
-    straight = (s[:, S_JAW0 + J_DEPTH] == 0.0) & (s[:, S_JAW1 + J_DEPTH] == 0.0)
-    return claimed & straight & ~(mirrored & turned)
+    return claimed & ~(mirrored & turned)
 
 
 def _solve_rows_of(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray,
@@ -207,6 +201,29 @@ def _solve_rows_of(n: int, prm: np.ndarray, xs: np.ndarray, lam_face: np.ndarray
     xs[rows], lam_face[rows] = x, lam
     for whole, piece in zip(ans, part, strict=True):
         whole[rows] = piece
+
+
+def _straight_leaders(scene: np.ndarray, leaders) -> np.ndarray | None:
+    """``leaders`` of :func:`solve_columns` checked, without the rows led by a design with a
+    groove in either jaw (``None`` where no row is led).
+
+    Why: the fast path (:mod:`envs.solver.follow`) seats the fingers and places the contacts
+    on a straight face only; on grooved designs it fell back more often than it settled (96
+    random designs of the ``any`` jaw box on paper-r070 under +-2 mm placements took 0.70x
+    the CPU time of the solves from rest, where straight jaws take 1.24x less), so their
+    scenarios are solved from rest, with the rows that lead."""
+    if leaders is None:
+        return None
+    leaders = np.asarray(leaders, dtype=np.int64)
+    if leaders.shape != (scene.shape[0],):
+        raise ValueError(f"leaders must have shape ({scene.shape[0]},), got {leaders.shape}")
+    if (np.any(leaders < -1) or np.any(leaders >= scene.shape[0])
+            or np.any(leaders[leaders[leaders >= 0]] >= 0)):
+        raise ValueError("leaders must be -1 or the index of a row of the batch that has no "
+                         "leader itself")
+    grooved = (scene[:, S_JAW0 + J_DEPTH] != 0.0) | (scene[:, S_JAW1 + J_DEPTH] != 0.0)
+    leaders = np.where((leaders >= 0) & grooved[np.maximum(leaders, 0)], -1, leaders)
+    return leaders if np.any(leaders >= 0) else None
 
 
 def _solve_following(n: int, scene: np.ndarray, prm: np.ndarray, xs: np.ndarray,
@@ -423,6 +440,7 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
         answer on the leader's contact set (:mod:`envs.solver.follow`) and keeps that answer
         where it is a stable equilibrium the independent check confirms; otherwise it is
         solved from its start like a row without a leader (its ``iterations`` count both).
+        A leader with a groove in either jaw leads none (:func:`_straight_leaders`).
     """
     n = int(n_triangles)
     scene = cols.rows() if isinstance(cols, SceneColumns) else cols
@@ -433,17 +451,11 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     lam_face = (np.zeros((scene.shape[0], 2, n)) if lam0 is None
                 else np.array(lam0, dtype=np.float64, ndmin=3, order="C"))
     t0 = time.perf_counter()
+    leaders = _straight_leaders(scene, leaders)
     if leaders is None:
         ans = _solve(n, prm, xs, lam_face)
         return checked_solution(scene, n, prm, xs, lam_face, ans.lam_corner, ans.lam_stop,
                                 ans.infos, time.perf_counter() - t0, payload_n)
-    leaders = np.asarray(leaders, dtype=np.int64)
-    if leaders.shape != (scene.shape[0],):
-        raise ValueError(f"leaders must have shape ({scene.shape[0]},), got {leaders.shape}")
-    if (np.any(leaders < -1) or np.any(leaders >= scene.shape[0])
-            or np.any(leaders[leaders[leaders >= 0]] >= 0)):
-        raise ValueError("leaders must be -1 or the index of a row of the batch that has no "
-                         "leader itself")
     start_x, start_lam = xs.copy(), lam_face.copy()
     ans, fast, slow = _solve_following(n, scene, prm, xs, lam_face, leaders)
     elapsed = time.perf_counter() - t0
