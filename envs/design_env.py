@@ -37,7 +37,7 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from .model.family import ModelSpec, resolve_model
-from .scenarios import Scenarios, place
+from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
 from .validation import check_range
 
@@ -486,15 +486,12 @@ def evaluate_objects(designs: np.ndarray, disks: list[SoftDisk], needs: np.ndarr
         offsets.append(o + disk.offset_x_m)  # (a disk placed off the axis stays there)
     sizes = np.array([r.shape[0] for r in rows])
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    # each design's other placements start from its nominal answer (the first of its rows;
-    # envs.solver.follow), as in envs.scenarios.evaluate_scenarios
-    leaders = np.repeat(starts, sizes)
-    leaders[starts] = -1
     out = evaluate_designs(
         np.concatenate(rows), placed, strain_limits=np.repeat(limit, sizes),
         friction_coefficients=np.concatenate(frictions),
         payload_factors=np.repeat(factor, sizes), offsets_x_m=np.concatenate(offsets),
-        leaders=leaders if sizes.max(initial=0) > 1 else None, **kwargs)
+        # each design's other placements start from its nominal answer, the first of its rows
+        leaders=nominal_leaders(sizes), **kwargs)
     worst = np.minimum.reduceat(out["reward"], starts)
     index = np.arange(out["reward"].size)
     is_worst = out["reward"] == np.repeat(worst, sizes)

@@ -313,6 +313,19 @@ def place(designs: np.ndarray, nominal: SoftDisk, friction: float,
     return rows, disks, frictions, offsets
 
 
+def nominal_leaders(sizes) -> np.ndarray | None:
+    """Leaders (:func:`~envs.evaluate.evaluate_designs`) of a design-major batch whose design
+    ``i`` has ``sizes[i]`` consecutive rows, its nominal scenario first: each design's first
+    row leads its others; ``None`` where no design has more than one row."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if sizes.max(initial=0) <= 1:
+        return None
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    leaders = np.repeat(starts, sizes)
+    leaders[starts] = -1
+    return leaders
+
+
 def _summary(table: dict[str, np.ndarray], robust: str) -> dict[str, np.ndarray]:
     reward = table["reward"]
     worst = np.argmin(reward, axis=1)  # first minimum: the earlier scenario on ties
@@ -392,11 +405,9 @@ def evaluate_scenarios(designs, disk: SoftDisk, scenarios: Scenarios, *,
                                             friction_coefficient, cases * designs.shape[0])
     extra = {"offsets_x_m": offsets} if np.any(offsets) else {}
     k = len(cases)
-    if warm_start and k > 1:
-        # the nominal scenario (the first) of each design leads its other scenarios
-        lead = np.repeat(np.arange(designs.shape[0]) * k, k)
-        lead[::k] = -1
-        extra["leaders"] = lead
+    leaders = nominal_leaders(np.full(designs.shape[0], k)) if warm_start else None
+    if leaders is not None:
+        extra["leaders"] = leaders
     flat = evaluate_designs(rows, disks, friction_coefficients=frictions,
                             torsion_stiffness_nm_per_rad=torsion_stiffness_nm_per_rad,
                             **extra, **kwargs)
