@@ -148,7 +148,7 @@ def _slp_vectorized():
 
     A lane loop of a fixed count is unrolled before the loop vectorizer sees it, so only the
     SLP vectorizer can pack its K copies into vector instructions; numba leaves it off by
-    default (numba issue 8705, a miscompilation), so the lane kernels are compiled with it on
+    default (numba#8705, a miscompilation), so the lane kernels are compiled with it on
     here and their answers are checked against the package's. The package's kernels and the
     sequential side are compiled as always.
     """
