@@ -160,15 +160,15 @@ def _slp_vectorized():
         numba.config.SLP_VECTORIZE = old
 
 
-def lane_kernels(lanes: int):
-    """The lane-major factor and element assembly for ``lanes`` lanes, compiled with the lane
-    count as a constant. Returns ``(factor_solve, assembly)``.
+# The lane kernels are made for a lane count K, a compile-time constant, by the factories
+# below. Their loops are written for the vectorizer: each lane loop stores into one array (a
+# vector store) and reads no other row of it (no store can then overlap a load of another
+# lane); running sums live in flat scratch vectors ``w[slot K + lane]`` (slots ``W_*``, ``T_*``,
+# ``Q_*``), whose constant offsets LLVM can tell apart.
 
-    The loops are written for the vectorizer: each lane loop stores into one array (a
-    vector store) and reads no other row of it (no store can then overlap a load of another
-    lane); running sums live in flat scratch vectors ``w[slot K + lane]`` (slots ``W_*``,
-    ``T_*``, ``Q_*``), whose constant offsets LLVM can tell apart.
-    """
+
+def _cholesky_lanes(lanes: int):
+    """The lane-major banded Cholesky for ``lanes`` lanes."""
     K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
 
     @njit(error_model="numpy", inline="always")
@@ -223,6 +223,13 @@ def lane_kernels(lanes: int):
                 ok[lane] &= w[s0 + lane] + w[s1 + lane] > 0.0
             for lane in range(K):
                 lb[j, bw, lane] = 1.0 / math.sqrt(w[s0 + lane] + w[s1 + lane])
+
+    return chol
+
+
+def _solve_lanes(lanes: int):
+    """The lane-major three-column solve and angle border for ``lanes`` lanes."""
+    K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
 
     @njit(error_model="numpy", inline="always")
     def solve3(lb, nb, bb, rb, ybuf, out, w):
@@ -318,6 +325,14 @@ def lane_kernels(lanes: int):
                 out_b[p, lane] -= (ybuf[p, 0, lane] * out_t[0, lane]
                                    + ybuf[p, 1, lane] * out_t[1, lane])
 
+    return solve3, border
+
+
+def factor_lanes(lanes: int):
+    """The lane-major factor and solve for ``lanes`` lanes (the entry point)."""
+    chol = _cholesky_lanes(lanes)
+    solve3, border = _solve_lanes(lanes)
+
     @njit(error_model="numpy", pipeline_class=_NoAliasCompiler)
     def factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t, ok, w):
         """:func:`envs.solver.banded._factor_solve` lane-major: the band's Cholesky, the
@@ -326,6 +341,13 @@ def lane_kernels(lanes: int):
         chol(ab, lb, nb, shift, ok, w)
         solve3(lb, nb, bb, rb, ybuf, out_b, w)
         border(bb, dd, ybuf, nb, shift, rt, out_b, out_t, ok, w)
+
+    return factor_solve
+
+
+def _point_lanes(lanes: int):
+    """The lane-major point tables and the scatter helpers for ``lanes`` lanes."""
+    K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
 
     @njit(error_model="numpy", inline="always")
     def point_tables(xl, prml, n, m, pts, rest):
@@ -386,6 +408,15 @@ def lane_kernels(lanes: int):
                 (ts[c + 4 * K], ts[c + 5 * K], ts[c + 6 * K], ts[c + 7 * K]),
                 (ts[c + 8 * K], ts[c + 9 * K], ts[c + 10 * K], ts[c + 11 * K]),
                 (ts[c + 12 * K], ts[c + 13 * K], ts[c + 14 * K], ts[c + 15 * K]))
+
+    return point_tables, triangle, add_grad, band_entry, cst_cols
+
+
+def _cst_lanes(lanes: int):
+    """The lane-major constant-strain triangles for ``lanes`` lanes."""
+    K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
+
+    _, triangle, add_grad, band_entry, cst_cols = _point_lanes(lanes)
 
     @njit(error_model="numpy", inline="always")
     def cst_gradients(pts, rest, prml, n, m, grad, ts):
@@ -455,6 +486,15 @@ def lane_kernels(lanes: int):
                                 for lane in range(K):
                                     ab[row, diag, lane] += 1.0 * _cst_block(
                                         cst_cols(ts, lane), tu0, tu1, tv0, tv1, r, rp)
+
+    return cst_gradients, cst_hessians
+
+
+def _quad_lanes(lanes: int):
+    """The lane-major quads' area energy for ``lanes`` lanes."""
+    K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
+
+    _, _, add_grad, band_entry, _ = _point_lanes(lanes)
 
     @njit(error_model="numpy", inline="always")
     def quad_values(pts, prml, k, ps, hessian, qs):
@@ -540,6 +580,17 @@ def lane_kernels(lanes: int):
                         hs = 1.0 if w == u + 1 else (-1.0 if w - u == 3 else 0.0)
                         quad_block(ab, qs, pu, u, pw, w, hs)
 
+    return quads
+
+
+def assembly_lanes(lanes: int):
+    """The lane-major element assembly for ``lanes`` lanes (the entry point)."""
+    K = lanes  # noqa: N806 - the lane count, a compile-time constant of the kernels below
+
+    point_tables = _point_lanes(lanes)[0]
+    cst_gradients, cst_hessians = _cst_lanes(lanes)
+    quads = _quad_lanes(lanes)
+
     @njit(error_model="numpy", pipeline_class=_NoAliasCompiler)
     def assembly(xl, prml, n, m, bidx, grad, ab, bb, dd, pts, rest, ts, qs):
         """:func:`envs.solver.assembly._spring_terms` of the nh-quad element lane-major: the
@@ -564,7 +615,7 @@ def lane_kernels(lanes: int):
             for lane in range(K):
                 dd[j, j, lane] += prml[P_KAPPA, lane]
 
-    return factor_solve, assembly
+    return assembly
 
 
 # --- the package's routines, called once a design ---
@@ -646,7 +697,7 @@ def factor_probe(states: list[dict], lanes: int) -> dict:
     """The banded factor and solve of ``lanes`` designs' convexified Newton matrices: the
     package's routine once a design against the lane-major one; us a design and the lane
     answers' largest relative difference."""
-    factor_lanes, _ = lane_kernels(lanes)
+    factor_kernel = factor_lanes(lanes)
     nb = states[0]["nbb"]
     stack = {key: np.stack([st[key] for st in states]) for key in ("ab", "bb", "dd")}
     rb = np.stack([np.linspace(1.0, -1.0, nb) for _ in states])  # a right-hand side a design
@@ -665,7 +716,7 @@ def factor_probe(states: list[dict], lanes: int) -> dict:
                            SHIFT, rb, rt, seq["out_b"], seq["out_t"], seq["ok"])
 
     def run_lanes():
-        factor_lanes(lane_in["ab"], lane_in["bb"], lane_in["dd"], lane["lb"], lane["ybuf"], nb,
+        factor_kernel(lane_in["ab"], lane_in["bb"], lane_in["dd"], lane["lb"], lane["ybuf"], nb,
                      SHIFT, rbl, rtl, lane["out_b"], lane["out_t"], lane_ok, w)
 
     with _slp_vectorized():
@@ -681,7 +732,7 @@ def factor_probe(states: list[dict], lanes: int) -> dict:
 def assembly_probe(states: list[dict], lanes: int) -> dict:
     """The nh-quad element assembly (gradient and exact Hessian into the band) of ``lanes``
     designs' answers: the package's once a design against the lane-major one."""
-    _, assembly_lanes = lane_kernels(lanes)
+    assembly_kernel = assembly_lanes(lanes)
     n, bidx = states[0]["n"], states[0]["bidx"]
     m = int(states[0]["prm"][P_RINGS])
     x = np.stack([st["x"] for st in states])
@@ -698,7 +749,7 @@ def assembly_probe(states: list[dict], lanes: int) -> dict:
         _sequential_assembly(x, prm, n, bidx, seq["grad"], seq["ab"], seq["bb"], seq["dd"])
 
     def run_lanes():
-        assembly_lanes(xl, prml, n, m, bidx, lane["grad"], lane["ab"], lane["bb"],
+        assembly_kernel(xl, prml, n, m, bidx, lane["grad"], lane["ab"], lane["bb"],
                        lane["dd"], *work)
 
     with _slp_vectorized():
