@@ -119,7 +119,8 @@ def _us(kernel, reps: int, *args) -> float:
 
 def batch_breakdown(designs: np.ndarray, model: dict) -> tuple[dict, dict]:
     """One-thread evaluation of ``designs``, timed by stage; returns it and the solver's
-    inputs and answers (for :func:`iteration_parts`)."""
+    inputs and answers (for :func:`iteration_parts`), with each design's Newton iterations,
+    whether it was valid at rest and whether it converged."""
     seen: dict = {}
     timer = {"solve": 0.0, "finish": 0.0}
     solve, finish = pl._solve, pl.checked_solution
@@ -148,6 +149,8 @@ def batch_breakdown(designs: np.ndarray, model: dict) -> tuple[dict, dict]:
     finally:
         pl._solve, pl.checked_solution = solve, finish
     iterations = out["iterations"][out["valid_at_rest"]]
+    seen.update(iterations=out["iterations"], valid=out["valid_at_rest"],
+                converged=out["converged"])
     return {
         "designs": len(designs),
         "wall_s": wall,
@@ -162,51 +165,71 @@ def batch_breakdown(designs: np.ndarray, model: dict) -> tuple[dict, dict]:
     }, seen
 
 
+def newton_state(seen: dict, row: int) -> dict:
+    """The solver's arrays at the answer of design ``row`` of :func:`batch_breakdown`, with the
+    constraint set a solve starts with at a strictly feasible barrier point near the answer,
+    and the convexified (positive definite) Newton matrix assembled there in ``ab``, ``bb``,
+    ``dd``: the inputs of :func:`_newton_matrix` and :func:`_factor_solve` by their names."""
+    n = seen["n"]
+    prm = kernel_copy(seen["prm"][row], n)
+    x = seen["x"][row].copy()
+    nbb, bw = band_shape(n, prm)
+    bidx = mesh_band_index(n, int(prm[P_RINGS]))
+    face = np.zeros((2, n), dtype=np.bool_)
+    corner = np.zeros((2, N_CORNERS, n), dtype=np.bool_)
+    _initial_candidates(seen["x0"][row], n, prm, face, corner, np.zeros((n, 4)),
+                        np.zeros((CORNER_SWEEP, 2)))
+    mmax = 10 * n + 2
+    kinds, fj, fidx = (np.zeros(mmax, np.int64) for _ in range(3))
+    mcount = _build_constraints(face, corner, n, kinds, fj, fidx)
+    nx = x.shape[0]
+    g = np.zeros(mcount)
+    _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
+    g = np.maximum(g, 1e-6)  # a strictly feasible barrier point near the answer
+    lam = BARRIER_MU / g
+    st = {
+        "n": n, "prm": prm, "x": x, "nbb": nbb, "bidx": bidx, "kinds": kinds, "fj": fj,
+        "fidx": fidx, "mcount": mcount, "lam": lam, "sig": lam / g, "g": g,
+        "grad": np.zeros(nx), "gb": np.zeros(nx), "res": np.zeros(nx),
+        "ab": np.zeros((nbb, bw + 1)), "bb": np.zeros((nbb, 2)), "dd": np.zeros((2, 2)),
+        "grad5": np.zeros(5), "hess5": np.zeros((5, 5)), "dofs": np.zeros(5, np.int64),
+        "cg": np.zeros((mcount, 5)), "cd": np.zeros((mcount, 5), np.int64),
+        "ch": np.zeros((mcount, CH_BLOCK + 1)),
+    }
+    # a positive definite matrix for the factor's timing: the convexified one
+    _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, st["lam"], st["sig"], st["grad"],
+                   st["ab"], st["bb"], st["dd"], g.copy(), st["grad5"], st["hess5"],
+                   st["dofs"], BARRIER_MU, True, st["gb"], st["res"], st["cg"], st["cd"],
+                   st["ch"])
+    return st
+
+
 def iteration_parts(seen: dict, states: int) -> dict:
     """Median microseconds of each part of an iteration over ``states`` answers."""
     n, opts = seen["n"], default_options()
     parts: dict[str, list[float]] = {}
     for row in range(states):
-        prm = kernel_copy(seen["prm"][row], n)
-        x = seen["x"][row].copy()
-        nbb, bw = band_shape(n, prm)
-        bidx = mesh_band_index(n, int(prm[P_RINGS]))
-        face = np.zeros((2, n), dtype=np.bool_)
-        corner = np.zeros((2, N_CORNERS, n), dtype=np.bool_)
-        _initial_candidates(seen["x0"][row], n, prm, face, corner, np.zeros((n, 4)),
-                            np.zeros((CORNER_SWEEP, 2)))
-        mmax = 10 * n + 2
-        kinds, fj, fidx = (np.zeros(mmax, np.int64) for _ in range(3))
-        mcount = _build_constraints(face, corner, n, kinds, fj, fidx)
-        nx = x.shape[0]
-        g = np.zeros(mcount)
-        _all_gaps(x, n, prm, kinds[:mcount], fj, fidx, g)
-        g = np.maximum(g, 1e-6)  # a strictly feasible barrier point near the answer
-        lam = BARRIER_MU / g
-        sig = lam / g
-        grad, gb, res = np.zeros(nx), np.zeros(nx), np.zeros(nx)
-        ab, bb, dd = np.zeros((nbb, bw + 1)), np.zeros((nbb, 2)), np.zeros((2, 2))
-        grad5, hess5, dofs = np.zeros(5), np.zeros((5, 5)), np.zeros(5, np.int64)
-        cg, cd = np.zeros((mcount, 5)), np.zeros((mcount, 5), np.int64)
-        ch = np.zeros((mcount, CH_BLOCK + 1))
-        # a positive definite matrix for the factor's timing: the convexified one
-        _newton_matrix(x, n, prm, bidx, kinds, fj, fidx, mcount, lam, sig, grad, ab, bb, dd,
-                       g.copy(), grad5, hess5, dofs, BARRIER_MU, True, gb, res, cg, cd, ch)
+        st = newton_state(seen, row)
+        x, prm, nbb, mcount = st["x"], st["prm"], st["nbb"], st["mcount"]
+        newton_args = (x, n, prm, st["bidx"], st["kinds"], st["fj"], st["fidx"], mcount,
+                       st["lam"], st["sig"], st["grad"], st["ab"].copy(), st["bb"].copy(),
+                       st["dd"].copy(), st["g"], st["grad5"], st["hess5"], st["dofs"],
+                       st["gb"], st["res"], st["cg"], st["cd"], st["ch"])
+        ab, bb, dd = st["ab"], st["bb"], st["dd"]
         lb, ybuf = np.zeros_like(ab), np.zeros((nbb, 2))
         rb, ob, rt, ot = np.ones(nbb), np.zeros(nbb), np.ones(2), np.zeros(2)
         xt = x + 1e-4
         timings = {
-            "assembly_us": _us(_time_newton, REPEATS, x, n, prm, bidx, kinds, fj, fidx, mcount,
-                               lam, sig, grad, ab.copy(), bb.copy(), dd.copy(), g, grad5, hess5,
-                               dofs, gb, res, cg, cd, ch),
+            "assembly_us": _us(_time_newton, REPEATS, *newton_args),
             "factor_solve_us": _us(_time_factor, REPEATS, ab, bb, dd, lb, ybuf, nbb, rb, rt, ob,
                                    ot),
-            "merit_us": _us(_time_merit, REPEATS, x, n, prm, kinds, fj, fidx, mcount, g),
+            "merit_us": _us(_time_merit, REPEATS, x, n, prm, st["kinds"], st["fj"], st["fidx"],
+                            mcount, st["g"]),
             "tunnels_us": _us(_time_tunnels, REPEATS, x, xt, n, prm),
             "grasp_us": _us(_time_solve, 100, n, seen["prm"][row], opts, seen["x0"][row],
                             seen["lam0"][row]),
             "constraints": float(mcount),
-            "unknowns": float(nx),
+            "unknowns": float(x.shape[0]),
         }
         for key, v in timings.items():
             parts.setdefault(key, []).append(v)

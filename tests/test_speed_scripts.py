@@ -57,3 +57,35 @@ def test_the_scenario_profile_reports_both_paths(tmp_path):
     assert sc["max_jaw_angle_difference_rad"] < 1e-9
     assert set(sc["warm_stages_cpu_s"]) == {"from_rest", "fast_path", "finish"}
     assert row["neighbours"]["designs"] == 12
+
+
+def test_lockstep_losses_from_iteration_counts():
+    """scripts/lanes_probe.py: groups of K designs run to their slowest lane; a refilled lane
+    loses only the batch's end."""
+    probe = _script("lanes_probe")
+    even = probe.lockstep([5, 5, 5, 5], sizes=(2,))
+    assert even["fixed_2"] == 1.0 and even["refill_2"] == 1.0
+    # groups (1, 3) and (2, 6): lane-iterations 2 (3 + 6) = 18 for 12 useful ones
+    out = probe.lockstep([1, 3, 2, 6], sizes=(2,))
+    assert out["fixed_2"] == 18 / 12
+    # refill: lane 0 runs 1, 2 (then 6: 9), lane 1 runs 3; the last lane ends at 9
+    assert out["refill_2"] == 2 * 9 / 12
+    assert out["mean_iterations"] == 3.0
+
+
+@pytest.mark.slow
+def test_the_lanes_probe_answers_as_the_package(tmp_path):
+    """scripts/lanes_probe.py: the lane-major factor and assembly give the package's answers
+    (the probe refuses to report otherwise) and every figure of the ceiling is there."""
+    probe = _script("lanes_probe")
+    out = tmp_path / "lanes.json"
+    probe.main(["--batch", "16", "--out", str(out)])
+    row = json.loads(out.read_text())
+    for lanes in probe.LANE_COUNTS:
+        part = row[f"lanes_{lanes}"]
+        for name in ("factor", "assembly"):
+            assert part[name]["max_rel_diff"] <= probe.RTOL
+            assert part[name]["lanes_us"] > 0.0 and part[name]["sequential_us"] > 0.0
+        ceiling = row[f"ceiling_{lanes}"]
+        # the optimistic ceiling is above the parts-only one, lockstep groups below refill
+        assert ceiling["all_free"] >= ceiling["parts_free"] >= ceiling["parts_fixed"]
