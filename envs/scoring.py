@@ -171,15 +171,24 @@ def pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad, joint_
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _jaw_indicator(points_m, force, i, j, angle_rad, joint_offset_m, length_m, width_m,
-                   rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
+def _touch_curvature(own_force_n, surface_curvature_per_m, rounding_m):
+    """Curvature [1/m] of what presses a contour point: the jaw's surface nearest it where its
+    own contact presses it, else a rounded corner on an edge beside it (convex, ``-1 / rho``)."""
+    return surface_curvature_per_m if own_force_n > 0.0 else -1.0 / rounding_m
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _jaw_indicator(points_m, own_force, force, i, j, angle_rad, joint_offset_m, length_m,
+                   width_m, rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
     """:func:`_point_indicator` of point ``i`` pressed with ``force`` [N]
-    (:func:`pressed_force_n`) against a grooved finger (the gap to the jaw's surface,
-    :func:`envs.model.geometry.jaw_finger_gap`) and the curvature of the surface nearest the
-    point."""
+    (:func:`pressed_force_n`, of which ``own_force`` its own contact's) against a grooved
+    finger (the gap to the jaw's surface, :func:`envs.model.geometry.jaw_finger_gap`) and the
+    curvature of the surface nearest the point. A point pressed through a corner on an edge
+    beside it keeps its gap: 0 where the corner's foot is at the point, growing as the foot
+    moves along the edge away from it."""
     gap, curvature = jaw_finger_gap(points_m[i, 0], points_m[i, 1], j, angle_rad,
                                     joint_offset_m, length_m, width_m, rounding_m, groove, base)
-    if force > 0.0:
+    if own_force > 0.0:
         gap = 0.0  # the solver holds a pressed point on the surface
     return contact_indicator(force, spacing_m * thickness_m, spacing_m, gap, e_star_pa), curvature
 
@@ -196,7 +205,8 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
     interpolated as in :func:`face_extent_share`: a V-groove's two flanks are two contacts, a
     cradle's arc one. A point's force is its own contact's and its share of the rounded
     corners' forces on the edges beside it (:func:`pressed_force_n`: a mouth edge pressing the
-    contour between two points). Each run's share is at most ``k sqrt(F)`` of its own force
+    contour between two points; a point pressed by corners alone touches a convex surface of
+    curvature ``-1 / rho``). Each run's share is at most ``k sqrt(F)`` of its own force
     ``F``, ``k`` of the relative radius of the disk against the surface where the run touches:
     the largest concave curvature over its pressed points
     (:func:`envs.model.geometry.jaw_finger_gap`), so a run that touches a cradle's arc of
@@ -223,7 +233,7 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
     # a free point to start from, so that no run wraps round the scan's ends
     start = -1
     for i in range(n):
-        phi, _ = _jaw_indicator(points_m, pressed_force_n(
+        phi, _ = _jaw_indicator(points_m, forces_n[i], pressed_force_n(
             points_m, forces_n, corner_forces_n, i, j, angle_rad, joint_offset_m, length_m,
             width_m, rounding_m, groove, base), i, j, angle_rad, joint_offset_m, length_m,
             width_m, rounding_m, groove, base, spacing, thickness_m, e_star)
@@ -237,32 +247,32 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
         for i in range(n):
             force = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
                                     joint_offset_m, length_m, width_m, rounding_m, groove, base)
-            _, curvature = _jaw_indicator(points_m, force, i, j, angle_rad, joint_offset_m,
-                                          length_m, width_m, rounding_m, groove, base, spacing,
-                                          thickness_m, e_star)
+            _, curvature = _jaw_indicator(points_m, forces_n[i], force, i, j, angle_rad,
+                                          joint_offset_m, length_m, width_m, rounding_m, groove,
+                                          base, spacing, thickness_m, e_star)
             total += force
-            bend = max(bend, curvature)
+            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
         return _run_share(1.0, total, bend, radius_m, thickness_m, modulus_pa, poisson_ratio)
     share = 0.0
     force_before = pressed_force_n(points_m, forces_n, corner_forces_n, start, j, angle_rad,
                                    joint_offset_m, length_m, width_m, rounding_m, groove, base)
-    before, _ = _jaw_indicator(points_m, force_before, start, j, angle_rad, joint_offset_m,
-                               length_m, width_m, rounding_m, groove, base, spacing,
-                               thickness_m, e_star)
+    before, _ = _jaw_indicator(points_m, forces_n[start], force_before, start, j, angle_rad,
+                               joint_offset_m, length_m, width_m, rounding_m, groove, base,
+                               spacing, thickness_m, e_star)
     extent = force = 0.0
     bend = -math.inf
     for k in range(1, n + 1):
         i = (start + k) % n
         pressed = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
                                   joint_offset_m, length_m, width_m, rounding_m, groove, base)
-        here, curvature = _jaw_indicator(points_m, pressed, i, j, angle_rad, joint_offset_m,
-                                         length_m, width_m, rounding_m, groove, base, spacing,
-                                         thickness_m, e_star)
+        here, curvature = _jaw_indicator(points_m, forces_n[i], pressed, i, j, angle_rad,
+                                         joint_offset_m, length_m, width_m, rounding_m, groove,
+                                         base, spacing, thickness_m, e_star)
         # the segment before point i belongs to the run of its pressed end(s)
         extent += segment_contact(before, here) / n
         if here > 0.0:
             force += pressed
-            bend = max(bend, curvature)
+            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
         elif before > 0.0:
             # the run ends on this free point
             share += _run_share(extent, force, bend, radius_m, thickness_m, modulus_pa,
