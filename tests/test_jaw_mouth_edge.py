@@ -15,8 +15,11 @@ import numpy as np
 import pytest
 
 from envs import Scene, evaluate_designs, simulate
+from envs.batch_metrics import grooves_m
 from envs.model.layout import C_MOUTH_ROOT
+from envs.model.problem import SceneColumns
 from envs.scene import Design
+from envs.scoring import pressed_force_n
 
 PAPER = Scene.preset("paper-r070")
 SWITCH_M = 111.257e-3  # cradle radius where the touch passes to the mouth edge [m]
@@ -72,3 +75,27 @@ def test_the_contact_score_is_continuous_where_the_touch_passes_to_the_mouth_edg
     steps = np.abs(np.diff(out["contact_score"]))
     assert np.max(steps) < 2.0 * np.mean(steps)
     assert np.max(steps) < 0.01 / out["n_triangles"][0]
+
+
+def test_a_corner_s_force_is_shared_by_its_edge_s_end_points():
+    """The measure's point forces above the switch: the mouth edge's 1.13 N on a contour edge
+    goes to that edge's two end points (nearly all to the one the corner's foot lies next to),
+    and the points' forces sum to the finger's face and corner forces together."""
+    res = _simulate(SWITCH_M + 50e-6)
+    g = PAPER.gripper
+    cols = SceneColumns.from_rows(Design.from_array(_designs(np.array([SWITCH_M + 50e-6]))[0])
+                                  .to_scene(PAPER.disk).rows(0.3))
+    packed, rounding = grooves_m(cols)
+    n = res.points_m.shape[0]
+    pressed = np.array([pressed_force_n(res.points_m, res.contact_forces_n[0],
+                                        res.corner_edge_forces_n[0], i, 0, res.jaw_angles_rad[0],
+                                        g.joint_offset_m, g.finger_length_m, g.finger_width_m,
+                                        float(rounding[0]), packed[0], 0) for i in range(n)])
+    edge = int(np.argmax(res.corner_edge_forces_n[0, C_MOUTH_ROOT]))
+    force = res.corner_edge_forces_n[0, C_MOUTH_ROOT, edge]
+    assert pressed.sum() == pytest.approx(res.contact_forces_n[0].sum()
+                                          + res.corner_edge_forces_n[0].sum(), rel=1e-12)
+    gained = pressed - res.contact_forces_n[0]
+    assert np.flatnonzero(gained > 0.0).tolist() in ([edge], [edge, edge + 1], [edge + 1])
+    assert gained[edge] + gained[edge + 1] == pytest.approx(force, rel=1e-12)
+    assert max(gained[edge], gained[edge + 1]) > 0.99 * force
