@@ -149,7 +149,8 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
                                                  sol.max_displacement_ratio, sol.peak_compression)]
     psm_metrics_rows(
         rows, n, sol.status, sol.converged, sol.iterations, sol.stable, sol.jaw_angles_rad,
-        sol.points_m, sol.face_forces_n, sol.corner_totals_n, sol.stop_torques_nm, *strains,
+        sol.points_m, sol.face_forces_n, sol.corner_forces_n, sol.corner_totals_n,
+        sol.stop_torques_nm, *strains,
         cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
         material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,

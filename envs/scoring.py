@@ -24,7 +24,8 @@ from .model.contact_width import (
     segment_contact,
     segment_hertz_cap,
 )
-from .model.geometry import finger_gap_m, jaw_finger_gap
+from .model.geometry import finger_axes, finger_gap_m, jaw_finger_gap
+from .model.jaw import corner_centre_local
 from .model.layout import G_DEPTH, N_GROOVE
 from .solver.status import CHECK_FAILED
 
@@ -116,40 +117,109 @@ def face_extent_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m, width_m,
-                   rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
-    """:func:`_point_indicator` against a grooved finger (the gap to the jaw's surface,
-    :func:`envs.model.geometry.jaw_finger_gap`) and the curvature of the surface nearest the
-    point."""
-    force = forces_n[i]
+def _edge_foot(points_m, k, x_m, y_m):
+    """Where the point ``(x_m, y_m)`` projects onto contour edge ``k -> k + 1``, as a fraction
+    of the edge from point ``k``, in [0, 1]."""
+    n = points_m.shape[0]
+    k1 = k + 1 if k + 1 < n else 0
+    dx, dy = points_m[k1, 0] - points_m[k, 0], points_m[k1, 1] - points_m[k, 1]
+    t = ((x_m - points_m[k, 0]) * dx + (y_m - points_m[k, 1]) * dy) / (dx * dx + dy * dy)
+    return 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad, joint_offset_m,
+                    length_m, width_m, rounding_m, groove, base):
+    """The normal force grooved finger ``j`` presses contour point ``i`` with [N]: the point's
+    own contact force and its share of each rounded corner's force on the two contour edges
+    beside it.
+
+    A corner pressing an edge at ``t`` along it (from point ``k`` to ``k + 1``) loads the edge's
+    ends with ``1 - t`` and ``t`` of its force (its gap's gradient shares it so), and at an end
+    (``t`` 0 or 1) it is that point's touch, which the solver may give to either constraint
+    (:func:`envs.solver.polish._one_constraint_per_touch`). Why: where a contact slides off the
+    face over a groove's mouth edge, the point's force passes to the edge's corner at a whole
+    point's force, continuously in the grasp; counted in points alone, the contact's extent and
+    its Hertz cap lost that force at once (a step of 0.015 in the contact score of cradles on
+    paper-r070, at R = 111.257 mm, 5 mm deep, 100 mm along the finger, 0.3 N·m).
+
+    Parameters
+    ----------
+    points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m, width_m
+        As :func:`face_extent_share`; ``forces_n`` the face contact forces of finger ``j``.
+    corner_forces_n
+        Finger ``j``'s corner forces on each contour edge [N], (N_CORNERS, N) (``C_*`` of
+        :mod:`envs.model.layout`).
+    rounding_m, groove, base
+        As :func:`grooved_face_share` (the corners' centres).
+    """
+    n = points_m.shape[0]
+    before = i - 1 if i > 0 else n - 1
+    total = forces_n[i]
+    ex, ey, nx, ny = finger_axes(j, math.sin(angle_rad), math.cos(angle_rad))
+    jx = joint_offset_m if j == 0 else -joint_offset_m
+    for c in range(corner_forces_n.shape[0]):
+        if not (corner_forces_n[c, before] > 0.0 or corner_forces_n[c, i] > 0.0):
+            continue
+        s, m = corner_centre_local(c, length_m, 0.5 * width_m, rounding_m, groove, base)
+        cx, cy = jx + s * ex + m * nx, s * ey + m * ny
+        if corner_forces_n[c, before] > 0.0:
+            total += corner_forces_n[c, before] * _edge_foot(points_m, before, cx, cy)
+        if corner_forces_n[c, i] > 0.0:
+            total += corner_forces_n[c, i] * (1.0 - _edge_foot(points_m, i, cx, cy))
+    return total
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _touch_curvature(own_force_n, surface_curvature_per_m, rounding_m):
+    """Curvature [1/m] of what presses a contour point: the jaw's surface nearest it where its
+    own contact presses it, else a rounded corner on an edge beside it (convex, ``-1 / rho``)."""
+    return surface_curvature_per_m if own_force_n > 0.0 else -1.0 / rounding_m
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _jaw_indicator(points_m, own_force, force, i, j, angle_rad, joint_offset_m, length_m,
+                   width_m, rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
+    """:func:`_point_indicator` of point ``i`` pressed with ``force`` [N]
+    (:func:`pressed_force_n`, of which ``own_force`` its own contact's) against a grooved
+    finger (the gap to the jaw's surface, :func:`envs.model.geometry.jaw_finger_gap`) and the
+    curvature of the surface nearest the point. A point pressed through a corner on an edge
+    beside it keeps its gap: 0 where the corner's foot is at the point, growing as the foot
+    moves along the edge away from it."""
     gap, curvature = jaw_finger_gap(points_m[i, 0], points_m[i, 1], j, angle_rad,
                                     joint_offset_m, length_m, width_m, rounding_m, groove, base)
-    if force > 0.0:
+    if own_force > 0.0:
         gap = 0.0  # the solver holds a pressed point on the surface
     return contact_indicator(force, spacing_m * thickness_m, spacing_m, gap, e_star_pa), curvature
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def grooved_face_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m,
-                       rounding_m, groove, base, radius_m, thickness_m, modulus_pa,
-                       poisson_ratio):
+def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_offset_m,
+                       length_m, width_m, rounding_m, groove, base, radius_m, thickness_m,
+                       modulus_pa, poisson_ratio):
     """Share of the contour in contact with a grooved finger ``j``, each contact capped by the
     Hertz width of its own force on the surface it touches.
 
     A *contact* is a run of consecutive pressed points (a positive indicator,
     :func:`envs.model.contact_width.contact_indicator`) with the segments on either side
     interpolated as in :func:`face_extent_share`: a V-groove's two flanks are two contacts, a
-    cradle's arc one. Each run's share is at most ``k sqrt(F)`` of its own force ``F``, ``k``
-    of the relative radius of the disk against the surface where the run touches: the largest
-    concave curvature over its pressed points (:func:`envs.model.geometry.jaw_finger_gap`), so
-    a run that touches a cradle's arc of radius ``R > r`` has ``R r / (R - r)``, one on a
-    flank ``r`` (a flat face), and one on an arc that fits the disk (``R <= r``) no cap: a
-    conforming contact measures the arc it touches at any force.
+    cradle's arc one. A point's force is its own contact's and its share of the rounded
+    corners' forces on the edges beside it (:func:`pressed_force_n`: a mouth edge pressing the
+    contour between two points; a point pressed by corners alone touches a convex surface of
+    curvature ``-1 / rho``). Each run's share is at most ``k sqrt(F)`` of its own force
+    ``F``, ``k`` of the relative radius of the disk against the surface where the run touches:
+    the largest concave curvature over its pressed points
+    (:func:`envs.model.geometry.jaw_finger_gap`), so a run that touches a cradle's arc of
+    radius ``R > r`` has ``R r / (R - r)``, one on a flank ``r`` (a flat face), and one on an
+    arc that fits the disk (``R <= r``) no cap: a conforming contact measures the arc it
+    touches at any force.
 
     Parameters
     ----------
     points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m
         As :func:`face_extent_share`.
+    corner_forces_n
+        Finger ``j``'s corner forces on the contour edges [N], (N_CORNERS, N).
     rounding_m, groove, base
         The corner radius ``rho`` [m] and the finger's groove packed in metres at
         ``groove[base:]`` (:func:`envs.model.jaw.pack_groove` with unit 1).
@@ -163,8 +233,10 @@ def grooved_face_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_
     # a free point to start from, so that no run wraps round the scan's ends
     start = -1
     for i in range(n):
-        phi, _ = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m, length_m,
-                                width_m, rounding_m, groove, base, spacing, thickness_m, e_star)
+        phi, _ = _jaw_indicator(points_m, forces_n[i], pressed_force_n(
+            points_m, forces_n, corner_forces_n, i, j, angle_rad, joint_offset_m, length_m,
+            width_m, rounding_m, groove, base), i, j, angle_rad, joint_offset_m, length_m,
+            width_m, rounding_m, groove, base, spacing, thickness_m, e_star)
         if not phi > 0.0:
             start = i
             break
@@ -173,28 +245,34 @@ def grooved_face_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_
         total = 0.0
         bend = -math.inf
         for i in range(n):
-            _, curvature = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m,
-                                          length_m, width_m, rounding_m, groove, base, spacing,
-                                          thickness_m, e_star)
-            total += forces_n[i]
-            bend = max(bend, curvature)
+            force = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
+                                    joint_offset_m, length_m, width_m, rounding_m, groove, base)
+            _, curvature = _jaw_indicator(points_m, forces_n[i], force, i, j, angle_rad,
+                                          joint_offset_m, length_m, width_m, rounding_m, groove,
+                                          base, spacing, thickness_m, e_star)
+            total += force
+            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
         return _run_share(1.0, total, bend, radius_m, thickness_m, modulus_pa, poisson_ratio)
     share = 0.0
-    before, _ = _jaw_indicator(points_m, forces_n, start, j, angle_rad, joint_offset_m,
-                               length_m, width_m, rounding_m, groove, base, spacing,
-                               thickness_m, e_star)
+    force_before = pressed_force_n(points_m, forces_n, corner_forces_n, start, j, angle_rad,
+                                   joint_offset_m, length_m, width_m, rounding_m, groove, base)
+    before, _ = _jaw_indicator(points_m, forces_n[start], force_before, start, j, angle_rad,
+                               joint_offset_m, length_m, width_m, rounding_m, groove, base,
+                               spacing, thickness_m, e_star)
     extent = force = 0.0
     bend = -math.inf
     for k in range(1, n + 1):
         i = (start + k) % n
-        here, curvature = _jaw_indicator(points_m, forces_n, i, j, angle_rad, joint_offset_m,
-                                         length_m, width_m, rounding_m, groove, base, spacing,
-                                         thickness_m, e_star)
+        pressed = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
+                                  joint_offset_m, length_m, width_m, rounding_m, groove, base)
+        here, curvature = _jaw_indicator(points_m, forces_n[i], pressed, i, j, angle_rad,
+                                         joint_offset_m, length_m, width_m, rounding_m, groove,
+                                         base, spacing, thickness_m, e_star)
         # the segment before point i belongs to the run of its pressed end(s)
         extent += segment_contact(before, here) / n
         if here > 0.0:
-            force += forces_n[i]
-            bend = max(bend, curvature)
+            force += pressed
+            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
         elif before > 0.0:
             # the run ends on this free point
             share += _run_share(extent, force, bend, radius_m, thickness_m, modulus_pa,
@@ -219,7 +297,8 @@ def _run_share(extent, force_n, curvature_per_m, radius_m, thickness_m, modulus_
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, stable_in,
-                     jaw_angles_rad, points_m, face_forces_n, corner_totals_n, stop_torques_nm,
+                     jaw_angles_rad, points_m, face_forces_n, corner_forces_n, corner_totals_n,
+                     stop_torques_nm,
                      peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
                      finger_length_m, joint_offset_m, finger_width_m, radius_m, thickness_m,
                      youngs_modulus_pa, poisson_ratio, material_scale, torque_nm,
@@ -269,7 +348,8 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
             base = N_GROOVE * j
             if grooves_m[g, base + G_DEPTH] > 0.0:
                 shares += grooved_face_share(
-                    points_m[g], face_forces_n[g, j], j, jaw_angles_rad[g, j],
+                    points_m[g], face_forces_n[g, j], corner_forces_n[g, j], j,
+                    jaw_angles_rad[g, j],
                     joint_offset_m[g], finger_length_m[g], finger_width_m[g], rounding_m[g],
                     grooves_m[g], base, radius_m[g], thickness_m[g], modulus, poisson_ratio[g])
             else:

@@ -191,7 +191,8 @@ def _face_share(scene: Scene, res, j: int) -> float:
     disk, grip = scene.disk, scene.gripper
     cols = SceneColumns.from_rows(scene.rows(res.torque_nm))
     packed, rounding = grooves_m(cols)
-    return grooved_face_share(res.points_m, res.contact_forces_n[j], j, res.jaw_angles_rad[j],
+    return grooved_face_share(res.points_m, res.contact_forces_n[j],
+                              res.corner_edge_forces_n[j], j, res.jaw_angles_rad[j],
                               grip.joint_offset_m, grip.finger_length_m, grip.finger_width_m,
                               rounding[0], packed[0], N_GROOVE * j, disk.radius_m,
                               disk.thickness_m, disk.stiffness_scale * disk.youngs_modulus_pa,

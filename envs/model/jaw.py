@@ -37,7 +37,18 @@ from dataclasses import dataclass
 from numba import njit
 
 from ..validation import check_range
-from .layout import G_CENTRE, G_COS, G_DEPTH, G_MOUTH, G_POSITION, G_RADIUS, G_SIN, N_GROOVE
+from .layout import (
+    C_MOUTH_TIP,
+    G_CENTRE,
+    G_COS,
+    G_DEPTH,
+    G_MOUTH,
+    G_POSITION,
+    G_RADIUS,
+    G_SIN,
+    N_BAR_CORNERS,
+    N_GROOVE,
+)
 
 __all__ = [
     "MAX_OPENING_RAD",
@@ -62,6 +73,7 @@ __all__ = [
     "DESIGN_WIDTHS",
     "mouth_half_width_m",
     "MAX_DEPTH_OF_WIDTH",
+    "corner_centre_local",
 ]
 
 # the scaled groove of one finger (pack_groove, layout G_* of envs.model.layout), lengths in
@@ -246,6 +258,27 @@ def pack_groove(depth, bottom_radius, opening, position, rho, unit, out, base):
     out[base + G_SIN] = sb
     # the mouth corners: where the grown groove meets the core face (depth rho)
     out[base + G_MOUTH] = groove_mouth(depth / unit, centre, grown, cb, sb, rho / unit)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def corner_centre_local(c, lmax, hw, rho, groove, base):
+    """Centre ``(s, m)`` of a finger's rounded convex corner ``c`` in finger coordinates (one
+    unit with the arguments): the centres of the roundings the contour's edges meet.
+
+    The bar's corners (``c < N_BAR_CORNERS``, ``C_*`` of :mod:`envs.model.layout`) sit at
+    ``s = l`` (tip, even ``c``) or 0 (root), ``m = +-(w/2 - rho)`` (the gripping face for
+    ``c < 2``, else the back); a groove's mouth edges at ``s = a +- u_E`` (the tip side for
+    ``C_MOUTH_TIP``), ``m = w/2 - rho``, from the packed groove at ``groove[base:]``
+    (:func:`pack_groove`).
+    """
+    hc = hw - rho
+    if c >= N_BAR_CORNERS:
+        ue = groove[base + G_MOUTH]
+        return groove[base + G_POSITION] + (ue if c == C_MOUTH_TIP else -ue), hc
+    sc = lmax if c % 2 == 0 else 0.0
+    if c >= 2:
+        hc = -hc
+    return sc, hc
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

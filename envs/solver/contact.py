@@ -18,13 +18,11 @@ import math
 from numba import njit
 
 from ..model.geometry import finger_axes
-from ..model.jaw import jaw_gap
+from ..model.jaw import corner_centre_local, jaw_gap
 from ..model.layout import (
-    C_MOUTH_TIP,
     G_CENTRE,
     G_COS,
     G_DEPTH,
-    G_MOUTH,
     G_POSITION,
     G_SIN,
     KIND_CORNER,
@@ -62,21 +60,9 @@ def _corner_active(j, c, prm):
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _corner_local(j, c, prm):
-    """Centre (s, m) of the rounded corner c of finger j in finger coordinates.
-
-    The bar's corners sit at s = l (tip, even c) or 0 (root), m = +-(w/2 - rho) (face, c < 2;
-    back); a groove's mouth edges at s = a +- u_E (tip side ``C_MOUTH_TIP``), m = w/2 - rho
-    (:func:`envs.model.jaw.pack_groove`).
-    """
-    hc = prm[P_HW] - prm[P_RHO]
-    if c >= N_BAR_CORNERS:
-        base = _groove_base(j)
-        ue = prm[base + G_MOUTH]
-        return prm[base + G_POSITION] + (ue if c == C_MOUTH_TIP else -ue), hc
-    sc = prm[P_LMAX] if c % 2 == 0 else 0.0
-    if c >= 2:
-        hc = -hc
-    return sc, hc
+    """Centre (s, m) of the rounded corner c of finger j in finger coordinates
+    (:func:`envs.model.jaw.corner_centre_local` of the scaled finger and groove)."""
+    return corner_centre_local(c, prm[P_LMAX], prm[P_HW], prm[P_RHO], prm, _groove_base(j))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

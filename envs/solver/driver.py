@@ -59,6 +59,7 @@ from .contact import (
     _build_constraints,
     _crossed_through,
     _face_gap,
+    _grooved,
     _sel,
     _trig,
 )
@@ -451,6 +452,15 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             # escapes exhausted: polish where we are; the answer is reported as not stable
             status = OK
             saddle = True
+        rescue = (status == ITER_LIMIT and opts[O_POLISH] > 0.0
+                  and (_grooved(0, prm) or _grooved(1, prm)))
+        if rescue:
+            # a grooved jaw's interior point can wander about a touch that two constraints
+            # describe (a contour point at a groove's mouth edge, see
+            # polish._one_constraint_per_touch) without closing on it: polish the contact set
+            # it ended near, which keeps one of the two; the iteration limit stands unless
+            # that polish reaches an equilibrium
+            status = OK
         blocked = status == BLOCKED
         if status != OK and not blocked:
             break
@@ -471,6 +481,9 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
                                  fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0)
             stable = stable_out[0]
+        if rescue and status != OK:
+            status = ITER_LIMIT
+            break
         # check the candidate set against the solution
         changed = False
         if not skip_gauge_polish:
@@ -485,7 +498,7 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                 xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
                 work_it, gbuf, stable_out, skip_gauge_polish)
             if rel_status != OK:
-                status = rel_status
+                status = ITER_LIMIT if rescue else rel_status
                 break
         if not changed and not stable and escapes < 3:
             # converged to a saddle (e.g. a symmetric squeeze past a bifurcation): perturb

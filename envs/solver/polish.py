@@ -10,11 +10,14 @@ import numpy as np
 from numba import njit
 
 from ..model.layout import (
+    KIND_CORNER,
+    KIND_FACE,
     O_POLISH_STEPS,
     O_TOL,
     P_KAPPA,
     P_KC,
     P_KR,
+    P_RHO,
 )
 from .assembly import (
     CH_BLOCK,
@@ -32,6 +35,10 @@ from .banded import (
 from .contact import (
     _all_gaps,
     _con_value,
+    _corner_centre,
+    _face_gap,
+    _grooved,
+    _sel,
     _trig,
 )
 from .status import (
@@ -59,6 +66,13 @@ NEUTRAL = 1e-8
 FULL_STEPS = 0.0
 CHORD_RATE = 0.1
 POLISH_ATTEMPTS = 6  # polishes on a corrected contact set before giving up
+# A point's gap counts as its distance to a corner's rounding when within this of it [r]
+# (round-off: a point beside the rounding, on the face next to it, is nearer the face by
+# u^2 / (2 rho) at a distance u from the corner's line)
+TOUCH_TOL = 1e-14
+# Largest gap [r] of an active constraint that a polish in equilibrium may end with once its
+# steps are spent (rather than the round-off it aims for)
+TOUCH_GAP = 1e-10
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -213,6 +227,9 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                     if gm < min(g[m], 0.0):
                         active[m] = True
                         lam[m] = 0.0
+            # (a touch of a corner taken in where its point's constraint holds it already, or
+            # the other way round: one of the two, judged where the step ran through it)
+            _one_constraint_per_touch(xt, n, prm, kinds, fj, fidx, mcount, active, lam)
             for d in range(nx):
                 xt[d] = x[d] + alpha * step[d]
         for d in range(nx):
@@ -240,7 +257,80 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         # keep the factor while full steps shrink the residual fast; a fresh one otherwise
         fresh = not (alpha == 1.0 and not hit and kkt <= chord_rate * kkt_best)
         kkt_best = min(kkt_best, kkt)
+    if kkt <= 10.0 * tol and viol <= TOUCH_GAP:
+        # the steps spent on a touch whose two constraints meet to second order (see
+        # _one_constraint_per_touch), in equilibrium with the gaps at round-off of the unit
+        # length: the answer stands, the independent check has the say (gaps within 1e-9 r)
+        return True, stable
     return False, stable
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _face_constraint(kinds, fj, fidx, mcount, j, i):
+    """Index of the face constraint of point ``i`` on finger ``j`` in the list, -1 if it is
+    not a candidate."""
+    for m in range(mcount):
+        if kinds[m] == KIND_FACE and fj[m] == j and fidx[m] == i:
+            return m
+    return -1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _one_constraint_per_touch(x, n, prm, kinds, fj, fidx, mcount, active, lam):
+    """Keep one constraint of each touch that two describe, on grooved fingers: in place on
+    ``active`` and ``lam`` (the dropped one's multiplier passes to the kept one).
+
+    Why: a contour point against a rounded corner (a groove's mouth edge, where a contact
+    slides off the face into the groove) is one touch with two gaps, the point's gap to the
+    finger and the corner's gap to a contour edge at that point. Where the corner's foot on
+    the edge is the edge's end point, the corner's gap is that point's distance to it, never
+    below the point's gap to the whole finger: the point's constraint implies it. Where the
+    foot lies inside the edge and the point's nearest surface is that corner, the point's gap
+    is never below the edge's: the corner's constraint implies it. Returns whether the set
+    changed. Both active, the polish
+    solved for both gaps at round-off, which holds only with the foot exactly at the point
+    (the two gaps meet to second order there), and stalled 1e-9 short (status 5 on cradles
+    whose contact ends at the groove's mouth). A corner pressing inside an edge whose end
+    point presses another surface keeps both: two touches.
+    """
+    q = x[: 2 * n].reshape(n, 2)
+    sn, cs = _trig(x, n)
+    changed = False
+    # first the corners whose foot is an end point (their touch passes to that point), then
+    # those inside an edge (a point's touch on the same corner passes to them), so that a
+    # point a corner's foot lies beyond is judged against the corner's inner edge too
+    for inner in range(2):
+        for m in range(mcount):
+            if not (active[m] and kinds[m] == KIND_CORNER and _grooved(fj[m], prm)):
+                continue
+            j = fj[m]
+            c = fidx[m] // n
+            k = fidx[m] - c * n
+            k1 = k + 1 if k + 1 < n else 0
+            kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
+            dx, dy = q[k1, 0] - q[k, 0], q[k1, 1] - q[k, 1]
+            foot = ((kx - q[k, 0]) * dx + (ky - q[k, 1]) * dy) / (dx * dx + dy * dy)
+            at_end = foot <= 0.0 or foot >= 1.0
+            if at_end and inner == 0:
+                f = _face_constraint(kinds, fj, fidx, mcount, j, k if foot <= 0.0 else k1)
+                if f >= 0:
+                    active[f] = True
+                    lam[f] = max(lam[f], 0.0) + max(lam[m], 0.0)
+                    active[m] = False
+                    lam[m] = 0.0
+                    changed = True
+            elif not at_end and inner == 1:
+                for v in (k, k1):
+                    f = _face_constraint(kinds, fj, fidx, mcount, j, v)
+                    if f < 0 or not active[f]:
+                        continue
+                    corner = math.sqrt((q[v, 0] - kx) ** 2 + (q[v, 1] - ky) ** 2) - prm[P_RHO]
+                    if _face_gap(q, v, j, _sel(sn, j), _sel(cs, j), prm) >= corner - TOUCH_TOL:
+                        lam[m] = max(lam[m], 0.0) + max(lam[f], 0.0)
+                        active[f] = False
+                        lam[f] = 0.0
+                        changed = True
+    return changed
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,6 +345,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     :mod:`envs.solver.follow`: from a start a few millimetres off, a constraint added after the
     first polish can be far open at the start, and a polish restarted there diverged).
     """
+    _one_constraint_per_touch(xs, n, prm, kinds, fj, fidx, mcount, active, lam)
     for _attempt in range(POLISH_ATTEMPTS):
         xp = xs.copy()
         lp = lam[:mcount].copy()
@@ -262,6 +353,10 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                               active, work_it, chord_rate)
         stable_out[0] = stable
         if not okp:
+            # a polish that crossed a corner's touch ends near it with both of its
+            # constraints: once more with one of them, else it failed
+            if _one_constraint_per_touch(xp, n, prm, kinds, fj, fidx, mcount, active, lam):
+                continue
             return POLISH_FAIL
         _all_gaps(xp, n, prm, kinds[:mcount], fj, fidx, gbuf)
         good = True
@@ -272,6 +367,9 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             elif (not active[m]) and gbuf[m] < -1e-10:
                 active[m] = True
                 good = False
+        if not good:
+            # the corrected set, judged where its corrections were found
+            _one_constraint_per_touch(xp, n, prm, kinds, fj, fidx, mcount, active, lam)
         if good or carry:
             for d in range(xs.shape[0]):
                 xs[d] = xp[d]
