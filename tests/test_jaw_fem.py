@@ -502,9 +502,9 @@ def test_a_disk_wedged_into_a_narrower_groove_scores_it_mouth_to_mouth_at_both_f
     is the arc the mouth spans, seen from the disk's centre at the solved jaw angle, within
     three of the fidelity's spacings (the rim pressed in under the rounded mouth edges, and
     half a spacing off at each edge, :func:`envs.model.contact_width.run_share`), and the two
-    fidelities' shares agree within 3 %. The Hertz
-    width of the face's force on the run's mean curvature (the flanks carry a third of the
-    force) is far narrower: the run is no Hertz contact, and its extent stands."""
+    fidelities' shares agree within 3 %. A flat face's Hertz width at the face's force is far
+    narrower (and the width on the run's mean curvature, the flanks carrying two fifths of the
+    force, a quarter narrower): the run is no Hertz contact, and its extent stands."""
     from envs.model.defaults import PAPER_TORSION_STIFFNESS_NM_PER_RAD
     from envs.object_file import load_object
     from envs.scene import Design
