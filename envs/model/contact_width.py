@@ -49,6 +49,12 @@ function of the face's geometry: a concave face (a cradle of radius ``rho >= r``
 ``R = r rho / (rho - r)``, larger than ``r``, and a face that fits the disk (``rho = r``) has no
 Hertz cap at all (``R`` infinite): conforming contact extends along the whole arc that touches,
 at any force, and the interpolated extent alone measures it.
+
+**Runs on a grooved jaw.** A grooved finger's contacts are runs of neighbouring pressed points,
+each scored on its own by :func:`run_share` at both fidelities: the Hertz width of the run's
+force on the jaw's force-weighted curvature under it (:func:`run_curvature_per_m`), but never
+more than half a spacing below the extent at each edge, so that a run over several surfaces
+that conforms to the disk (a disk wedged into a groove narrower than itself) keeps its extent.
 """
 
 from __future__ import annotations
@@ -227,9 +233,9 @@ def run_share(extent_share, force_n, curvature_per_m, edge_spacing_share, radius
     below the extent means that the run is not a Hertz contact: a disk wedged into a groove
     narrower than itself presses its two flanks and its bottom arc as one conforming patch,
     whose extent the geometry sets (mouth to mouth), not the Hertz width of a curvature
-    averaged over flanks and arc. The resolved extent is then the contact, less at most the
-    overshoot, at any number of contour points or rim nodes. Continuous in the extent, the
-    force and the curvature (a minimum and a maximum of continuous functions).
+    averaged over flanks and arc. The resolved extent is then the contact, less at most half a
+    spacing at each edge, at any number of contour points or rim nodes. Continuous in the
+    extent, the force and the curvature (a minimum and a maximum of continuous functions).
 
     Parameters
     ----------
