@@ -18,11 +18,13 @@ from .model.contact_width import (
     FLAT_FACE_CURVATURE_PER_M,
     contact_indicator,
     contact_share,
+    curvature_weight_n,
     hertz_arc_coefficient,
     plane_strain_modulus_pa,
     relative_radius_m,
+    run_curvature_per_m,
+    run_share,
     segment_contact,
-    segment_hertz_cap,
 )
 from .model.geometry import finger_axes, finger_gap_m, jaw_finger_gap
 from .model.jaw import corner_centre_local
@@ -171,13 +173,6 @@ def pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad, joint_
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _touch_curvature(own_force_n, surface_curvature_per_m, rounding_m):
-    """Curvature [1/m] of what presses a contour point: the jaw's surface nearest it where its
-    own contact presses it, else a rounded corner on an edge beside it (convex, ``-1 / rho``)."""
-    return surface_curvature_per_m if own_force_n > 0.0 else -1.0 / rounding_m
-
-
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _jaw_indicator(points_m, own_force, force, i, j, angle_rad, joint_offset_m, length_m,
                    width_m, rounding_m, groove, base, spacing_m, thickness_m, e_star_pa):
     """:func:`_point_indicator` of point ``i`` pressed with ``force`` [N]
@@ -197,22 +192,22 @@ def _jaw_indicator(points_m, own_force, force, i, j, angle_rad, joint_offset_m, 
 def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_offset_m,
                        length_m, width_m, rounding_m, groove, base, radius_m, thickness_m,
                        modulus_pa, poisson_ratio):
-    """Share of the contour in contact with a grooved finger ``j``, each contact capped by the
-    Hertz width of its own force on the surface it touches.
+    """Share of the contour in contact with a grooved finger ``j``: the sum over its contacts
+    of :func:`envs.model.contact_width.run_share`, the rule the FEM's rim applies too.
 
     A *contact* is a run of consecutive pressed points (a positive indicator,
     :func:`envs.model.contact_width.contact_indicator`) with the segments on either side
     interpolated as in :func:`face_extent_share`: a V-groove's two flanks are two contacts, a
     cradle's arc one. A point's force is its own contact's and its share of the rounded
     corners' forces on the edges beside it (:func:`pressed_force_n`: a mouth edge pressing the
-    contour between two points; a point pressed by corners alone touches a convex surface of
-    curvature ``-1 / rho``). Each run's share is at most ``k sqrt(F)`` of its own force
-    ``F``, ``k`` of the relative radius of the disk against the surface where the run touches:
-    the largest concave curvature over its pressed points
-    (:func:`envs.model.geometry.jaw_finger_gap`), so a run that touches a cradle's arc of
-    radius ``R > r`` has ``R r / (R - r)``, one on a flank ``r`` (a flat face), and one on an
-    arc that fits the disk (``R <= r``) no cap: a conforming contact measures the arc it
-    touches at any force.
+    contour between two points). Each run's extent is capped by the Hertz width of its force on
+    the jaw's curvature under it (its points' curvatures weighted by their own contacts' forces,
+    so a rounded corner weighs nothing, :func:`envs.model.contact_width.run_curvature_per_m`;
+    from :func:`envs.model.geometry.jaw_finger_gap`), the cap at most
+    :data:`envs.model.contact_width.EDGE_CORRECTION_SPACINGS` of a spacing below the extent at
+    each edge: a flank is a flat face, a cradle of radius ``R > r`` has the relative radius
+    ``R r / (R - r)``, an arc that fits the disk (``R <= r``) no cap, and a disk wedged into a
+    groove narrower than itself scores the extent it touches.
 
     Parameters
     ----------
@@ -241,9 +236,8 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
             start = i
             break
     if start < 0:
-        # every point pressed: one contact round the whole contour
-        total = 0.0
-        bend = -math.inf
+        # every point pressed: one contact round the whole contour, without edges
+        total = weighted = weight = 0.0
         for i in range(n):
             force = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
                                     joint_offset_m, length_m, width_m, rounding_m, groove, base)
@@ -251,16 +245,18 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
                                           joint_offset_m, length_m, width_m, rounding_m, groove,
                                           base, spacing, thickness_m, e_star)
             total += force
-            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
-        return _run_share(1.0, total, bend, radius_m, thickness_m, modulus_pa, poisson_ratio)
+            w = curvature_weight_n(forces_n[i], curvature)
+            weighted += w * curvature
+            weight += w
+        return run_share(1.0, total, run_curvature_per_m(weighted, weight), 0.0, radius_m,
+                         thickness_m, modulus_pa, poisson_ratio)
     share = 0.0
     force_before = pressed_force_n(points_m, forces_n, corner_forces_n, start, j, angle_rad,
                                    joint_offset_m, length_m, width_m, rounding_m, groove, base)
     before, _ = _jaw_indicator(points_m, forces_n[start], force_before, start, j, angle_rad,
                                joint_offset_m, length_m, width_m, rounding_m, groove, base,
                                spacing, thickness_m, e_star)
-    extent = force = 0.0
-    bend = -math.inf
+    extent = force = weighted = weight = 0.0
     for k in range(1, n + 1):
         i = (start + k) % n
         pressed = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
@@ -272,27 +268,20 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
         extent += segment_contact(before, here) / n
         if here > 0.0:
             force += pressed
-            bend = max(bend, _touch_curvature(forces_n[i], curvature, rounding_m))
+            # weighted by the point's own contact: a corner's share presses through a
+            # rounded, convex edge, which does not make the jaw under the run flatter
+            w = curvature_weight_n(forces_n[i], curvature)
+            weighted += w * curvature
+            weight += w
         elif before > 0.0:
-            # the run ends on this free point
-            share += _run_share(extent, force, bend, radius_m, thickness_m, modulus_pa,
-                                poisson_ratio)
-            extent = force = 0.0
-            bend = -math.inf
+            # the run ends on this free point; its two edges lie in segments 1 / n long
+            share += run_share(extent, force, run_curvature_per_m(weighted, weight), 2.0 / n,
+                               radius_m, thickness_m, modulus_pa, poisson_ratio)
+            extent = force = weighted = weight = 0.0
         else:
             extent = 0.0
         before = here
     return share
-
-
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _run_share(extent, force_n, curvature_per_m, radius_m, thickness_m, modulus_pa,
-               poisson_ratio):
-    """One contact's share: its extent, at most the Hertz width of its force against a surface
-    of curvature ``curvature_per_m`` (concave positive)."""
-    cap = segment_hertz_cap(force_n, curvature_per_m, radius_m, thickness_m, modulus_pa,
-                            poisson_ratio)
-    return cap if cap < extent else extent
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -10,6 +10,7 @@ import pytest
 
 from envs import SoftDisk, evaluate_designs
 from envs.model.contact_width import (
+    EDGE_CORRECTION_SPACINGS,
     EDGE_STIFFNESS_FACTOR,
     FLAT_FACE_CURVATURE_PER_M,
     contact_arc_share,
@@ -17,7 +18,10 @@ from envs.model.contact_width import (
     contact_share,
     hertz_arc_coefficient,
     relative_radius_m,
+    run_curvature_per_m,
+    run_share,
     segment_contact,
+    segment_hertz_cap,
 )
 from envs.scene import Design
 
@@ -96,6 +100,55 @@ def test_the_cap_is_hertz_s_on_a_flat_face_and_none_on_a_conforming_one():
     assert contact_share(0.2, 1e-9, conforming) == 0.2
     assert contact_share(0.2, 1e-9, flat) == pytest.approx(flat * math.sqrt(1e-9))
     assert contact_share(0.2, 0.0, conforming) == 0.0
+
+
+@pytest.mark.parametrize("spacings", [1.0, 2.0, 4.0, 8.0])
+def test_a_run_on_hertz_s_profile_scores_hertz_s_width_wherever_the_points_fall(spacings):
+    """A grooved jaw's contact run (:func:`run_share`) on Hertz's own pressure and gap
+    profiles (a cylinder of radius 1 on a flat, E* = 1, unit thickness: ``P = pi b^2 / 4``):
+    its share is the Hertz cap ``2 b / (2 pi r)`` exactly, at every phase of the points, the
+    floor below the extent never binding (the interpolation's overshoot there is under a
+    quarter spacing at each edge, the floor's allowance half a spacing)."""
+    h = 1e-3
+    b = spacings * h
+    force = math.pi * b * b / 4.0
+    for phase in np.linspace(0.0, 1.0, 21)[:-1]:
+        extent = _hertz_extent(b, h, phase) / (2 * math.pi)
+        share = run_share(extent, force, FLAT_FACE_CURVATURE_PER_M, 2 * h / (2 * math.pi),
+                          1.0, 1.0, 1.0, 0.0)
+        assert extent >= share * (1 - 1e-12)
+        assert share == pytest.approx(2 * b / (2 * math.pi), rel=1e-12)
+    assert EDGE_CORRECTION_SPACINGS == 0.5
+
+
+def test_a_run_whose_cap_is_far_below_its_extent_keeps_its_extent_less_half_a_spacing():
+    """A run far wider than the Hertz width of its force on the jaw's mean curvature (a disk
+    wedged into a groove narrower than itself: flanks and an undersized arc in one patch) is
+    not a Hertz contact: its share is its extent less half a spacing at each edge, not the
+    cap; the share moves continuously as the mean curvature moves, whether the cap binds, the
+    floor does, or the arc conforms (no cap)."""
+    r, t, e, nu = 0.07, 0.01, 1e5, 0.45
+    force, extent, edges = 10.5, 0.26, 2.0 / 144
+    flat_cap = segment_hertz_cap(force, FLAT_FACE_CURVATURE_PER_M, r, t, e, nu)
+    assert flat_cap < 0.6 * extent
+    assert run_share(extent, force, FLAT_FACE_CURVATURE_PER_M, edges, r, t, e, nu) == (
+        pytest.approx(extent - 0.5 * edges, rel=1e-12))
+    # a run of one curvature on the flat part and another on the arc: the force-weighted mean
+    assert run_curvature_per_m(0.6 * 15.0, 1.0) == pytest.approx(9.0)
+    assert run_curvature_per_m(0.0, 0.0) == FLAT_FACE_CURVATURE_PER_M
+    # a narrow run (a resolved Hertz contact, a fifth of a spacing beyond Hertz's edges) is
+    # capped; sweep the curvature to 1 / r and past
+    small = 0.05
+    hertz = segment_hertz_cap(small, FLAT_FACE_CURVATURE_PER_M, r, t, e, nu)
+    curvatures = np.linspace(0.0, 1.2 / r, 2001)
+    narrow = np.array([run_share(hertz + 0.2 * edges, small, k, edges, r, t, e, nu)
+                       for k in curvatures])
+    wide = np.array([run_share(extent, force, k, edges, r, t, e, nu) for k in curvatures])
+    assert narrow[0] == pytest.approx(hertz, rel=1e-12)
+    assert narrow[-1] == hertz + 0.2 * edges and wide[-1] == extent
+    for shares in (narrow, wide):
+        assert np.all(np.diff(shares) >= 0.0)
+        assert np.max(np.diff(shares)) < 2e-3 * shares[-1]
 
 
 # --- continuity in the design -------------------------------------------------------------------

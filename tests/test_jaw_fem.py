@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -483,3 +484,63 @@ def test_grooved_results_round_trip_the_cache(tmp_path, monkeypatch):
     old = first.to_json()
     del old["contact_shares"]
     assert np.all(np.isnan(fem.FemResult.from_json(old).contact_shares))
+
+
+# a disk wedged into a groove narrower than itself: the water-like disk's shaped optimum
+# (examples/objects/water_disk.toml, found by scripts/jaw_comparison.py), a rounded V whose
+# bottom arc (66.5 mm) is 5 % smaller than the disk (70 mm), 21 mm deep, opening 112 deg
+WEDGED_DESIGN = (0.3140254232308895, 0.9377450016710519, 0.03893766180380683,
+                 0.027972911086744167, 1.1156386356639794, 0.051195053341855826,
+                 0.020979544355708094, 0.0664959234145449, 1.9540592856308905,
+                 0.11209813395736047)
+
+
+def test_a_disk_wedged_into_a_narrower_groove_scores_it_mouth_to_mouth_at_both_fidelities():
+    """Squeezed into a rounded V whose bottom arc is smaller than the disk, the disk presses
+    both flanks and the arc as one conforming patch that ends at the groove's mouth edges: at
+    both fidelities (the FEM's r / 12 rim, the 96 x 6 point-spring member) each face's share
+    is the arc the mouth spans, seen from the disk's centre at the solved jaw angle, within
+    three of the fidelity's spacings (the rim pressed in under the rounded mouth edges, and
+    half a spacing off at each edge, :func:`envs.model.contact_width.run_share`), and the two
+    fidelities' shares agree within 3 %. A flat face's Hertz width at the face's force is far
+    narrower (and the width on the run's mean curvature, the flanks carrying two fifths of the
+    force, a quarter narrower): the run is no Hertz contact, and its extent stands."""
+    from envs.model.defaults import PAPER_TORSION_STIFFNESS_NM_PER_RAD
+    from envs.object_file import load_object
+    from envs.scene import Design
+    from envs.solver.simulate import simulate
+    from tests.test_jaw_solver import _face_share
+
+    disk = load_object(Path(__file__).resolve().parents[1] / "examples" / "objects"
+                       / "water_disk.toml").disk
+    design = Design.from_array(np.array(WEDGED_DESIGN))
+    scene = design.to_scene(disk, PAPER_TORSION_STIFFNESS_NM_PER_RAD)
+    grip, r = scene.gripper, disk.radius_m
+    centre = np.asarray(scene.disk.center_m, dtype=float)  # (placed by the design)
+
+    def mouth_arc(side: int, angle_rad: float) -> float:
+        joint, axis, normal = finger_frame(grip, side, angle_rad)
+        jaw = grip.jaws[side]
+        ends = [joint + (jaw.position_m + s * jaw.mouth_half_width_m) * axis
+                + 0.5 * grip.finger_width_m * normal - centre for s in (-1.0, 1.0)]
+        turn = math.atan2(ends[0][0] * ends[1][1] - ends[0][1] * ends[1][0],
+                          float(ends[0] @ ends[1]))
+        return abs(turn) / (2 * math.pi)
+
+    (res,), system, _, _ = _solve(scene, [design.torque_nm])
+    assert res.converged
+    fem_spacing = 1.0 / system.rim.dofs.shape[0]
+    psm = simulate(scene, design.torque_nm, n_triangles=96, n_rings=6)
+    assert psm.converged, psm.message
+    for side in (0, 1):
+        arc = mouth_arc(side, res.jaw_angles_rad[side])
+        assert 0.25 < arc < 0.28
+        fem_share = res.contact_shares[side]
+        assert abs(fem_share - arc) <= 3 * fem_spacing, (fem_share, arc)
+        assert fem_share >= res.contact_fractions[side] - fem_spacing
+        psm_share = _face_share(scene, psm, side)
+        assert abs(psm_share - mouth_arc(side, psm.jaw_angles_rad[side])) <= 3.0 / 96
+        assert psm_share == pytest.approx(fem_share, rel=0.03)
+        flat = segment_hertz_cap(res.contact_forces_n[side], FLAT_FACE_CURVATURE_PER_M, r,
+                                 disk.thickness_m, disk.youngs_modulus_pa, disk.poisson_ratio)
+        assert flat < 0.6 * arc

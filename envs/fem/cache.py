@@ -21,8 +21,11 @@ from .result import FemResult
 # the payload, the grip force and what limits the friction; fem-7: the pressure shift within the
 # faces' Hertz patches; fem-8: the contact fractions interpolated between rim nodes
 # (envs.model.contact_width); fem-9: a grooved jaw's runs of loaded rim nodes are pressure
-# patches in the holding (envs.model.holding)
-FEM_VERSION = "fem-9"
+# patches in the holding (envs.model.holding); fem-11 (fem-10 was a measured, reverted variant of
+# the mouth edges' radius whose entries may still be in caches): a grooved jaw's contact shares
+# by envs.model.contact_width.run_share (force-weighted curvature, the cap at most half a spacing
+# below the extent at each edge)
+FEM_VERSION = "fem-11"
 
 
 def fem_cache_dir() -> Path:

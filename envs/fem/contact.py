@@ -24,11 +24,13 @@ from envs.model.contact_width import (
     contact_arc_share,
     contact_indicator,
     contact_share,
+    curvature_weight_n,
     hertz_arc_coefficient,
     plane_strain_modulus_pa,
     relative_radius_m,
+    run_curvature_per_m,
+    run_share,
     segment_contact,
-    segment_hertz_cap,
 )
 from envs.model.geometry import bar_distance, corner_radius, finger_frame
 from envs.model.jaw import (
@@ -372,15 +374,14 @@ def jaw_curvature_per_m(local: np.ndarray) -> np.ndarray:
 
 def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
                     curvature_per_m: np.ndarray, scene: Scene) -> float:
-    """One grooved face's share of the contour: each contact segment (a run of neighbouring
-    pressed nodes) its interpolated extent, at most the Hertz width of its own force on the
-    jaw's curvature under it (:func:`envs.model.contact_width.segment_hertz_cap`).
+    """One grooved face's share of the rim: the sum over its contact segments (runs of
+    neighbouring pressed nodes) of :func:`envs.model.contact_width.run_share`, the rule the
+    point-spring model applies to its contour points.
 
-    The curvature of a segment is its nodes' curvatures weighted by their forces, over the nodes
-    on a flat or concave part of the jaw: a node on a rounded convex edge (the groove's mouth,
-    rounded only so that the gap is smooth) does not count, and a segment on such edges alone
-    counts as flat. So a cradle's arc gives ``1 / R`` however hard the disk presses its mouth
-    edges, a V's flank 0, each flank its own segment.
+    Each run's curvature is its nodes' curvatures weighted by their forces
+    (:func:`~envs.model.contact_width.curvature_weight_n`: a node on a rounded convex edge does
+    not count); its extent is the rim segments of its pressed nodes and its two interpolated
+    edges, its edge spacing the rim segments in which those edges lie.
     """
     disk = scene.disk
     pressed = phi > 0.0
@@ -398,22 +399,25 @@ def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
                 label += 1
             run[i] = label
     extent = np.zeros(label + 1)
+    edges = np.zeros(label + 1)
     for i in range(n):
         j = (i + 1) % n
         part = segment[i] * segment_contact(float(phi[i]), float(phi[j]))
         if part > 0.0:
             extent[run[i] if pressed[i] else run[j]] += part
+        if pressed[i] != pressed[j]:
+            # a run's edge lies in the segment between a pressed node and a free one
+            edges[run[i] if pressed[i] else run[j]] += segment[i]
     total = 0.0
-    on_face = curvature_per_m >= FLAT_FACE_CURVATURE_PER_M  # not a rounded convex edge
     for k in range(label + 1):
-        members = run == k
-        force = float(np.sum(forces_n[members]))
-        weights = forces_n[members & on_face]
-        curvature = (float(np.sum(weights * curvature_per_m[members & on_face]) / np.sum(weights))
-                     if np.sum(weights) > 0.0 else FLAT_FACE_CURVATURE_PER_M)
-        cap = segment_hertz_cap(force, curvature, disk.radius_m, disk.thickness_m,
-                                disk.youngs_modulus_pa, disk.poisson_ratio)
-        total += min(float(extent[k]), cap)
+        members = np.flatnonzero(run == k)
+        weights = np.array([curvature_weight_n(float(forces_n[i]), float(curvature_per_m[i]))
+                            for i in members])
+        curvature = run_curvature_per_m(float(np.sum(weights * curvature_per_m[members])),
+                                        float(np.sum(weights)))
+        total += run_share(float(extent[k]), float(np.sum(forces_n[members])), curvature,
+                           float(edges[k]), disk.radius_m, disk.thickness_m,
+                           disk.youngs_modulus_pa, disk.poisson_ratio)
     return total
 
 
@@ -453,7 +457,7 @@ def rim_contact_shares(scene: Scene, rim: _Rim, order: np.ndarray, positions_m: 
         (:func:`~envs.model.contact_width.contact_share`); a grooved face's contact segments
         each at most the Hertz width of its own force on the jaw's curvature under it
         (:func:`_segment_shares`: a fitted cradle is not capped, a V's flanks are capped one by
-        one).
+        one, a disk wedged into a narrower groove scores the extent it touches).
     """
     disk, grip = scene.disk, scene.gripper
     e_star = plane_strain_modulus_pa(disk.youngs_modulus_pa, disk.poisson_ratio)

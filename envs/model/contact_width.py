@@ -49,6 +49,12 @@ function of the face's geometry: a concave face (a cradle of radius ``rho >= r``
 ``R = r rho / (rho - r)``, larger than ``r``, and a face that fits the disk (``rho = r``) has no
 Hertz cap at all (``R`` infinite): conforming contact extends along the whole arc that touches,
 at any force, and the interpolated extent alone measures it.
+
+**Runs on a grooved jaw.** A grooved finger's contacts are runs of neighbouring pressed points,
+each scored on its own by :func:`run_share` at both fidelities: the Hertz width of the run's
+force on the jaw's force-weighted curvature under it (:func:`run_curvature_per_m`), but never
+more than half a spacing below the extent at each edge, so that a run over several surfaces
+that conforms to the disk (a disk wedged into a groove narrower than itself) keeps its extent.
 """
 
 from __future__ import annotations
@@ -58,14 +64,18 @@ import math
 from numba import njit
 
 __all__ = [
+    "EDGE_CORRECTION_SPACINGS",
     "EDGE_STIFFNESS_FACTOR",
     "FLAT_FACE_CURVATURE_PER_M",
     "contact_arc_share",
     "contact_indicator",
     "contact_share",
+    "curvature_weight_n",
     "hertz_arc_coefficient",
     "plane_strain_modulus_pa",
     "relative_radius_m",
+    "run_curvature_per_m",
+    "run_share",
     "segment_contact",
     "segment_hertz_cap",
 ]
@@ -74,6 +84,12 @@ __all__ = [
 #: the edge lies up to a quarter of a spacing beyond Hertz's (1 would put it a tenth beyond, 1.73
 #: centre it), so that on a flat face the Hertz cap sets the share of a resolved contact.
 EDGE_STIFFNESS_FACTOR = 0.5
+
+#: The most the Hertz cap may pull each edge of a contact run back from its interpolated place,
+#: in point spacings (see :func:`run_share`): twice the interpolation's overshoot on Hertz's own
+#: profiles (at most a quarter spacing, ``tests/test_contact_width.py``), since the solved
+#: contours' pressure profiles are not exactly Hertz's (a V's flank on the default model: 0.28).
+EDGE_CORRECTION_SPACINGS = 0.5
 
 #: Curvature of a straight gripping face [1/m] (a concave cutout: ``1 / rho`` of its arc).
 FLAT_FACE_CURVATURE_PER_M = 0.0
@@ -178,6 +194,69 @@ def segment_hertz_cap(force_n, face_curvature_per_m, radius_m, thickness_m, youn
     k = hertz_arc_coefficient(radius_m, thickness_m, youngs_modulus_pa, poisson_ratio,
                               relative_radius_m(radius_m, face_curvature_per_m))
     return k * math.sqrt(force_n) if k < math.inf else math.inf
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def curvature_weight_n(force_n, curvature_per_m):
+    """Weight [N] of one pressed point (rim node) in its run's curvature
+    (:func:`run_curvature_per_m`): its force where the jaw under it is flat or concave, 0 on a
+    rounded convex edge (a groove's mouth, rounded only so that the gap is smooth: however hard
+    the disk presses it, it does not make a cradle's arc look flatter)."""
+    if force_n > 0.0 and curvature_per_m >= FLAT_FACE_CURVATURE_PER_M:
+        return force_n
+    return 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def run_curvature_per_m(weighted_curvature_sum, weight_sum_n):
+    """The jaw's curvature [1/m] under one contact run: the mean of its points' curvatures
+    weighted by :func:`curvature_weight_n` (``weighted_curvature_sum = sum w_i k_i``,
+    ``weight_sum_n = sum w_i``), flat where no point weighs. A weighted mean, so that it moves
+    continuously as a point joins the run with a vanishing force."""
+    if weight_sum_n > 0.0:
+        return weighted_curvature_sum / weight_sum_n
+    return FLAT_FACE_CURVATURE_PER_M
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def run_share(extent_share, force_n, curvature_per_m, edge_spacing_share, radius_m,
+              thickness_m, youngs_modulus_pa, poisson_ratio):
+    """One contact run's share of the contour on a grooved jaw, the same at both fidelities.
+
+    The run's interpolated extent (the segments of its pressed points and its two interpolated
+    edges), at most the Hertz width of its force on the jaw's curvature under it
+    (:func:`segment_hertz_cap`), and that cap at most :data:`EDGE_CORRECTION_SPACINGS` of a
+    spacing below the extent at each of its two edges: ``min(e, max(cap, e - q (s_a + s_b)))``.
+
+    Why the floor: the cap is there to take off the extent's overshoot beyond Hertz's edge,
+    which on Hertz's own profiles is at most a quarter of a spacing at each edge. A cap far
+    below the extent means that the run is not a Hertz contact: a disk wedged into a groove
+    narrower than itself presses its two flanks and its bottom arc as one conforming patch,
+    whose extent the geometry sets (mouth to mouth), not the Hertz width of a curvature
+    averaged over flanks and arc. The resolved extent is then the contact, less at most half a
+    spacing at each edge, at any number of contour points or rim nodes. Continuous in the
+    extent, the force and the curvature (a minimum and a maximum of continuous functions).
+
+    Parameters
+    ----------
+    extent_share
+        The run's interpolated extent, as a share of the contour [-].
+    force_n
+        The run's normal force ``F`` [N] (the sum over its pressed points).
+    curvature_per_m
+        The jaw's curvature under the run [1/m] (:func:`run_curvature_per_m`).
+    edge_spacing_share
+        The spacings at the run's two edges, summed, as a share of the contour [-] (``2 / N``
+        on a contour of ``N`` evenly spaced points); 0 for a run round the whole contour.
+    radius_m, thickness_m, youngs_modulus_pa, poisson_ratio
+        The disk's ``r`` [m], ``t`` [m], ``E`` [Pa] and ``nu`` [-] (as for
+        :func:`hertz_arc_coefficient`).
+    """
+    cap = segment_hertz_cap(force_n, curvature_per_m, radius_m, thickness_m, youngs_modulus_pa,
+                            poisson_ratio)
+    floor = extent_share - EDGE_CORRECTION_SPACINGS * edge_spacing_share
+    bound = cap if cap > floor else floor
+    return bound if bound < extent_share else extent_share
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
