@@ -62,7 +62,7 @@ from .contact import (
     _trig,
 )
 from .driver import _finish
-from .polish import CHORD_RATE, _polish_set
+from .polish import _polish_set
 from .status import CONTACT_CYCLE, OK
 
 __all__ = ["follow_one", "follow_rows", "follow_batch"]
@@ -86,6 +86,11 @@ def _known_multipliers(kinds, fj, fidx, mcount, n, lam_face, lam_corner, lam_sto
 
 
 FOLLOW_POLISH_STEPS = 10.0  # Newton steps of one polish on the fast path (the solver's: 40)
+# chord steps (polish.CHORD_RATE) only once a full step has shrunk the residual a thousandfold:
+# with Newton's multipliers (polish._newton_multipliers) the full steps converge quadratically
+# (e.g. 6.6e9, 1.4e7, 1.2e2 times the tolerance), and a chord step contracts only by about the
+# size of the last full step
+FOLLOW_CHORD_RATE = 1e-3
 SEAT_SECANTS = 2  # secant steps on each finger's angle when seating it on its contacts
 SEAT_OPENING = 1e-3  # first opening step of a finger that starts inside its contacts [rad]
 SEAT_STEP = 1e-6  # finger-angle step of the secant's slope [rad]
@@ -230,9 +235,10 @@ def follow_one(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_cand, 
     fast = opts.copy()
     fast[O_POLISH_STEPS] = min(opts[O_POLISH_STEPS], FOLLOW_POLISH_STEPS)
     if opts[O_POLISH] > 0.0:
-        # chord steps; each correction of the set goes on from the last polished point
+        # Newton's multipliers and chord steps; each correction of the set goes on from the
+        # last polished point
         status = _polish_set(x, lam, n, prm, fast, bidx, kinds, fj, fidx, mcount, fscale,
-                             active, work_it, gbuf, stable_out, CHORD_RATE, n > 0)
+                             active, work_it, gbuf, stable_out, FOLLOW_CHORD_RATE, n > 0, n > 0)
     # a point or corner edge the neighbour's sets left out now touches a finger: the set is
     # not this grasp's (commit=False as a runtime value: one compiled specialization)
     if status == OK and _grow_candidates(x, x0, n, prm, face_cand, corner_cand, n < 0, n < 0):
