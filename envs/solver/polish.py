@@ -212,7 +212,7 @@ def _newton_multipliers(k, act, sch, cg, cd, g, step, delta, lb, bb, dd, ybuf, n
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _polish(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active, work_it,
-            chord_rate, exact_multipliers=False):
+            chord_rate, exact_multipliers):
     """Augmented-Lagrangian Newton on the active set: contacts hold to round-off.
 
     Allocates the work arrays for :func:`_polish_core` (compiled without reference counting).
@@ -413,7 +413,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
 
 @njit(cache=True, error_model="numpy")
 def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, active,
-                work_it, gbuf, stable_out, chord_rate, carry, exact_multipliers=False):
+                work_it, gbuf, stable_out, chord_rate, carry, exact_multipliers):
     """Polish on a contact set, correcting the set (primal-dual active set) a few times.
 
     Drops contacts that come out with a pulling force and adds constraints that come out
