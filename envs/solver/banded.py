@@ -285,3 +285,26 @@ def _factor_solve(ab, bb, dd, lb, ybuf, nb, shift, rb, rt, out_b, out_t):
     elif not _chol_general(ab, lb, nb, shift):
         return False
     return _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, out_b, out_t)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _forward_from(lb, nb, r, z, start):
+    """``z = L^-1 r`` (the forward half of a solve with the point block's factor, either
+    layout) for a right-hand side that is zero above row ``start``: only rows from ``start`` on
+    are swept and written (a contact constraint's gradient touches one or two points, so its
+    sweep starts there)."""
+    if lb.shape[1] == BW + 1:
+        # 2x2-block layout of _chol_band: lb[j, d] = L[j, j - d], lb[j, 0] = 1 / L[j, j]
+        for j in range(start, nb):
+            a = r[j]
+            for d in range(1, min(j - start, BW) + 1):
+                a -= lb[j, d] * z[j - d]
+            z[j] = a * lb[j, 0]
+        return
+    bw = lb.shape[1] - 1
+    for j in range(start, nb):
+        a = r[j]
+        oj = bw - j
+        for k in range(max(start, j - bw), j):
+            a -= lb[j, oj + k] * z[k]
+        z[j] = a * lb[j, bw]

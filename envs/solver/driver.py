@@ -251,9 +251,11 @@ def _release_gauge(xs, x0, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fsc
             active[m] = lam[m] > 0.0
     xkeep = xs.copy()
     lkeep = lam.copy()
-    # full steps, from the start each correction (runtime values: one compilation)
+    # full steps, from the start each correction, the augmented Lagrangian's multipliers
+    # (runtime values: one compilation)
     good = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
-                       fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0) == OK
+                       fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0,
+                       n < 0) == OK
     stable = stable_out[0]
     if good:
         return OK, stable, False
@@ -479,7 +481,8 @@ def _solve_attempt(n, prm_in, opts, x, lam_face, lam_corner, lam_stop, corner_ca
                                                      blocked, n < 0)
         if opts[O_POLISH] > 0.0 and not blocked and not skip_gauge_polish:
             status = _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount,
-                                 fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0)
+                                 fscale, active, work_it, gbuf, stable_out, FULL_STEPS, n < 0,
+                                 n < 0)
             stable = stable_out[0]
         if rescue and status != OK:
             status = ITER_LIMIT

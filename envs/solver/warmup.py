@@ -47,7 +47,7 @@ _ENTRIES = (("driver", "solve_rows"), ("pipeline", "_finish_rows"))
 _HELPER_UNITS = (
     ("assembly", "_newton_matrix",
      "f1 i f1 i1 i1 i1 i1 i f1 f1 f1 f2 f2 f2 f1 f1 f2 i1 f b f1 f1 f2 i2 f2"),
-    ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1 f b"),
+    ("polish", "_polish_set", "f1 f1 i f1 f1 i1 i1 i1 i1 i f b1 i1 f1 b1 f b b"),
     ("ipm", "_ipm_core", "f1 f1 i f1 f1 i1 i1 i1 i1 i f f i1 W"),
 )
 _MAIN_UNITS = (
