@@ -475,6 +475,22 @@ def _corner_centre(j, sj, cj, c, prm):
             -prm[P_C0X + 2 * j + 1] + sc * ey + hc * ny)
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _corner_on_edge(q, idx, j, sn, cs, prm):
+    """Corner constraint ``idx`` of finger ``j`` (its corner ``idx // n`` against the contour
+    edge ``k = idx % n``): the corner's centre, the edge's end points ``k``, ``k1``, the edge
+    vector and the centre's foot on the edge's line as a fraction ``t`` of it from ``k`` (not
+    clamped: outside [0, 1] the foot lies beyond an end point)."""
+    n = q.shape[0]
+    c = idx // n
+    k = idx - c * n
+    k1 = k + 1 if k + 1 < n else 0
+    kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
+    ex, ey = q[k1, 0] - q[k, 0], q[k1, 1] - q[k, 1]
+    t = ((kx - q[k, 0]) * ex + (ky - q[k, 1]) * ey) / (ex * ex + ey * ey)
+    return kx, ky, k, k1, ex, ey, t
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _inside(q, n, px, py):
     """Crossing-number test: is (px, py) inside the contour polygon?"""

@@ -56,7 +56,7 @@ from .candidates import _grow_candidates
 from .contact import (
     _all_gaps,
     _build_constraints,
-    _corner_centre,
+    _corner_on_edge,
     _finger_coords,
     _grooved,
     _sel,
@@ -169,12 +169,7 @@ def _place_on_contacts(x, n, prm, kinds, fj, fidx, mcount, active):
     for m in range(mcount):
         j = fj[m]
         if kinds[m] == KIND_CORNER and active[m]:
-            c = fidx[m] // n
-            k = fidx[m] - c * n
-            k1 = k + 1 if k + 1 < n else 0
-            kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
-            ex, ey = q[k1, 0] - q[k, 0], q[k1, 1] - q[k, 1]
-            t = ((kx - q[k, 0]) * ex + (ky - q[k, 1]) * ey) / (ex * ex + ey * ey)
+            kx, ky, k, k1, ex, ey, t = _corner_on_edge(q, fidx[m], j, sn, cs, prm)
             t = min(1.0, max(0.0, t))
             wx, wy = kx - q[k, 0] - t * ex, ky - q[k, 1] - t * ey
             dist = math.sqrt(wx * wx + wy * wy)

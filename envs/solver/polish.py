@@ -36,7 +36,7 @@ from .banded import (
 from .contact import (
     _all_gaps,
     _con_value,
-    _corner_centre,
+    _corner_on_edge,
     _face_gap,
     _grooved,
     _sel,
@@ -473,12 +473,7 @@ def _one_constraint_per_touch(x, n, prm, kinds, fj, fidx, mcount, active, lam):
             if not (active[m] and kinds[m] == KIND_CORNER and _grooved(fj[m], prm)):
                 continue
             j = fj[m]
-            c = fidx[m] // n
-            k = fidx[m] - c * n
-            k1 = k + 1 if k + 1 < n else 0
-            kx, ky = _corner_centre(j, _sel(sn, j), _sel(cs, j), c, prm)
-            dx, dy = q[k1, 0] - q[k, 0], q[k1, 1] - q[k, 1]
-            foot = ((kx - q[k, 0]) * dx + (ky - q[k, 1]) * dy) / (dx * dx + dy * dy)
+            kx, ky, k, k1, _, _, foot = _corner_on_edge(q, fidx[m], j, sn, cs, prm)
             at_end = foot <= 0.0 or foot >= 1.0
             if at_end and inner == 0:
                 f = _face_constraint(kinds, fj, fidx, mcount, j, k if foot <= 0.0 else k1)
