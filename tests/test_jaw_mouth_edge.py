@@ -16,14 +16,15 @@ import pytest
 
 from envs import Scene, evaluate_designs, simulate
 from envs.batch_metrics import grooves_m
+from envs.model.jaw import JAW_FIELDS
 from envs.model.layout import C_MOUTH_ROOT
 from envs.model.problem import SceneColumns
-from envs.scene import Design
+from envs.scene import DESIGN_FIELDS, Design
 from envs.scoring import pressed_force_n
 
 PAPER = Scene.preset("paper-r070")
 SWITCH_M = 111.257e-3  # cradle radius where the touch passes to the mouth edge [m]
-RADIUS_COLUMN = 7  # jaw_bottom_radius_m of a 10-wide design row (envs.model.jaw.JAW_FIELDS)
+RADIUS_COLUMN = (DESIGN_FIELDS + JAW_FIELDS).index("jaw_bottom_radius_m")
 
 
 def _designs(radii_m: np.ndarray) -> np.ndarray:
@@ -92,6 +93,7 @@ def test_a_corner_s_force_is_shared_by_its_edge_s_end_points():
                                         g.joint_offset_m, g.finger_length_m, g.finger_width_m,
                                         float(rounding[0]), packed[0], 0) for i in range(n)])
     edge = int(np.argmax(res.corner_edge_forces_n[0, C_MOUTH_ROOT]))
+    assert 0 <= edge < n - 1  # (its end points edge and edge + 1, not wrapping round)
     force = res.corner_edge_forces_n[0, C_MOUTH_ROOT, edge]
     assert pressed.sum() == pytest.approx(res.contact_forces_n[0].sum()
                                           + res.corner_edge_forces_n[0].sum(), rel=1e-12)

@@ -213,7 +213,8 @@ def _near_constraints(x, n, prm, kinds, fj, fidx, mcount, active, lam, gbuf, fac
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _corner_pressed(kinds, mcount, active):
-    """Whether a bar corner carries a force in the neighbour's answer.
+    """Whether a rounded corner (a bar's end corner; on a grooved jaw also a mouth edge, but
+    grooved designs lead no scenario) carries a force in the neighbour's answer.
 
     Why the fast path is not tried then: a corner pressing the contour slides over its edges
     when the object is displaced, and the polish from the neighbour's set rarely follows it.

@@ -300,6 +300,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
     shift = kreg
     slope = 0.0
     k_active = -1  # active constraints in the factor of _contact_schur (-1: none)
+    kkt = viol = math.inf  # (no step taken: not converged)
     for _outer in range(int(opts[O_POLISH_STEPS])):
         work_it[0] += 1
         sn, cs = _trig(x, n)
@@ -406,6 +407,11 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             if active[m]:
                 gm = _con_value(kinds[m], fj[m], fidx[m], x, q, n, prm, sn, cs)
                 lam[m] = lam_step[m] - rho * gm
+            else:
+                # lam_step holds lam's value here, but for a constraint the step's
+                # _one_constraint_per_touch dropped (its force passed to the one kept: counted
+                # in the stationarity below once, not twice)
+                lam[m] = lam_step[m]
         kkt = _stationarity(x, n, prm, kinds, fj, fidx, mcount, lam, g, grad5, hess5, dofs,
                             res)
         viol = 0.0
@@ -426,7 +432,7 @@ def _polish_core(x, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
         fresh = not (alpha == 1.0 and not hit and kkt <= chord_rate * kkt_best
                      and (_outer > 0 or not exact_multipliers))
         kkt_best = min(kkt_best, kkt)
-    if kkt <= 10.0 * tol and viol <= TOUCH_GAP:
+    if (_grooved(0, prm) or _grooved(1, prm)) and kkt <= 10.0 * tol and viol <= TOUCH_GAP:
         # the steps spent on a touch whose two constraints meet to second order (see
         # _one_constraint_per_touch), in equilibrium with the gaps at round-off of the unit
         # length: the answer stands, the independent check has the say (gaps within 1e-9 r)
@@ -532,9 +538,6 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
             elif (not active[m]) and gbuf[m] < -1e-10:
                 active[m] = True
                 good = False
-        if not good:
-            # the corrected set, judged where its corrections were found
-            _one_constraint_per_touch(xp, n, prm, kinds, fj, fidx, mcount, active, lam)
         if good or carry:
             for d in range(xs.shape[0]):
                 xs[d] = xp[d]
@@ -542,4 +545,7 @@ def _polish_set(xs, lam, n, prm, opts, bidx, kinds, fj, fidx, mcount, fscale, ac
                 lam[m] = max(lp[m], 0.0) if active[m] else 0.0
         if good:
             return OK
+        # the corrected set, judged where its corrections were found (after the copy above,
+        # so that a multiplier it moves to the constraint it keeps stays moved)
+        _one_constraint_per_touch(xp, n, prm, kinds, fj, fidx, mcount, active, lam)
     return POLISH_FAIL
