@@ -242,6 +242,21 @@ def _solve_general3(lb, nb, bb, rb, ybuf, out):
             out[k] -= v * a2
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _angle_schur(dd, bb, ybuf, nb, shift):
+    """The finger angles' 2 x 2 Schur complement ``D + shift I - B^T A^-1 B`` of the bordered
+    matrix, from ``ybuf = A^-1 B`` over its first ``nb`` rows: its entries (0, 0), (1, 1) and
+    (0, 1)."""
+    s00 = dd[0, 0] + shift
+    s11 = dd[1, 1] + shift
+    s01 = dd[0, 1]
+    for p in range(nb):
+        s00 -= bb[p, 0] * ybuf[p, 0]
+        s11 -= bb[p, 1] * ybuf[p, 1]
+        s01 -= bb[p, 0] * ybuf[p, 1]
+    return s00, s11, s01
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, out_b, out_t):
     """Solve [[A, B], [B^T, D]] + shift I with A + shift I already factored into ``lb`` (by
@@ -252,13 +267,7 @@ def _solve_factored(lb, bb, dd, ybuf, nb, shift, rb, rt, out_b, out_t):
         _solve_band3(lb, nb, bb, rb, ybuf, out_b)
     else:
         _solve_general3(lb, nb, bb, rb, ybuf, out_b)
-    s00 = dd[0, 0] + shift
-    s11 = dd[1, 1] + shift
-    s01 = dd[0, 1]
-    for p in range(nb):
-        s00 -= bb[p, 0] * ybuf[p, 0]
-        s11 -= bb[p, 1] * ybuf[p, 1]
-        s01 -= bb[p, 0] * ybuf[p, 1]
+    s00, s11, s01 = _angle_schur(dd, bb, ybuf, nb, shift)
     det = s00 * s11 - s01 * s01
     if not (s00 > 0.0 and det > 1e-300 * max(1.0, s00 * s11) and det > 0.0):
         return False

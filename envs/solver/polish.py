@@ -28,6 +28,7 @@ from .assembly import (
     _step_from_band,
 )
 from .banded import (
+    _angle_schur,
     _factor_solve,
     _forward_from,
     _solve_factored,
@@ -118,13 +119,7 @@ def _contact_schur(lb, bb, dd, ybuf, nbb, shift, bidx, nb, cg, cd, active, mcoun
     angle entries ``Lc^-1 (j_t - (A^-1 B)^T j_b)``, ``Lc`` the Cholesky factor of the angles'
     Schur complement.
     """
-    s00 = dd[0, 0] + shift
-    s11 = dd[1, 1] + shift
-    s01 = dd[0, 1]
-    for p in range(nbb):
-        s00 -= bb[p, 0] * ybuf[p, 0]
-        s11 -= bb[p, 1] * ybuf[p, 1]
-        s01 -= bb[p, 0] * ybuf[p, 1]
+    s00, s11, s01 = _angle_schur(dd, bb, ybuf, nbb, shift)
     if not s00 > 0.0:
         return -1
     c00 = math.sqrt(s00)
