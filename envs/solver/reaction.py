@@ -22,22 +22,27 @@ import math
 import numpy as np
 from numba import njit
 
-from ..model.holding import NO_PATCH, hertz_half_width, holding_of_contacts
+from ..model.holding import NO_PATCH, hertz_half_width
 from ..model.layout import (
     N_BAR_CORNERS,
     N_CORNERS,
+    P_RINGS,
     S_DISTANCE,
+    S_JOINT_OFFSET,
     S_OFFSET_X,
     S_POISSON,
     S_RADIUS,
     S_SCALE,
     S_THICKNESS,
+    S_TORSION,
     S_YOUNG,
 )
+from ..model.loads import loaded_holding, patch_constraints, patch_response
 from ..model.problem import stiffness_unit
 from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
+from .loaded import contact_compliance
 
-__all__ = ["max_contacts", "holding_one"]
+__all__ = ["max_contacts", "holding_one", "loaded_contacts"]
 
 
 @njit(cache=True, inline="always")
@@ -76,22 +81,32 @@ def _corner_label(lam_face, j, c, k, k1, n):
     return 2 * n + (j * N_CORNERS + c) * n + k
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, normals, points,
-                forces, patches, gens, out):
-    """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer.
+@njit(cache=True, error_model="numpy")
+def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, load_set, bidx,
+                work, grad5, hess5, normals, points, forces, patches, nodes, share, fingers,
+                response, gens, scratch, groups, cons, weights, out):
+    """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer:
+    the fixed centre's reaction, then the free object's grasp over the load set
+    (:func:`envs.model.loads.loaded_holding`, the normal forces moved by the patch-level
+    model with the point-spring model's compliance, :func:`envs.solver.loaded`).
 
     Parameters
     ----------
-    s, prm, n
-        The scene row (SI), its packed parameters and N.
-    x, lam_face, lam_corner
-        The scaled state and the face (2, N) and corner (2, N_CORNERS, N) multipliers.
-    payload
-        The payload ``W`` [N] the grasp must carry in every direction of the load set
-        (:mod:`envs.model.holding`), >= 0.
-    grad5, hess5, normals, points, forces, patches, gens
-        Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / - (int) / 3).
+    s, prm, kprm, n
+        The scene row (SI), its packed parameters, the kernels' copy of them
+        (:func:`envs.model.rings.kernel_copy_into`) and N.
+    x, lam_face, lam_corner, lam_stop
+        The scaled state and the face (2, N), corner (2, N_CORNERS, N) and joint-stop (2,)
+        multipliers.
+    payload, load_set
+        The payload ``W`` [N] (>= 0) and the load set's code (``LOAD_*`` of
+        :mod:`envs.model.loads`).
+    bidx, work
+        The band index and :func:`envs.solver.loaded.response_work`'s scratch.
+    grad5, hess5, normals, points, forces, patches, nodes, share, fingers, response, gens,
+    scratch, groups, cons, weights
+        Scratch: (5,), (5, 5), and per contact (max_contacts(n) rows): 2 / 2 / - / - (int) /
+        2 (int) / - / - (int) / N_RESPONSE / 3 / 2 / 2 (int) / 2 (int) / 2.
     out
         The holding row (layout ``H_*``), written: the pin force on the object [N], its
         moment about the centre [N·m], the required friction [-], the payload and the grip
@@ -124,6 +139,8 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
             points[count, 0], points[count, 1] = px + xc, py + yc
             forces[count] = f
             patches[count] = _run_label(lam_face, j, i, n) if _grooved(j, prm) else NO_PATCH
+            nodes[count, 0], nodes[count, 1], share[count] = i, -1, 1.0
+            fingers[count] = j
             fx += f * nx
             fy += f * ny
             moment += f * (px * ny - py * nx)
@@ -158,10 +175,57 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
                 points[count, 0], points[count, 1] = px + xc, py + yc
                 forces[count] = f * size
                 patches[count] = _corner_label(lam_face, j, c, k, k1, n)
+                nodes[count, 0], nodes[count, 1] = k, k1
+                share[count] = wa / (wa + wb)
+                fingers[count] = j
                 count += 1
-    # the centre carries what the contacts leave unbalanced
     # the faces' contact patches with the solved model's stiffness (its scale times E)
     half_width = hertz_half_width(r, s[S_THICKNESS], s[S_SCALE] * s[S_YOUNG], s[S_POISSON])
-    holding_of_contacts(normals, points, forces, patches, count, xc, yc, r, -fx, -fy, -moment,
-                        payload, half_width, gens, out)
+    # how the free object's normal forces move under a load (zero where the body's Hessian or
+    # the patch-level system is singular: the forces as solved)
+    mn, mc = patch_constraints(normals, points, forces, patches, count, r, groups, cons,
+                               weights)
+    g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
+                           weights, mc, r, force_unit)
+    locked = (lam_stop[0] > 0.0, lam_stop[1] > 0.0)
+    if g.shape[0] == mc:
+        patch_response(g, mn, mc, normals, points, fingers, count, cons, weights, xc, yc,
+                       s[S_JOINT_OFFSET], s[S_TORSION], locked, r, force_unit, response)
+    else:
+        response[:count, :] = 0.0
+    # the centre carries what the contacts leave unbalanced
+    loaded_holding(normals, points, forces, patches, response, count, xc, yc, r, -fx, -fy,
+                   -moment, payload, load_set, half_width, gens, scratch, groups, out)
     return count
+
+
+def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.ndarray,
+                    lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
+                    payload_n: float = 0.0, load_set: int = 2) -> dict:
+    """:func:`holding_one` of one scaled answer as plain arrays (tests, scripts): the contact
+    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``), each contact's
+    ``response`` (k, N_RESPONSE: its normal force's change per unit load on the freed object,
+    a force along x, y [N/N] and a moment [N/(N·m)]) and the holding ``row``."""
+    from ..model.holding import N_HOLD
+    from ..model.loads import N_RESPONSE
+    from ..model.rings import kernel_copy, mesh_band_index
+    from .loaded import response_work
+
+    k = max_contacts(n)
+    prm_row = np.ascontiguousarray(prm_row, dtype=np.float64)
+    kprm = kernel_copy(prm_row, n)
+    normals, points, forces = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k)
+    fingers = np.zeros(k, dtype=np.int64)
+    resp = np.zeros((k, N_RESPONSE))
+    row = np.empty(N_HOLD)
+    count = holding_one(
+        np.ascontiguousarray(scene_row, dtype=np.float64), prm_row, kprm, n,
+        np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(lam_face),
+        np.ascontiguousarray(lam_corner), np.ascontiguousarray(lam_stop, dtype=np.float64),
+        float(payload_n), int(load_set), mesh_band_index(n, int(prm_row[P_RINGS])),
+        response_work(n, kprm), np.empty(5), np.empty((5, 5)), normals, points, forces,
+        np.empty(k, dtype=np.int64), np.empty((k, 2), dtype=np.int64), np.empty(k), fingers,
+        resp, np.empty((k, 3)), np.empty((k, 2)), np.empty((k, 2), dtype=np.int64),
+        np.empty((k, 2), dtype=np.int64), np.empty((k, 2)), row)
+    return {"normals": normals[:count], "points": points[:count], "forces": forces[:count],
+            "fingers": fingers[:count], "response": resp[:count], "row": row}

@@ -1,0 +1,550 @@
+"""The loaded grasp: the friction a free object needs over the load set of how it is picked.
+
+The solved grasp holds its object by a fixed centre (:mod:`envs.model.holding`). Lifted, the
+object is free: the fixed centre's reaction and the payload ``W`` are loads on it, and the
+contacts must carry them. They move the object a little, and the contacts' normal forces change
+as the grasp's stiffness decides: a load that pushes the object into a jaw is carried by that
+jaw's normal force. Each fidelity gives that stiffness as a *response*: the change of every
+contact's normal force per unit load on the free object (a force along x, along y, a moment
+about the centre), linearized about the solved grasp with the contacts sticking
+(:func:`envs.solver.loaded.grasp_response` for the point-spring model, :mod:`envs.fem.grasp`
+for the FEM). Given it, a load ``f`` on the object leaves the normal forces
+
+    N_i'(f) = N_i + R_i . (f - p),         p the fixed centre's reaction (released),
+
+(a contact the load would pull off carries nothing) and friction must carry what they leave:
+the tangential forces ``t_i`` along the contacts' tangents with ``sum_i t_i tau_i = -(sum_i
+N_i' nu_i + F)`` and the matching moment, ``|t_i| <= mu N_i'``. The required friction of one
+load is the smallest such ``mu``: the gauge of :func:`envs.model.holding.in_plane_friction`
+on the loaded normal forces, each face's pressure free to shift within its Hertz patch as
+before (:mod:`envs.model.holding`): the onset of gross slip of the loaded grasp.
+
+The *load set* is how the gripper picks (:data:`LOAD_SETS`):
+
+* ``"top-down"``: the gripper points down and lifts; the payload pulls along the gripper's
+  axis, towards the tips (+y) and back (-y, set down or decelerated).
+* ``"side"``: the gripper comes from the side with its fingers' plane level: the payload acts
+  along the disk's axis, +z (its weight) and -z.
+* ``"any"`` (default): every in-plane direction and out of the plane.
+
+Every set includes the object held at rest (the reaction alone, no payload). The required
+friction is the largest over the set; which load sets it is reported (``LIMIT_*`` of
+:mod:`envs.model.holding`, with the direction of an in-plane pull).
+
+Out of the plane the 2-D model has no stiffness: the out-of-plane load leaves the in-plane
+normal forces as the reaction alone left them, and the exact 3-D cone requirement
+(:func:`envs.model.holding.lift_friction`) is taken on those.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .holding import (
+    H_GRIP,
+    H_LIMIT,
+    H_LIMIT_ANGLE,
+    H_MU,
+    H_PAYLOAD,
+    H_PIN_MOMENT,
+    H_PIN_X,
+    H_PIN_Y,
+    LIMIT_IN_PLANE,
+    LIMIT_NONE,
+    LIMIT_OUT_OF_PLANE,
+    LIMIT_REACTION,
+    NO_PATCH,
+    SPAN_TOL,
+    _merge,
+    _same_normal,
+    _same_patch,
+    in_plane_friction,
+    lift_friction,
+)
+
+__all__ = [
+    "LOAD_TOP_DOWN",
+    "LOAD_SIDE",
+    "LOAD_ANY",
+    "LOAD_SETS",
+    "DEFAULT_LOAD_SET",
+    "N_RESPONSE",
+    "load_set_code",
+    "loaded_holding",
+    "loaded_holding_row",
+    "patch_constraints",
+    "patch_response",
+]
+
+LOAD_TOP_DOWN, LOAD_SIDE, LOAD_ANY = range(3)
+#: The load sets by name, in the order of their codes.
+LOAD_SETS = ("top-down", "side", "any")
+#: The load set checked when none is given: every direction (a pick not stated).
+DEFAULT_LOAD_SET = "any"
+#: Columns of a response: a force along x, along y [N] and a moment about the centre [N·m].
+N_RESPONSE = 3
+# the in-plane directions sampled for the "any" set, then refined about the worst
+_DIRECTIONS = 24
+_REFINE_STEPS = 24  # golden-section steps: the bracket (2 / 24 of a turn) shrinks to ~1e-6 rad
+_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+
+
+def load_set_code(load_set: str) -> int:
+    """The code (``LOAD_*``) of a load set's name; ``ValueError`` naming the allowed ones."""
+    if load_set not in LOAD_SETS:
+        raise ValueError(f"load_set must be one of {', '.join(map(repr, LOAD_SETS))}, got "
+                         f"{load_set!r}")
+    return LOAD_SETS.index(load_set)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group):
+    """Group the contacts once for every load: ``gen_group[i]`` the contact whose generator
+    contact i's tangential force joins (a patch's contacts of one normal act as one, at their
+    force-weighted arm; :func:`envs.model.holding.holding_of_contacts`), ``shift_group[i]``
+    the first contact of its pressure patch (:func:`envs.model.holding._pressure_shift`)."""
+    tol = 1e-3 * length_scale
+    for i in range(count):
+        gen_group[i] = i
+        shift_group[i] = i
+        if not forces[i] > 0.0:
+            continue
+        for k in range(i):
+            if forces[k] > 0.0 and _same_patch(normals, points, patches, i, k, tol):
+                shift_group[i] = shift_group[k]
+                break
+        if patches[i] >= 0:
+            for k in range(i):
+                if (forces[k] > 0.0 and patches[k] == patches[i]
+                        and _same_normal(normals, i, k)):
+                    gen_group[i] = gen_group[k]
+                    break
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _one_load(normals, points, forces, response, count, centre_x, centre_y, length_scale,
+              fx, fy, fm, wx, wy, half_width, gen_group, shift_group, loaded, gens, shift,
+              tol, weight):
+    """The friction the loaded grasp needs under the load ``f = (fx, fy, fm)`` on the free
+    object (its response), of which ``(wx, wy)`` is an external force [N] (the payload; the
+    rest released the fixed centre's reaction), and ``weight`` out of the plane (0: none).
+    Returns ``(mu, total)``, ``total`` the loaded normal forces' sum."""
+    # the loaded normal forces; a contact the load pulls off carries nothing
+    nx_sum = ny_sum = m_sum = 0.0
+    for i in range(count):
+        f = forces[i]
+        if not f > 0.0:
+            loaded[i] = 0.0
+            continue
+        v = f + response[i, 0] * fx + response[i, 1] * fy + response[i, 2] * fm
+        v = max(v, 0.0)
+        loaded[i] = v
+        nx_sum += v * normals[i, 0]
+        ny_sum += v * normals[i, 1]
+        m_sum += v * ((points[i, 0] - centre_x) * normals[i, 1]
+                      - (points[i, 1] - centre_y) * normals[i, 0])
+    # the generators: a group's tangential force at its force-weighted arm
+    for i in range(count):
+        gens[i, 0] = gens[i, 1] = gens[i, 2] = 0.0
+        shift[i] = 0.0
+    total = 0.0
+    for i in range(count):
+        v = loaded[i]
+        if not v > 0.0:
+            continue
+        total += v
+        tx, ty = -normals[i, 1], normals[i, 0]
+        g = gen_group[i]
+        gens[g, 0] += v * tx
+        gens[g, 1] += v * ty
+        gens[g, 2] += v * ((points[i, 0] - centre_x) * ty
+                           - (points[i, 1] - centre_y) * tx) / length_scale
+        shift[shift_group[i]] += v
+    # compact the generators (zero rows are skipped by the merge) and the pressure shift
+    reach = 0.0
+    for i in range(count):
+        s = shift[i]
+        if s > 0.0:
+            reach += s * half_width * math.sqrt(s)
+    m = _merge(gens, count)
+    # the tangential forces carry what the normal forces and the payload leave
+    need_x, need_y = -(nx_sum + wx), -(ny_sum + wy)
+    scale = max(total, math.hypot(need_x, need_y))
+    if weight > 0.0:
+        mu = lift_friction(gens, m, need_x, need_y, -m_sum / length_scale,
+                           reach / length_scale, weight, tol * scale)
+    else:
+        mu = in_plane_friction(gens, m, need_x, need_y, -m_sum / length_scale,
+                               reach / length_scale, 0.0, tol * scale)[0]
+    return mu, total
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def loaded_holding(normals, points, forces, patches, response, count, centre_x, centre_y,
+                   length_scale, pin_x, pin_y, pin_moment, payload, load_set, half_width,
+                   gens, scratch, groups, out):
+    """The holding row of a solved grasp freed of its fixed centre, over a load set.
+
+    Parameters
+    ----------
+    normals, points, forces, patches, count, centre_x, centre_y, length_scale
+        The contact list as for :func:`envs.model.holding.holding_of_contacts`.
+    response
+        (>= count, N_RESPONSE): the change of each contact's normal force per unit load on
+        the free object (a force along x, along y [N/N], a moment [N/(N·m)]); zeros keep the
+        normal forces as solved (:func:`envs.model.holding.holding_of_contacts`' bound).
+    pin_x, pin_y, pin_moment
+        The fixed centre's reaction on the object [N, N, N·m], released here.
+    payload
+        The payload ``W`` [N], >= 0.
+    load_set
+        ``LOAD_TOP_DOWN``, ``LOAD_SIDE`` or ``LOAD_ANY``.
+    half_width
+        The contact patches' ``c`` [m N^-1/2] (:func:`envs.model.holding.hertz_half_width`).
+    gens, scratch, groups
+        Scratch: (>= count, 3) floats, (>= count, 2) floats and (>= count, 2) ints.
+    out
+        The holding row (layout ``H_*``), written: the reaction and grip as solved, the
+        required friction over the load set and what sets it.
+    """
+    total = 0.0
+    for i in range(count):
+        if forces[i] > 0.0:
+            total += forces[i]
+    out[H_PIN_X] = pin_x
+    out[H_PIN_Y] = pin_y
+    out[H_PIN_MOMENT] = pin_moment
+    out[H_PAYLOAD] = payload
+    out[H_GRIP] = total
+    gen_group, shift_group = groups[:, 0], groups[:, 1]
+    loaded, shift = scratch[:, 0], scratch[:, 1]
+    _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group)
+    fx, fy, fm = -pin_x, -pin_y, -pin_moment
+    mu, held = _one_load(normals, points, forces, response, count, centre_x, centre_y,
+                         length_scale, fx, fy, fm, 0.0, 0.0, half_width, gen_group,
+                         shift_group, loaded, gens, shift, SPAN_TOL, 0.0)
+    code, angle = LIMIT_REACTION, math.nan
+    if payload > 0.0 and mu < math.inf:
+        mu0 = mu
+        if load_set != LOAD_SIDE:
+            worst, phi = _in_plane_worst(normals, points, forces, response, count, centre_x,
+                                         centre_y, length_scale, fx, fy, fm, payload,
+                                         load_set, half_width, gen_group, shift_group,
+                                         loaded, gens, shift)
+            if worst > mu:
+                mu, code, angle = worst, LIMIT_IN_PLANE, phi
+        ratio = payload / held if held > 0.0 else math.inf
+        # out of the plane: bounded by the proportional shares; the exact need where it may
+        # set the answer
+        if load_set != LOAD_TOP_DOWN and mu < math.inf and (
+                math.sqrt(mu0 * mu0 + ratio * ratio) > mu):
+            lift, _ = _one_load(normals, points, forces, response, count, centre_x,
+                                centre_y, length_scale, fx, fy, fm, 0.0, 0.0, half_width,
+                                gen_group, shift_group, loaded, gens, shift, SPAN_TOL,
+                                payload)
+            if lift > mu:
+                mu, code, angle = lift, LIMIT_OUT_OF_PLANE, math.nan
+    if mu == 0.0:
+        code = LIMIT_NONE
+    out[H_MU] = mu
+    out[H_LIMIT] = code
+    out[H_LIMIT_ANGLE] = angle
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _in_plane_worst(normals, points, forces, response, count, centre_x, centre_y,
+                    length_scale, fx, fy, fm, payload, load_set, half_width, gen_group,
+                    shift_group, loaded, gens, shift):
+    """The largest friction over the set's in-plane pulls of size ``payload`` and the
+    direction of the pull that needs it [rad from +x]: top-down the gripper's axis both ways;
+    any every direction (sampled, then refined by golden section about the worst sample)."""
+    best, best_phi = -1.0, 0.0
+    samples = 2 if load_set == LOAD_TOP_DOWN else _DIRECTIONS
+    for k in range(samples):
+        phi = (0.5 * math.pi + math.pi * k if load_set == LOAD_TOP_DOWN
+               else 2.0 * math.pi * k / samples)
+        v = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
+                  fx, fy, fm, payload, phi, half_width, gen_group, shift_group, loaded, gens,
+                  shift)
+        if v > best:
+            best, best_phi = v, phi
+    if load_set == LOAD_TOP_DOWN or not best < math.inf:
+        return best, best_phi
+    step = 2.0 * math.pi / samples
+    a, b = best_phi - step, best_phi + step
+    p1, p2 = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
+    v1 = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
+               fx, fy, fm, payload, p1, half_width, gen_group, shift_group, loaded, gens,
+               shift)
+    v2 = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
+               fx, fy, fm, payload, p2, half_width, gen_group, shift_group, loaded, gens,
+               shift)
+    for _ in range(_REFINE_STEPS):
+        if v1 >= v2:
+            b, p2, v2 = p2, p1, v1
+            p1 = b - _GOLDEN * (b - a)
+            v1 = _pull(normals, points, forces, response, count, centre_x, centre_y,
+                       length_scale, fx, fy, fm, payload, p1, half_width, gen_group,
+                       shift_group, loaded, gens, shift)
+        else:
+            a, p1, v1 = p1, p2, v2
+            p2 = a + _GOLDEN * (b - a)
+            v2 = _pull(normals, points, forces, response, count, centre_x, centre_y,
+                       length_scale, fx, fy, fm, payload, p2, half_width, gen_group,
+                       shift_group, loaded, gens, shift)
+    for v, phi in ((v1, p1), (v2, p2)):
+        if v > best:
+            best, best_phi = v, phi
+    return best, math.atan2(math.sin(best_phi), math.cos(best_phi))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale, fx, fy,
+          fm, payload, phi, half_width, gen_group, shift_group, loaded, gens, shift):
+    """The friction of the pull ``payload`` along ``phi`` on top of the released reaction."""
+    wx, wy = payload * math.cos(phi), payload * math.sin(phi)
+    return _one_load(normals, points, forces, response, count, centre_x, centre_y,
+                     length_scale, fx + wx, fy + wy, fm, wx, wy, half_width, gen_group,
+                     shift_group, loaded, gens, shift, SPAN_TOL, 0.0)[0]
+
+
+def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                       pin_moment_nm, response=None, payload_n: float = 0.0,
+                       load_set: str = DEFAULT_LOAD_SET, half_width: float = 0.0,
+                       patches=None) -> np.ndarray:
+    """:func:`loaded_holding` of plain arrays (the FEM's contact list, tests), a row
+    (N_HOLD,); ``response`` (k, N_RESPONSE), default zeros (the normal forces as solved)."""
+    from .holding import N_HOLD
+
+    normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
+    count = forces.size
+    labels = (np.full(count, NO_PATCH, dtype=np.int64) if patches is None
+              else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
+    if labels.size != count:
+        raise ValueError(f"patches needs one label per contact ({count}), got {labels.size}")
+    resp = (np.zeros((count, N_RESPONSE)) if response is None
+            else np.ascontiguousarray(response, dtype=np.float64).reshape(count, N_RESPONSE))
+    rows = max(count, 1)
+    out = np.empty(N_HOLD)
+    loaded_holding(normals, points, forces, labels, resp, count, float(centre_m[0]),
+                   float(centre_m[1]), float(length_scale_m), float(pin_force_n[0]),
+                   float(pin_force_n[1]), float(pin_moment_nm), float(payload_n),
+                   load_set_code(load_set), float(half_width), np.zeros((rows, 3)),
+                   np.zeros((rows, 2)), np.zeros((rows, 2), dtype=np.int64), out)
+    return out
+
+
+# the patch-level model of the loaded grasp (the response each fidelity computes with its own
+# compliance): see docs/holding.md, "The loaded grasp"
+_LOCKED = 1e9  # a finger on its closed stop: its joint's stiffness over the force scale x r
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def patch_constraints(normals, points, forces, patches, count, length_scale, groups, cons,
+                      weights):
+    """The sticking constraints of the loaded grasp's patch-level model, one per *normal
+    group* (a pressure patch's contacts of one normal: a flat face, a flank, each node of a
+    curved run, a corner) and one per pressure patch (its sliding along the surface); rolling
+    is free. Contact i joins normal constraint ``cons[i, 0]`` with weight ``weights[i, 0]``
+    (its share of the group's force) and tangential constraint ``cons[i, 1]`` with weight
+    ``weights[i, 1]`` (its share of the patch's); -1 for a contact without force. Returns
+    ``(normal, total)``: the number of normal constraints and of all (normal first).
+
+    ``groups`` (>= count, 2) gets the generator and pressure-patch groups of
+    :func:`_groups`."""
+    gen_group, shift_group = groups[:, 0], groups[:, 1]
+    _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group)
+    # number the groups' leaders: normal groups first, then the patches
+    mn = 0
+    for i in range(count):
+        cons[i, 0] = cons[i, 1] = -1
+        if not forces[i] > 0.0:
+            continue
+        lead = gen_group[i] if patches[i] >= 0 else shift_group[i]
+        if lead == i:
+            cons[i, 0] = mn
+            mn += 1
+        else:
+            cons[i, 0] = cons[lead, 0]
+    mc = mn
+    for i in range(count):
+        if not forces[i] > 0.0:
+            continue
+        lead = shift_group[i]
+        if lead == i:
+            cons[i, 1] = mc
+            mc += 1
+        else:
+            cons[i, 1] = cons[lead, 1]
+    # each contact's share of its group's and its patch's force
+    for i in range(count):
+        weights[i, 0] = weights[i, 1] = 0.0
+    for c in range(mc):
+        sums = 0.0
+        for i in range(count):
+            if cons[i, 0] == c or cons[i, 1] == c:
+                sums += forces[i]
+        for i in range(count):
+            if cons[i, 0] == c:
+                weights[i, 0] = forces[i] / sums
+            elif cons[i, 1] == c:
+                weights[i, 1] = forces[i] / sums
+    return mn, mc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _direction(normals, i, tangential):
+    """Contact i's unit normal (on the object) or its tangent, the normal turned a quarter
+    counter-clockwise."""
+    if tangential:
+        return -normals[i, 1], normals[i, 0]
+    return normals[i, 0], normals[i, 1]
+
+
+@njit(cache=True, error_model="numpy")
+def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, weights,
+                   centre_x, centre_y, joint_offset, kf, locked, length_scale, force_scale,
+                   response):
+    """Each contact's change of normal force per unit load on the free object, from the
+    patch-level model of the loaded grasp.
+
+    The object moves rigidly (``q``: a translation and a turn about the centre) and deforms
+    elastically (``compliance``); each finger turns about its joint against its spring
+    (``kf``); every constraint of :func:`patch_constraints` sticks (the object's and the
+    finger's material points move together along the constraint's direction). The
+    constraints' forces ``lam``, the motion and the fingers' turns solve the symmetric
+    saddle-point system ::
+
+        [[G,      A_q, A_d ],    [lam]   [ 0]
+         [A_q^T,  0,   0   ],  x [q  ] = [-f]
+         [A_d^T,  0,   -K_f]]    [d  ]   [ 0]
+
+    with ``G`` the object's compliance between the constraints (from its hub) and ``A_q``,
+    ``A_d`` what the rigid motion and the fingers' turns move them by.
+
+    Parameters
+    ----------
+    compliance
+        (>= mc, >= mc) ``G`` [m/N]: the displacement along constraint c per unit force along
+        constraint c' (each a contact-weighted sum, :func:`patch_constraints`), the hub held.
+    mn, mc, cons, weights
+        From :func:`patch_constraints`.
+    normals, points, fingers, count
+        The contact list and each contact's finger (0 right, 1 left).
+    centre_x, centre_y
+        The object's centre [m] (its hub, where the load acts).
+    joint_offset
+        ``d_3`` [m]: the joints at ``(+-d_3, 0)``.
+    kf, locked
+        The joints' stiffness [N·m/rad] and whether each finger is on its closed stop (2,).
+    length_scale, force_scale
+        ``r`` [m] and a force [N] that scale the system.
+    response
+        (>= count, N_RESPONSE), written: per unit force along x, along y [N/N] and per unit
+        moment [N/(N·m)]. Zero where the system is singular (an object the contacts do not
+        hold in place: one finger touching).
+
+    Returns
+    -------
+    bool
+        False where the system is singular.
+    """
+    size = mc + 5
+    a = np.zeros((size, size))
+    r, fs = length_scale, force_scale
+    for c in range(mc):
+        for c2 in range(mc):
+            a[c, c2] = compliance[c, c2] * fs / r
+    for i in range(count):
+        for kind in range(2):
+            c = cons[i, kind]
+            if c < 0:
+                continue
+            w = weights[i, kind]
+            dx, dy = _direction(normals, i, kind == 1)
+            px, py = (points[i, 0] - centre_x) / r, (points[i, 1] - centre_y) / r
+            a[c, mc] += w * dx
+            a[c, mc + 1] += w * dy
+            a[c, mc + 2] += w * (-dx * py + dy * px)
+            j = fingers[i]
+            # a point of finger j turns about its joint: opening (theta up) turns the right
+            # finger clockwise (sign -1), the left counter-clockwise (+1)
+            sign = -1.0 if j == 0 else 1.0
+            jx = (joint_offset if j == 0 else -joint_offset) / r
+            vx, vy = points[i, 0] / r - jx, points[i, 1] / r
+            a[c, mc + 3 + j] -= w * sign * (-dx * vy + dy * vx)
+    for c in range(mc):
+        for k in range(5):
+            a[mc + k, c] = a[c, mc + k]
+    for j in range(2):
+        stiff = _LOCKED if locked[j] else max(kf, 1e-9 * fs * r) / (fs * r)
+        a[mc + 3 + j, mc + 3 + j] = -stiff
+    lu = a.copy()
+    piv = np.zeros(size, dtype=np.int64)
+    ok = _lu(lu, piv, size)
+    for i in range(count):
+        for k in range(N_RESPONSE):
+            response[i, k] = 0.0
+    if not ok:
+        return False
+    rhs = np.zeros(size)
+    for k in range(N_RESPONSE):
+        rhs[:] = 0.0
+        rhs[mc + k] = -1.0
+        _lu_solve(lu, piv, size, rhs)
+        unit = 1.0 if k < 2 else 1.0 / r  # per N, per N·m
+        for i in range(count):
+            c = cons[i, 0]
+            if c >= 0:
+                response[i, k] = weights[i, 0] * rhs[c] * unit
+    return True
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _lu(a, piv, n):
+    """LU with partial pivoting in place; False where a pivot is below 1e-13 of the largest
+    entry (singular)."""
+    big = 0.0
+    for i in range(n):
+        for j in range(n):
+            big = max(big, abs(a[i, j]))
+    if not big > 0.0:
+        return False
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > abs(a[p, k]):
+                p = i
+        piv[k] = p
+        if not abs(a[p, k]) > 1e-13 * big:
+            return False
+        if p != k:
+            for j in range(n):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+        for i in range(k + 1, n):
+            f = a[i, k] / a[k, k]
+            a[i, k] = f
+            for j in range(k + 1, n):
+                a[i, j] -= f * a[k, j]
+    return True
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _lu_solve(lu, piv, n, b):
+    """Solve with :func:`_lu`'s factors in place."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(n):
+        for j in range(i):
+            b[i] -= lu[i, j] * b[j]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            b[i] -= lu[i, j] * b[j]
+        b[i] /= lu[i, i]
