@@ -13,7 +13,7 @@ from typing import Any
 
 from optim import run
 
-from .options import cli_option
+from .options import add_load_set_option, cli_option
 
 __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 
@@ -61,6 +61,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
                       args.jaw_per_finger)
     cli_option("--jaw", run.check_policy_jaw, args.method, jaws)
+    cli_option("--load-set", run.load_set_of, obj, args.load_set)
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
                                             obj, args.strain_limit, args.friction,
@@ -84,7 +85,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust, joints_apart=args.joints_apart,
-                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger)
+                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger,
+                                 load_set=args.load_set)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -129,6 +131,12 @@ def _verify_command(args: argparse.Namespace) -> int:
         _check_same_object(args.object, recorded.object, path)
     if args.jaw is not None or args.jaw_per_finger is not None:
         _check_same_jaws(args.jaw, args.jaw_per_finger, recorded.extra, path)
+    if args.load_set is not None:
+        # (a run recorded before the load sets checked every direction)
+        ran = recorded.object.get("load_set", "any")
+        if ran != args.load_set:
+            raise ValueError(f"--load-set: the run in {str(path)!r} checked the load set "
+                             f"{ran!r}, not {args.load_set!r}")
     report = run.verify_outputs(args.out_dir, args.result, args.top)
     return verify_exit_code(report)
 
@@ -213,6 +221,7 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="check that the run was for this object file's object")
     add_jaw_options(p, "check that the run designed these", "no check; the FEM always "
                     "solves each design with its own jaws")
+    add_load_set_option(p, "no check; the FEM always checks the run's own load set")
     p.set_defaults(func=_verify_command)
     return p
 
@@ -244,7 +253,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
                    "stiffness_scale, strain_limit, friction_coefficient, density_kg_m3, "
-                   "payload_factor, jaw, jaw_per_finger); see examples/objects")
+                   "payload_factor, load_set, jaw, jaw_per_finger); see examples/objects")
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
@@ -271,7 +280,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    f"else {DEFAULT_FRICTION_COEFFICIENT}, a rubber or silicone pad)")
     p.add_argument("--payload-factor", type=float, default=None, metavar="F",
                    help="the grasp must lift the payload F m g (m: the object's mass) by "
-                   "friction, out of the plane and in every in-plane direction; in [0, 100] "
+                   "friction in every direction of --load-set; in [0, 100] "
                    "(default: the object file's, else 2: the weight plus a lift at 1 g; 0: no "
                    "payload)")
     p.add_argument("--joint-spring", type=float, default=None, metavar="REL",
@@ -307,6 +316,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    "forceps jaws (default: any d3 in the box; the build sheet says when the "
                    "fingers must be stacked)")
     add_jaw_options(p, "design", "the object file's jaw, else straight")
+    add_load_set_option(p, "the object file's load_set, else any")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

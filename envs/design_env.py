@@ -37,6 +37,7 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from .model.family import ModelSpec, resolve_model
+from .model.loads import DEFAULT_LOAD_SET, load_set_code
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
 from .validation import check_range
@@ -706,6 +707,9 @@ class GripperDesignEnv(gym.Env):
       disk, 0.0149 per radian: the spring scales with each object like the torque, so an
       action means the same grasp for every object); `torsion_stiffness_nm_per_rad`: an
       absolute spring [N·m/rad] instead. `self.joint_spring` holds the one given.
+    - `load_set`: how the gripper picks, the payload's directions a grasp must hold the
+      object in (`"top-down"`, `"side"` or `"any"`, :mod:`envs.model.loads`; default
+      `"any"`, every direction): a setting of the env, not observed.
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
@@ -752,7 +756,9 @@ class GripperDesignEnv(gym.Env):
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
+        load_set_code(load_set)  # (a bad setting at construction, not at the first step)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
@@ -760,6 +766,7 @@ class GripperDesignEnv(gym.Env):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.action_space, self.observation_space = _spaces(self.bounds)
         self._disk: SoftDisk | None = None
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
@@ -795,7 +802,7 @@ class GripperDesignEnv(gym.Env):
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
                                weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
         info["design"] = design
@@ -901,7 +908,9 @@ class GripperDesignVectorEnv(VectorEnv):
         calibrated: bool | None = None,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
+        load_set_code(load_set)
         if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -916,6 +925,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.max_episode_steps = max_episode_steps
         self.single_action_space, self.single_observation_space = _spaces(self.bounds)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -983,7 +993,7 @@ class GripperDesignVectorEnv(VectorEnv):
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_objects(designs, [self._disks[i] for i in rows.tolist()],
                                self._needs[rows], weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
         for key, (dtype, shape) in {**METRIC_KEYS, **ROBUST_KEYS}.items():

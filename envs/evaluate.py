@@ -82,6 +82,7 @@ from .model.defaults import (
     MAX_FRICTION_COEFFICIENT,
 )
 from .model.family import resolve_model, triangle_range
+from .model.loads import DEFAULT_LOAD_SET, load_set_code
 from .model.problem import REST_OK, rest_codes
 from .reward import RewardWeights, add_reward  # noqa: F401
 from .scene import (
@@ -115,13 +116,15 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                      kf: np.ndarray, weights: RewardWeights,
                      model: tuple[int, str, float] = (1, "spring", 1.0),
                      fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS,
-                     leaders: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                     leaders: np.ndarray | None = None,
+                     load_set: str = DEFAULT_LOAD_SET) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
     ``needs``: each object's strain limit, friction coefficient and payload (columns
     ``NEED_*``);
     ``model``: rings, element and the factor of the member's calibration on the disks'
     stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``);
-    ``leaders``: validated leader rows (see :func:`evaluate_designs`) or None."""
+    ``leaders``: validated leader rows (see :func:`evaluate_designs`) or None; ``load_set``:
+    the payload's directions (:data:`envs.model.loads.LOAD_SETS`)."""
     batch = des.shape[0]
     n_rings, element, model_scale = model
     out = _empty_output(batch)
@@ -149,13 +152,13 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         out["n_triangles"][:] = 0
         if rows.size:
             _fill_fem(out, rows, des, disk, kf, cols.take(rows), fem_rings,
-                      needs[rows, NEED_PAYLOAD])
+                      needs[rows, NEED_PAYLOAD], load_set)
     for n in (np.unique(n_tri[valid]).tolist() if fidelity == "psm" else ()):
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
                             element=element, payload_n=needs[rows, NEED_PAYLOAD],
-                            leaders=_group_leaders(leaders, rows))
+                            leaders=_group_leaders(leaders, rows), load_set=load_set)
         _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -208,10 +211,11 @@ def _chunk_leaders(leaders: np.ndarray | None, start: int, size: int) -> np.ndar
 
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
                     model: tuple[int, str, float] = (1, "spring", 1.0), fidelity: str = "psm",
-                    fem_rings: int = FEM_DESIGN_RINGS) -> dict[str, np.ndarray]:
+                    fem_rings: int = FEM_DESIGN_RINGS,
+                    load_set: str = DEFAULT_LOAD_SET) -> dict[str, np.ndarray]:
     *arrays, leaders = chunk
     return _evaluate_arrays(*arrays, weights=weights, model=model, fidelity=fidelity,
-                            fem_rings=fem_rings, leaders=leaders)
+                            fem_rings=fem_rings, leaders=leaders, load_set=load_set)
 
 
 def _result_of(item):
@@ -232,6 +236,7 @@ def evaluate_designs(
     friction_coefficients=None,
     offsets_x_m=None,
     payload_factors=None,
+    load_set: str = DEFAULT_LOAD_SET,
     executor=None,
     chunk_size: int | None = None,
     n_rings: int | None = None,
@@ -301,10 +306,16 @@ def evaluate_designs(
     payload_factors
         Payload factor ``f`` [-], in [0, 100]; scalar or shape (B,). The grasp must carry the
         payload ``W = f m g`` (``m = rho pi r^2 t`` of each row's disk, its
-        ``density_kg_m3``; g = 9.81 m/s^2) by friction, out of the plane and in every in-plane
-        direction, besides the centre's reaction (:mod:`envs.model.holding`). Default
+        ``density_kg_m3``; g = 9.81 m/s^2) in every direction of the ``load_set``, besides
+        the centre's reaction, the freed object's normal forces moved by each load as the
+        grasp's stiffness decides (:mod:`envs.model.loads`). Default
         :data:`~envs.model.defaults.DEFAULT_PAYLOAD_FACTOR` (2: the weight plus a lift at 1 g);
         0 turns the payload off (the reaction alone).
+    load_set
+        How the gripper picks, the payload's directions (one for the whole batch):
+        ``"top-down"`` (along the gripper's axis, towards the tips and back), ``"side"`` (out
+        of the plane, both ways) or ``"any"`` (every in-plane direction and out of the plane;
+        default, :data:`envs.model.loads.DEFAULT_LOAD_SET`).
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
@@ -399,12 +410,13 @@ def evaluate_designs(
           push the object out of the grip, along +y); ``pin_moment_nm``: its moment about the
           centre [N·m] (a hub's; ~0 for the fan's pin). FEM: the hub's reaction.
         - ``required_friction``: the smallest Coulomb coefficient with which friction at the
-          contacts could carry that force and moment instead of the centre [-]
-          (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction
-          can (one finger touching); ``tan(theta)`` for a symmetric grasp on the faces at
-          finger angle ``theta``. It includes the payload: friction must carry the reaction
-          plus ``payload_n`` out of the plane (3-D Coulomb cones, exact) and in every in-plane
-          direction (closed form).
+          contacts holds the object freed of its centre [-] (:mod:`envs.model.loads`): the
+          centre's reaction and ``payload_n`` in every direction of the ``load_set`` are loads
+          on the free object, whose normal forces move under each as the grasp's stiffness
+          decides; friction carries what they leave (3-D Coulomb cones out of the plane). 0
+          when nothing is carried, ``inf`` when no friction can (one finger touching);
+          ``tan(theta)`` for a symmetric grasp on the faces at finger angle ``theta`` without
+          a payload.
         - ``payload_n``: the payload ``W = f rho pi r^2 t g`` the required friction includes
           [N] (0 with ``payload_factors=0``); ``grip_force_n``: the sum of the contacts'
           normal forces [N] (``mu * grip_force_n >= payload_n`` is necessary to lift the
@@ -467,6 +479,7 @@ def evaluate_designs(
         else friction_coefficients, batch, 0.0, MAX_FRICTION_COEFFICIENT, low_open=True)
     needs[:, NEED_PAYLOAD] = _payloads(disks, batch, DEFAULT_PAYLOAD_FACTOR
                                        if payload_factors is None else payload_factors)
+    load_set_code(load_set)  # (validated before any work)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if offsets_x_m is not None:
         disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
@@ -478,7 +491,7 @@ def evaluate_designs(
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     if executor is None:
         return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
-                                fem_rings, leaders)
+                                fem_rings, leaders, load_set)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     starts = range(0, batch, int(chunk_size))
@@ -486,7 +499,7 @@ def evaluate_designs(
     chunks = [(*(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf)),
                _chunk_leaders(leaders, s, int(chunk_size))) for s in starts]
     fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
-                           fem_rings=fem_rings)
+                           fem_rings=fem_rings, load_set=load_set)
     parts = [_result_of(p) for p in executor.map(fn, chunks)]
     if not parts:
         return _empty_output(0)

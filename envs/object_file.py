@@ -15,6 +15,8 @@ A designer's own object is four numbers and, optionally, what the design must re
                                     # [along, across] the gripper's axis
     density_kg_m3 = 1000          # optional: its density (default 1000, water-like)
     payload_factor = 2            # optional: payload W = f m g to lift (default 2; 0: none)
+    load_set = "top-down"         # optional: how it is picked, the payload's directions:
+                                  # "top-down", "side" or "any" (default: the command's, any)
     jaw = "cradle"                # optional: the jaws to design, "straight" (default),
                                   # "cradle", "vee" or "any" (envs.design_space.DesignBounds)
     jaw_per_finger = false        # optional: each finger its own groove (default false)
@@ -54,6 +56,7 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
     OBJECT_DENSITY_KG_M3,
 )
+from .model.loads import LOAD_SETS
 from .scenarios import RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
 from .validation import check_range, read_text_file, unit_slip
@@ -94,6 +97,8 @@ TOLERANCE_KEY = "placement_tolerance_m"
 TOLERANCE_RULE = (0.0, math.inf, False, False, False)
 # the jaws a design problem designs (envs.design_space.DesignBounds): a word and a flag
 JAW_KEY, JAW_PER_FINGER_KEY = "jaw", "jaw_per_finger"
+# how the object is picked: the payload's directions (envs.model.loads.LOAD_SETS)
+LOAD_SET_KEY = "load_set"
 
 
 @dataclass(frozen=True)
@@ -139,6 +144,9 @@ class ObjectSpec:
         the ranges' centre.
     payload_factor
         ``f`` of the payload to lift, or ``None``.
+    load_set
+        How the object is picked, the payload's directions
+        (:data:`envs.model.loads.LOAD_SETS`), or ``None`` (the caller's default).
     jaw, jaw_per_finger
         The jaws to design (one of :data:`envs.design_space.JAW_KINDS`) and whether each
         finger has its own groove, or ``None`` (the caller's default: straight bars).
@@ -154,6 +162,7 @@ class ObjectSpec:
     payload_factor: float | None = None
     jaw: str | None = None
     jaw_per_finger: bool | None = None
+    load_set: str | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -185,6 +194,7 @@ class ObjectSpec:
                 "strain_limit": self.strain_limit,
                 "friction_coefficient": self.friction_coefficient,
                 "payload_factor": self.payload_factor,
+                **({} if self.load_set is None else {LOAD_SET_KEY: self.load_set}),
                 "file": None if self.path is None else str(self.path),
                 **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()}),
                 **{k: v for k, v in ((JAW_KEY, self.jaw),
@@ -258,9 +268,13 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
     jaw, per_finger = _jaws(f"{where}: [object]", table.pop(JAW_KEY, None),
                             table.pop(JAW_PER_FINGER_KEY, None))
+    load_set = table.pop(LOAD_SET_KEY, None)
+    if load_set is not None and (not isinstance(load_set, str) or load_set not in LOAD_SETS):
+        raise ValueError(f"{where}: [object] {LOAD_SET_KEY} must be one of "
+                         f"{', '.join(repr(k) for k in LOAD_SETS)}, got {load_set!r}")
     table, ranges = _ranges(f"{where}: [object]", table)
     values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
-                    after=(JAW_KEY, JAW_PER_FINGER_KEY))
+                    after=(JAW_KEY, JAW_PER_FINGER_KEY, LOAD_SET_KEY))
     scenarios = None
     if ranges or tolerance is not None:
         try:
@@ -274,7 +288,7 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
                       values.get("friction_coefficient"), gripper, path, scenarios,
-                      values.get("payload_factor"), jaw, per_finger)
+                      values.get("payload_factor"), jaw, per_finger, load_set)
 
 
 def _jaws(where: str, jaw: Any, per_finger: Any) -> tuple[str | None, bool | None]:

@@ -91,6 +91,9 @@ CONDITION_ROWS: tuple[tuple[str, str, str], ...] = (
     ("density_kg_m3", "kg/m^3", "object density (payload)"),
     ("payload_factor", "-", "payload factor f: the load is f m g"),
     ("payload_n", "N", "payload W = f m g the grasp must carry"),
+    ("load_set", "-", "how the object is picked: the payload's directions checked (top-down: "
+                      "along the gripper's axis both ways; side: out of the plane both ways; "
+                      "any: every direction)"),
     ("grip_force_n", "N", "grip force of the grasp"),
 )
 # (key, unit, description) of the rows of a grooved jaw, after a prefix naming the finger(s)
@@ -283,6 +286,8 @@ def _conditions(obj: dict[str, Any], metrics: dict[str, Any]) -> dict[str, Any]:
         "density_kg_m3": given(obj.get("density_kg_m3")),
         "payload_factor": given(obj.get("payload_factor")),
         "payload_n": given(payload),
+        # (a result recorded before the load sets checked every direction)
+        "load_set": NOT_MODELLED if payload is None else obj.get("load_set", "any"),
         "grip_force_n": given(metrics.get("grip_force_n")),
     }
 
@@ -476,7 +481,8 @@ def _condition_lines(sheet: dict[str, Any]) -> list[str]:
     payload_line = (f"payload: {NOT_MODELLED} (the grasp was judged without the object's weight)"
                     if isinstance(payload, str) else
                     f"payload W = {payload:.4g} N (density {number('density_kg_m3', '.4g')} "
-                    f"kg/m^3, factor {number('payload_factor', '.3g')}); grip force "
+                    f"kg/m^3, factor {number('payload_factor', '.3g')}), load set "
+                    f"{cond['load_set']}; grip force "
                     f"{number('grip_force_n', '.4g')} N")
     along, across = tol["placement_along_mm"], tol["placement_across_mm"]
     placement = (f"placement tolerance: +-{along:.3g} mm along the axis, +-{across:.3g} mm "

@@ -35,6 +35,7 @@ from envs.model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from envs.model.family import resolve_model
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.scenarios import ROBUST_MEASURES, Scenarios, ScenarioTable, evaluate_scenarios
 from envs.scene import (
     PRESETS,
@@ -218,6 +219,10 @@ class DesignProblem:
         ``f`` of the payload ``W = f rho pi r^2 t g`` (the disk's ``density_kg_m3``) that
         friction must carry besides the centre's reaction, in [0, 100] (default 2: the weight
         plus a lift at 1 g; 0: no payload). A grasp that cannot lift its object does not hold.
+    load_set
+        How the gripper picks, the payload's directions (:mod:`envs.model.loads`):
+        ``"top-down"`` (along the gripper's axis, both ways), ``"side"`` (out of the plane,
+        both ways) or ``"any"`` (every direction; default).
     torsion_stiffness_rel
         Joint torsion spring ``k_f`` in the object's torque unit ``s E t r^2`` per radian
         [1/rad], > 0 (:func:`envs.scene.joint_spring`). Default (with
@@ -273,6 +278,7 @@ class DesignProblem:
         friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
         *,
         payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+        load_set: str = DEFAULT_LOAD_SET,
         torsion_stiffness_rel: float | None = None,
         torsion_stiffness_nm_per_rad: float | None = None,
         n_triangles: int | None = None,
@@ -307,6 +313,8 @@ class DesignProblem:
             else self.scenarios.nominal_friction(friction_coefficient))
         self.payload_factor = check_payload_factor(payload_factor)
         self.payload_n = self.disk.payload_n(self.payload_factor)
+        load_set_code(load_set)
+        self.load_set = load_set
         self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
@@ -444,7 +452,7 @@ class DesignProblem:
             designs, self.disk, strain_limits=self.strain_limit,
             friction_coefficients=self.friction_coefficient,
             payload_factors=self.payload_factor * margin, **self.joint_spring_kwargs(),
-            weights=self.weights, executor=self.executor,
+            load_set=self.load_set, weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
@@ -462,7 +470,7 @@ class DesignProblem:
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
             friction_coefficient=self.friction_coefficient, robust=self.robust,
             strain_limits=self.strain_limit, payload_factors=self.payload_factor * margin,
-            weights=self.weights, executor=self.executor,
+            load_set=self.load_set, weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(rows))
 
@@ -604,6 +612,7 @@ class DesignProblem:
             "density_kg_m3": d.density_kg_m3,
             "payload_factor": self.payload_factor,
             "payload_n": self.payload_n,
+            "load_set": self.load_set,
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **self.model.kwargs(),

@@ -176,14 +176,17 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,
                     spring_rel, spring_nm, placement_tolerance_m=None,
                     robust: str | None = None, payload_factor=None, jaw: str | None = None,
-                    jaw_per_finger: bool | None = None) -> tuple[Any, dict[str, Any]]:
+                    jaw_per_finger: bool | None = None,
+                    load_set: str | None = None) -> tuple[Any, dict[str, Any]]:
     """The object (a disk, or a preset's scene) and the DesignProblem keyword arguments of a
     run, validated: explicit values first, then the object file's, then the defaults.
 
     The scenarios: the object file's ranges, with the placement tolerance given here (one
     number for both ways, or ``(along, across)`` [m]) or else the file's. The jaws (``jaw``,
     ``jaw_per_finger``, always in the keyword arguments): as given, else the object file's,
-    else straight bars."""
+    else straight bars. The load set (how the object is picked, always in the keyword
+    arguments): as given, else the object file's, else
+    :data:`envs.model.loads.DEFAULT_LOAD_SET`."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
     from envs.scene import joint_spring_kwargs
 
@@ -206,7 +209,8 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
         else DEFAULT_PAYLOAD_FACTOR)
     kwargs: dict[str, Any] = {"strain_limit": check_strain_limit(limit),
                               "friction_coefficient": check_friction(mu),
-                              "payload_factor": check_payload_factor(factor)}
+                              "payload_factor": check_payload_factor(factor),
+                              "load_set": load_set_of(own, load_set)}
     if spring_rel is not None or spring_nm is not None:
         kwargs.update(joint_spring_kwargs(spring_rel, spring_nm))
     kwargs.update(jaw_settings(own, jaw, jaw_per_finger))
@@ -218,6 +222,18 @@ def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, fric
             raise ValueError(f"robust must be one of {ROBUST_MEASURES}, got {robust!r}")
         kwargs["robust"] = robust
     return (obj.disk if obj is not None else scene), kwargs
+
+
+def load_set_of(obj: ObjectSpec | None, load_set: str | None = None) -> str:
+    """The load set a run checks (the payload's directions, :mod:`envs.model.loads`),
+    validated: as given, else the object file's, else the default (``"any"``)."""
+    from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
+
+    if load_set is None:
+        load_set = (obj.load_set if obj is not None and obj.load_set is not None
+                    else DEFAULT_LOAD_SET)
+    load_set_code(load_set)
+    return load_set
 
 
 def jaw_settings(obj: ObjectSpec | None, jaw: str | None = None,
@@ -315,6 +331,7 @@ def run_optimize(
     joints_apart: bool = False,
     jaw: str | None = None,
     jaw_per_finger: bool | None = None,
+    load_set: str | None = None,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -342,6 +359,10 @@ def run_optimize(
     straight bars. The result's designs then carry the jaw fields by name
     (:data:`envs.model.jaw.JAW_FIELDS`, ``left_...`` per finger) and its extra records both.
     The design policy designs straight jaws, or any shaped jaws alike on both fingers.
+
+    ``load_set``: how the object is picked, the payload's directions the grasp must hold it in
+    (``"top-down"``, ``"side"`` or ``"any"``, :mod:`envs.model.loads`); ``None``: the object
+    file's, else ``"any"``. The result JSON records it (``object["load_set"]``).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -374,7 +395,7 @@ def run_optimize(
                                       torsion_stiffness_rel, torsion_stiffness_nm_per_rad,
                                       placement_tolerance_m, robust,
                                       payload_factor=payload_factor, jaw=jaw,
-                                      jaw_per_finger=jaw_per_finger)
+                                      jaw_per_finger=jaw_per_finger, load_set=load_set)
     budget, seed = check_budget(budget), check_seed(seed)
     check_joints_apart(method, joints_apart)
     check_policy_jaw(method, settings)

@@ -24,6 +24,7 @@ from envs.model.defaults import (
     FEM_DESIGN_RINGS,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
+from envs.model.loads import DEFAULT_LOAD_SET
 from envs.scenarios import Scenarios, evaluate_scenarios, place
 from envs.scene import DESIGN_FIELDS, design_row
 from envs.validation import check_integer
@@ -134,7 +135,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
               "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
                                                       PAPER_TORSION_STIFFNESS_NM_PER_RAD),
               # (a run recorded before the payload had none)
-              "payload_factors": obj.get("payload_factor", 0.0)}
+              "payload_factors": obj.get("payload_factor", 0.0),
+              # (a run recorded before the load sets checked every direction)
+              "load_set": obj.get("load_set", DEFAULT_LOAD_SET)}
     disk = disk_of(obj)
     model = model_of(obj)
     reward_model = result.extra.get("reward_model", model)
@@ -212,7 +215,8 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     mu = common["friction_coefficients"]
     kw = {"torsion_stiffness_nm_per_rad": common["torsion_stiffness_nm_per_rad"],
           "friction_coefficient": mu, "strain_limits": common["strain_limits"],
-          "payload_factors": common["payload_factors"], "robust": obj.get("robust", "worst")}
+          "payload_factors": common["payload_factors"], "load_set": common["load_set"],
+          "robust": obj.get("robust", "worst")}
     psm = evaluate_scenarios(designs, disk, scenarios, **kw, **model)
     fine = evaluate_scenarios(designs, disk, scenarios, **kw, **RANKING_MEMBER)
     worst = fine.summary["worst_scenario"]
@@ -221,6 +225,7 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     fem = evaluate_designs(rows, disks, strain_limits=common["strain_limits"],
                            friction_coefficients=frictions, offsets_x_m=offsets,
                            payload_factors=common["payload_factors"],
+                           load_set=common["load_set"],
                            torsion_stiffness_nm_per_rad=common["torsion_stiffness_nm_per_rad"],
                            fidelity="fem", fem_rings=fem_rings, executor=executor)
     table = fine if dict(reward_model) == dict(RANKING_MEMBER) else psm

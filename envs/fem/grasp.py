@@ -161,8 +161,8 @@ def fem_grasp(
         inputs["jaws"] = [list(jaw_row(jaw)) for jaw in grip.jaws]
     if payload > 0.0:  # (keys of results without a payload stay as they were)
         inputs["payload_n"] = payload
-        if load_set != DEFAULT_LOAD_SET:
-            inputs["load_set"] = load_set
+    if load_set != DEFAULT_LOAD_SET:  # (the default's keys stay as they were)
+        inputs["load_set"] = load_set
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
     if cache:
         hit = _load_cache(path, inputs)
@@ -336,6 +336,7 @@ def _solve_grasp(
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
                 **holding_fields(hold),
+                load_set=load_set,
                 **common,
             )
         )

@@ -566,7 +566,8 @@ def row_message(sol: BatchSolution, i: int) -> str:
 def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
                  stiffness_rule: str = "van_gelder", *, message: str | None = None,
                  iterations: int | None = None, solve_time_s: float | None = None,
-                 element: str = "spring", model_scale: float = 1.0) -> GraspResult:
+                 element: str = "spring", model_scale: float = 1.0,
+                 load_set: str = DEFAULT_LOAD_SET) -> GraspResult:
     """Row ``i`` of a batch solution as a :class:`GraspResult`."""
     face = sol.face_forces_n[i]
     return GraspResult(
@@ -599,6 +600,7 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         model_scale=float(model_scale),
         interior_points_m=sol.interior_points_m[i],
         peak_compression=float(sol.peak_compression[i]),
+        load_set=load_set,
         **{**holding_fields(sol.holding[i]),
            "pin_force_n": sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy()},
     )
