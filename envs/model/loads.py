@@ -344,43 +344,83 @@ def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_fo
 _LOCKED = 1e9  # a finger on its closed stop: its joint's stiffness over the force scale x r
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _root(parent, i):
+    """The root of contact i's set (union-find), compressing the path."""
+    r = i
+    while parent[r] != r:
+        r = parent[r]
+    while parent[i] != r:
+        parent[i], i = r, parent[i]
+    return r
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _join(parent, i, k):
+    """Put contacts i and k in one set (the smaller root leads)."""
+    a, b = _root(parent, i), _root(parent, k)
+    if a != b:
+        parent[max(a, b)] = min(a, b)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def patch_constraints(normals, points, forces, patches, count, length_scale, groups, cons,
-                      weights):
+def _number_sets(parent, forces, count, column, first, cons):
+    """Number the sets of ``parent`` from ``first`` into ``cons[:, column]`` (-1 for a contact
+    without force); returns the next free number."""
+    c = first
+    for i in range(count):
+        cons[i, column] = -1
+    for i in range(count):
+        if not forces[i] > 0.0:
+            continue
+        r = _root(parent, i)
+        if r == i:
+            cons[i, column] = c
+            c += 1
+    for i in range(count):
+        if forces[i] > 0.0 and cons[i, column] < 0:
+            cons[i, column] = cons[_root(parent, i), column]
+    return c
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def patch_constraints(normals, points, forces, patches, nodes, fingers, count, length_scale,
+                      groups, cons, weights):
     """The sticking constraints of the loaded grasp's patch-level model, one per *normal
     group* (a pressure patch's contacts of one normal: a flat face, a flank, each node of a
     curved run, a corner) and one per pressure patch (its sliding along the surface); rolling
-    is free. Contact i joins normal constraint ``cons[i, 0]`` with weight ``weights[i, 0]``
-    (its share of the group's force) and tangential constraint ``cons[i, 1]`` with weight
-    ``weights[i, 1]`` (its share of the patch's); -1 for a contact without force. Returns
-    ``(normal, total)``: the number of normal constraints and of all (normal first).
+    is free. Contacts of one finger whose forces act on a common mesh node join one normal
+    group and one patch (a rounded corner pressing two edges at their common node, a tip
+    corner beside a face's last node: one touch, whose two rows of the mesh would otherwise
+    be nearly the same constraint). Contact i joins normal constraint ``cons[i, 0]`` with
+    weight ``weights[i, 0]`` (its share of the group's force) and tangential constraint
+    ``cons[i, 1]`` with weight ``weights[i, 1]`` (its share of the patch's); -1 for a contact
+    without force. Returns ``(normal, total)``: the number of normal constraints and of all
+    (normal first).
 
-    ``groups`` (>= count, 2) gets the generator and pressure-patch groups of
-    :func:`_groups`."""
+    ``nodes`` (>= count, 2): the mesh nodes each contact's force acts on (-1: none);
+    ``fingers``: each contact's finger. ``groups`` (>= count, 2) gets the generator and
+    pressure-patch groups of :func:`_groups` and is then the two union-find forests."""
     gen_group, shift_group = groups[:, 0], groups[:, 1]
     _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group)
-    # number the groups' leaders: normal groups first, then the patches
-    mn = 0
+    # the forests: a normal group's leader, a patch's leader (each leader leads itself)
     for i in range(count):
-        cons[i, 0] = cons[i, 1] = -1
-        if not forces[i] > 0.0:
-            continue
-        lead = gen_group[i] if patches[i] >= 0 else shift_group[i]
-        if lead == i:
-            cons[i, 0] = mn
-            mn += 1
-        else:
-            cons[i, 0] = cons[lead, 0]
-    mc = mn
+        gen_group[i] = gen_group[i] if patches[i] >= 0 else shift_group[i]
     for i in range(count):
         if not forces[i] > 0.0:
             continue
-        lead = shift_group[i]
-        if lead == i:
-            cons[i, 1] = mc
-            mc += 1
-        else:
-            cons[i, 1] = cons[lead, 1]
+        for k in range(i):
+            if not (forces[k] > 0.0 and fingers[k] == fingers[i]):
+                continue
+            shared = False
+            for a in range(2):
+                for b in range(2):
+                    shared = shared or (nodes[i, a] >= 0 and nodes[i, a] == nodes[k, b])
+            if shared:
+                _join(gen_group, i, k)
+                _join(shift_group, i, k)
+    mn = _number_sets(gen_group, forces, count, 0, 0, cons)
+    mc = _number_sets(shift_group, forces, count, 1, mn, cons)
     # each contact's share of its group's and its patch's force
     for i in range(count):
         weights[i, 0] = weights[i, 1] = 0.0
@@ -457,9 +497,14 @@ def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, we
     size = mc + 5
     a = np.zeros((size, size))
     r, fs = length_scale, force_scale
+    big = 0.0
     for c in range(mc):
+        big = max(big, compliance[c, c])
         for c2 in range(mc):
             a[c, c2] = compliance[c, c2] * fs / r
+    for c in range(mc):
+        # a floor of round-off size for constraints the mesh can hardly tell apart
+        a[c, c] += 1e-9 * big * fs / r
     for i in range(count):
         for kind in range(2):
             c = cons[i, kind]

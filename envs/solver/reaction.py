@@ -183,8 +183,8 @@ def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, loa
     half_width = hertz_half_width(r, s[S_THICKNESS], s[S_SCALE] * s[S_YOUNG], s[S_POISSON])
     # how the free object's normal forces move under a load (zero where the body's Hessian or
     # the patch-level system is singular: the forces as solved)
-    mn, mc = patch_constraints(normals, points, forces, patches, count, r, groups, cons,
-                               weights)
+    mn, mc = patch_constraints(normals, points, forces, patches, nodes, fingers, count, r,
+                               groups, cons, weights)
     g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
                            weights, mc, r, force_unit)
     locked = (lam_stop[0] > 0.0, lam_stop[1] > 0.0)
