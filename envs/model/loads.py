@@ -75,6 +75,7 @@ __all__ = [
     "load_set_code",
     "loaded_holding",
     "loaded_holding_row",
+    "friction_under_load",
     "patch_constraints",
     "patch_response",
 ]
@@ -593,3 +594,30 @@ def _lu_solve(lu, piv, n, b):
         for j in range(i + 1, n):
             b[i] -= lu[i, j] * b[j]
         b[i] /= lu[i, i]
+
+
+def friction_under_load(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                        pin_moment_nm, response, load_n, half_width: float = 0.0,
+                        patches=None) -> float:
+    """The friction the freed object's grasp needs under one in-plane load ``load_n`` (a
+    force ``(x, y)`` [N] on the object at its centre; ``(0, 0)``: the released reaction
+    alone), the contact list and its ``response`` as for :func:`loaded_holding_row` (tests,
+    scripts: one load rather than a load set)."""
+    normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
+    count = forces.size
+    labels = (np.full(count, NO_PATCH, dtype=np.int64) if patches is None
+              else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
+    resp = np.ascontiguousarray(response, dtype=np.float64).reshape(count, N_RESPONSE)
+    rows = max(count, 1)
+    groups = np.zeros((rows, 2), dtype=np.int64)
+    _groups(normals, points, forces, labels, count, float(length_scale_m), groups[:, 0],
+            groups[:, 1])
+    scratch = np.zeros((rows, 2))
+    wx, wy = float(load_n[0]), float(load_n[1])
+    return _one_load(normals, points, forces, resp, count, float(centre_m[0]),
+                     float(centre_m[1]), float(length_scale_m), -float(pin_force_n[0]) + wx,
+                     -float(pin_force_n[1]) + wy, -float(pin_moment_nm), wx, wy,
+                     float(half_width), groups[:, 0], groups[:, 1], scratch[:, 0],
+                     np.zeros((rows, 3)), scratch[:, 1], SPAN_TOL, 0.0)[0]

@@ -203,7 +203,8 @@ def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.nd
                     lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
                     payload_n: float = 0.0, load_set: int = 2) -> dict:
     """:func:`holding_one` of one scaled answer as plain arrays (tests, scripts): the contact
-    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``), each contact's
+    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``, ``patches``), each
+    contact's
     ``response`` (k, N_RESPONSE: its normal force's change per unit load on the freed object,
     a force along x, y [N/N] and a moment [N/(N·m)]) and the holding ``row``."""
     from ..model.holding import N_HOLD
@@ -215,7 +216,7 @@ def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.nd
     prm_row = np.ascontiguousarray(prm_row, dtype=np.float64)
     kprm = kernel_copy(prm_row, n)
     normals, points, forces = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k)
-    fingers = np.zeros(k, dtype=np.int64)
+    fingers, patches = np.zeros(k, dtype=np.int64), np.zeros(k, dtype=np.int64)
     resp = np.zeros((k, N_RESPONSE))
     row = np.empty(N_HOLD)
     count = holding_one(
@@ -224,8 +225,9 @@ def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.nd
         np.ascontiguousarray(lam_corner), np.ascontiguousarray(lam_stop, dtype=np.float64),
         float(payload_n), int(load_set), mesh_band_index(n, int(prm_row[P_RINGS])),
         response_work(n, kprm), np.empty(5), np.empty((5, 5)), normals, points, forces,
-        np.empty(k, dtype=np.int64), np.empty((k, 2), dtype=np.int64), np.empty(k), fingers,
+        patches, np.empty((k, 2), dtype=np.int64), np.empty(k), fingers,
         resp, np.empty((k, 3)), np.empty((k, 2)), np.empty((k, 2), dtype=np.int64),
         np.empty((k, 2), dtype=np.int64), np.empty((k, 2)), row)
     return {"normals": normals[:count], "points": points[:count], "forces": forces[:count],
-            "fingers": fingers[:count], "response": resp[:count], "row": row}
+            "fingers": fingers[:count], "patches": patches[:count], "response": resp[:count],
+            "row": row}
