@@ -5,8 +5,8 @@ this, ...), each importing its own ``envs`` (``PYTHONPATH``) with this interpret
 (or compiles, the first time) its kernels, warms up, and times:
 
 - ``batch``: one :func:`envs.evaluate.evaluate_designs` call on ``--batch`` random designs of
-  the design box on paper-r070, the default model (designs per second; ``--fan``: the paper's
-  fan too);
+  the design box on paper-r070 (``--jaw``: with grooved jaws), the default model (designs per
+  second; ``--fan``: the paper's fan too);
 - ``scenarios``: :func:`envs.scenarios.evaluate_scenarios` of ``--scenario-designs`` designs
   under a 3 x 3 placement grid (``--placement-mm``, both ways, 9 scenarios a design), from
   rest (``warm_start=False``, as every scenario was solved before) and, where the checkout
@@ -64,7 +64,7 @@ def measure(args: argparse.Namespace) -> dict:
 
     disk = PRESETS["paper-r070"][1]
     rng = np.random.default_rng(args.seed)
-    designs = DesignBounds().sample(rng, args.batch, disk)
+    designs = DesignBounds(jaw=args.jaw).sample(rng, args.batch, disk)
     members = {"default": {}}
     if args.fan:
         members["fan"] = {"element": "spring"}
@@ -81,7 +81,7 @@ def measure(args: argparse.Namespace) -> dict:
     modes = {"independent": {}}
     if "warm_start" in inspect.signature(evaluate_scenarios).parameters:
         modes = {"independent": {"warm_start": False}, "warm": {"warm_start": True}}
-    for mode, extra in modes.items():
+    for mode, extra in (modes.items() if args.scenario_designs > 0 else ()):
         evaluate_scenarios(picked[:2], disk, grid, **common, **extra)
         out[f"scenarios_{mode}_s"], out[f"scenarios_{mode}_cpu_s"] = _seconds(
             lambda extra=extra: evaluate_scenarios(picked, disk, grid, **common, **extra))
@@ -93,7 +93,8 @@ def _run_worker(tree: Path, args: argparse.Namespace) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree))
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--batch",
            str(args.batch), "--scenario-designs", str(args.scenario_designs), "--placement-mm",
-           str(args.placement_mm), "--seed", str(args.seed)] + (["--fan"] if args.fan else [])
+           str(args.placement_mm), "--seed", str(args.seed), "--jaw", args.jaw] + (
+               ["--fan"] if args.fan else [])
     done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise SystemExit(f"measurement in {tree} failed:\n{done.stderr[-3000:]}")
@@ -114,6 +115,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--placement-mm", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fan", action="store_true", help="also the paper's fan's batch")
+    parser.add_argument("--jaw", default="straight",
+                        help="the designs' jaws (envs.DesignBounds jaw: straight, cradle, vee, "
+                        "any)")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, default=None, help="write the results as JSON")
     args = parser.parse_args(argv)
