@@ -274,3 +274,35 @@ def test_the_point_spring_model_carries_the_load_as_the_fem_does():
     assert both.sum() >= 5
     mu_p, mu_f = psm["required_friction"][both], fem["required_friction"][both]
     assert np.median(np.abs(mu_p - mu_f) / mu_f) <= 0.05
+
+
+def test_the_grape_needs_no_more_friction_for_what_its_normals_carry():
+    """A grape (r = 9.5 mm, 275 kPa, t = 20 mm, 1050 kg/m^3, friction 0.7) in the grooved optimum
+    of ``psm-grasp optimize --jaw any --budget 800`` (a rounded V, 0.83 mm deep, jaw angle 16°):
+    pushed towards the joints (within 40° of -y, where the jaws' normals carry it) at payload
+    factor 4 it needs no more friction than held at rest, and every pull of the load set needs a
+    finite friction within the grape's 0.7. The normal forces as solved (the bound) need more
+    at every factor."""
+    grape = SoftDisk(0.0095, 0.0, 275e3, 0.45, 0.02, density_kg_m3=1050.0)
+    design = np.array([0.03854, 0.538653, 0.00059293, 0.001285, 0.076647, 0.021314,
+                       0.00082559, 0.008217, 0.895509, 0.029198])
+    from envs.scene import Design
+
+    scene = Design.from_array(design).to_scene(grape, 0.007395)
+    g = _loaded(scene, design[4])
+    assert min(g["angles"]) > 0.2 and len(set(g["patches"].tolist())) >= 4  # V flanks
+    rest = _friction(g, (0.0, 0.0))
+    w = grape.payload_n(4.0)
+    for deg in range(-130, -49, 10):
+        phi = math.radians(deg)
+        assert _friction(g, (w * math.cos(phi), w * math.sin(phi))) <= rest * (1 + 1e-9)
+    row = g["row"]
+    for name in LOAD_SETS:
+        for factor in (0.5, 2.0, 4.0):
+            args = (g["normals"], g["points"], g["forces"], g["centre"], g["radius"], row[:2],
+                    row[2])
+            loaded = loaded_holding_row(*args, g["response"], grape.payload_n(factor), name,
+                                        g["half_width"], g["patches"])[H_MU]
+            fixed = loaded_holding_row(*args, None, grape.payload_n(factor), name,
+                                       g["half_width"], g["patches"])[H_MU]
+            assert rest <= loaded < 0.7 and loaded < fixed
