@@ -104,17 +104,18 @@ def fem_holding(system, body, rim, x: np.ndarray, load: float, centre: np.ndarra
     mn, mc = patch_constraints(normals, points, forces, patches, nodes,
                                np.resize(fingers, rows), count, radius_m, groups, cons,
                                weights)
-    response = np.zeros((rows, N_RESPONSE))
+    response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
     n_free = system.free[system.free < body.n]
     g = _compliance(body, rim, n_free, x[: body.n], carriers, normals, cons, weights, mc)
-    if g is not None and count:
-        patch_response(np.ascontiguousarray(g), mn, mc, normals, points, fingers, count, cons,
-                       weights, float(centre[0]), float(centre[1]), float(joint_offset_m),
-                       float(torsion_nm_per_rad), locked, float(radius_m),
-                       float(force_scale_n), response)
+    if not (g is not None and count and patch_response(
+            np.ascontiguousarray(g), mn, mc, normals, points, np.resize(fingers, rows), count,
+            cons, weights, float(centre[0]), float(centre[1]), float(joint_offset_m),
+            float(torsion_nm_per_rad), locked, float(radius_m), float(force_scale_n), response,
+            coupling)):
+        mc = 0  # the forces as solved
     out = np.empty(N_HOLD)
-    loaded_holding(normals, points, forces, patches, response, count, float(centre[0]),
-                   float(centre[1]), float(radius_m), float(-net[0]), float(-net[1]),
-                   float(-moment_c), float(payload_n), load_set_code(load_set),
-                   float(half_width), np.zeros((rows, 3)), np.zeros((rows, 2)), groups, out)
+    loaded_holding(normals, points, forces, patches, (cons, weights, response, coupling), mn,
+                   mc, count, float(centre[0]), float(centre[1]), float(radius_m),
+                   float(-net[0]), float(-net[1]), float(-moment_c), float(payload_n),
+                   load_set_code(load_set), float(half_width), out)
     return out

@@ -39,6 +39,7 @@ normal forces as the reaction alone left them, and the exact 3-D cone requiremen
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -73,6 +74,7 @@ __all__ = [
     "DEFAULT_LOAD_SET",
     "N_RESPONSE",
     "load_set_code",
+    "Response",
     "loaded_holding",
     "loaded_holding_row",
     "friction_under_load",
@@ -91,6 +93,8 @@ N_RESPONSE = 3
 _DIRECTIONS = 24
 _REFINE_STEPS = 24  # golden-section steps: the bracket (2 / 24 of a turn) shrinks to ~1e-6 rad
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+# a finger on its closed stop: its joint's stiffness over the force scale x r
+_LOCKED = 1e9
 
 
 def load_set_code(load_set: str) -> int:
@@ -125,23 +129,118 @@ def _groups(normals, points, forces, patches, count, length_scale, gen_group, sh
                     break
 
 
+class Response(NamedTuple):
+    """A fidelity's loaded grasp, for the holding of its contact list (:func:`loaded_holding`):
+    the constraints of :func:`patch_constraints` (``cons``, ``weights``: each contact's
+    normal group and patch, and its share of their force; ``mn`` normal constraints of ``mc``)
+    and what :func:`patch_response` makes of them (``response``: each constraint's change of
+    force per unit load; ``coupling``: the release of constraints). ``mc = 0``: the normal
+    forces as solved (the bound :func:`envs.model.holding.holding_row` gives)."""
+
+    cons: np.ndarray
+    weights: np.ndarray
+    mn: int
+    mc: int
+    response: np.ndarray
+    coupling: np.ndarray
+
+    @classmethod
+    def none(cls, count: int) -> Response:
+        """No response: every load leaves the normal forces as solved."""
+        rows = max(count, 1)
+        return cls(np.full((rows, 2), -1, dtype=np.int64), np.zeros((rows, 2)), 0, 0,
+                   np.zeros((1, N_RESPONSE)), np.zeros((1, 1)))
+
+
+@njit(cache=True, error_model="numpy")
+def _work(count, mc):
+    """Scratch of :func:`_one_load`: the groups, the loaded forces, the generators, the
+    pressure patches, and the constraints' forces and their release."""
+    rows, m = max(count, 1), max(mc, 1)
+    return (np.zeros(rows, dtype=np.int64), np.zeros(rows, dtype=np.int64), np.zeros(rows),
+            np.zeros((rows, 3)), np.zeros(rows), np.zeros(m), np.zeros(m),
+            np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64), np.zeros((m, m)),
+            np.zeros(m, dtype=np.int64), np.zeros(m))
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _one_load(normals, points, forces, response, count, centre_x, centre_y, length_scale,
-              fx, fy, fm, wx, wy, half_width, gen_group, shift_group, loaded, gens, shift,
-              tol, weight):
+def _release(lam, lam0, mn, mc, cons, count, coupling, released, which, small, piv, tmp):
+    """Release the normal groups the load pulls off (their force would be negative), and the
+    sliding of a patch whose every group is released, moving the others' forces as the grasp's
+    stiffness decides: ``lam = lam0 - M_{:S} M_{SS}^-1 lam0_S`` over the released set ``S``
+    (``M``, the ``coupling``, the inverse's block of the constraints: the solution with the
+    set's constraints taken out of the system and their forces zero), grown until no force is
+    negative. A set the rest cannot hold (a singular ``M_SS``) keeps the forces clamped at 0."""
+    for c in range(mc):
+        lam0[c] = lam[c]
+        released[c] = 0
+    size = 0
+    for _ in range(mn + 1):
+        added = False
+        for c in range(mn):
+            if released[c] == 0 and lam[c] < 0.0:
+                released[c] = 1
+                which[size] = c
+                size += 1
+                added = True
+        if not added:
+            return
+        for t in range(mn, mc):
+            if released[t] != 0:
+                continue
+            members = alone = 0
+            for i in range(count):
+                if cons[i, 1] == t and cons[i, 0] >= 0:
+                    members += 1
+                    alone += released[cons[i, 0]]
+            if members > 0 and alone == members:
+                released[t] = 1
+                which[size] = t
+                size += 1
+        for a in range(size):
+            tmp[a] = lam0[which[a]]
+            for b in range(size):
+                small[a, b] = coupling[which[a], which[b]]
+        if not _lu(small, piv, size):
+            for c in range(mn):
+                lam[c] = max(lam[c], 0.0)
+            return
+        _lu_solve(small, piv, size, tmp)
+        for c in range(mc):
+            v = lam0[c]
+            for a in range(size):
+                v -= coupling[c, which[a]] * tmp[a]
+            lam[c] = v
+        for a in range(size):
+            lam[which[a]] = 0.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y, length_scale,
+              fx, fy, fm, wx, wy, half_width, work, tol, weight):
     """The friction the loaded grasp needs under the load ``f = (fx, fy, fm)`` on the free
-    object (its response), of which ``(wx, wy)`` is an external force [N] (the payload; the
-    rest released the fixed centre's reaction), and ``weight`` out of the plane (0: none).
-    Returns ``(mu, total)``, ``total`` the loaded normal forces' sum."""
-    # the loaded normal forces; a contact the load pulls off carries nothing
+    object, of which ``(wx, wy)`` is an external force [N] (the payload; the rest released the
+    fixed centre's reaction), and ``weight`` out of the plane (0: none). Returns ``(mu,
+    total)``, ``total`` the loaded normal forces' sum."""
+    cons, weights, response, coupling = model
+    (gen_group, shift_group, loaded, gens, shift, lam, lam0, released, which, small, piv,
+     tmp) = work
+    # the constraints' forces: their base (a normal group's as solved; a patch slides with no
+    # force) and the load's change, the groups it pulls off released
+    for c in range(mc):
+        lam[c] = response[c, 0] * fx + response[c, 1] * fy + response[c, 2] * fm
+    for i in range(count):
+        if forces[i] > 0.0 and cons[i, 0] >= 0:
+            lam[cons[i, 0]] += forces[i]
+    if mc > 0:
+        _release(lam, lam0, mn, mc, cons, count, coupling, released, which, small, piv, tmp)
     nx_sum = ny_sum = m_sum = 0.0
     for i in range(count):
         f = forces[i]
         if not f > 0.0:
             loaded[i] = 0.0
             continue
-        v = f + response[i, 0] * fx + response[i, 1] * fy + response[i, 2] * fm
-        v = max(v, 0.0)
+        v = f if mc == 0 else max(weights[i, 0] * lam[cons[i, 0]], 0.0)
         loaded[i] = v
         nx_sum += v * normals[i, 0]
         ny_sum += v * normals[i, 1]
@@ -164,7 +263,7 @@ def _one_load(normals, points, forces, response, count, centre_x, centre_y, leng
         gens[g, 2] += v * ((points[i, 0] - centre_x) * ty
                            - (points[i, 1] - centre_y) * tx) / length_scale
         shift[shift_group[i]] += v
-    # compact the generators (zero rows are skipped by the merge) and the pressure shift
+    # the pressure shift's reach (zero rows of the generators are skipped by the merge)
     reach = 0.0
     for i in range(count):
         s = shift[i]
@@ -183,20 +282,20 @@ def _one_load(normals, points, forces, response, count, centre_x, centre_y, leng
     return mu, total
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def loaded_holding(normals, points, forces, patches, response, count, centre_x, centre_y,
-                   length_scale, pin_x, pin_y, pin_moment, payload, load_set, half_width,
-                   gens, scratch, groups, out):
+@njit(cache=True, error_model="numpy")
+def loaded_holding(normals, points, forces, patches, model, mn, mc, count, centre_x,
+                   centre_y, length_scale, pin_x, pin_y, pin_moment, payload, load_set,
+                   half_width, out):
     """The holding row of a solved grasp freed of its fixed centre, over a load set.
 
     Parameters
     ----------
     normals, points, forces, patches, count, centre_x, centre_y, length_scale
         The contact list as for :func:`envs.model.holding.holding_of_contacts`.
-    response
-        (>= count, N_RESPONSE): the change of each contact's normal force per unit load on
-        the free object (a force along x, along y [N/N], a moment [N/(N·m)]); zeros keep the
-        normal forces as solved (:func:`envs.model.holding.holding_of_contacts`' bound).
+    model, mn, mc
+        The loaded grasp, ``(cons, weights, response, coupling)`` and the constraint counts
+        of a :class:`Response` (``mc = 0``: the normal forces as solved, the bound of
+        :func:`envs.model.holding.holding_of_contacts`).
     pin_x, pin_y, pin_moment
         The fixed centre's reaction on the object [N, N, N·m], released here.
     payload
@@ -205,8 +304,6 @@ def loaded_holding(normals, points, forces, patches, response, count, centre_x, 
         ``LOAD_TOP_DOWN``, ``LOAD_SIDE`` or ``LOAD_ANY``.
     half_width
         The contact patches' ``c`` [m N^-1/2] (:func:`envs.model.holding.hertz_half_width`).
-    gens, scratch, groups
-        Scratch: (>= count, 3) floats, (>= count, 2) floats and (>= count, 2) ints.
     out
         The holding row (layout ``H_*``), written: the reaction and grip as solved, the
         required friction over the load set and what sets it.
@@ -220,21 +317,18 @@ def loaded_holding(normals, points, forces, patches, response, count, centre_x, 
     out[H_PIN_MOMENT] = pin_moment
     out[H_PAYLOAD] = payload
     out[H_GRIP] = total
-    gen_group, shift_group = groups[:, 0], groups[:, 1]
-    loaded, shift = scratch[:, 0], scratch[:, 1]
-    _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group)
+    work = _work(count, mc)
+    _groups(normals, points, forces, patches, count, length_scale, work[0], work[1])
     fx, fy, fm = -pin_x, -pin_y, -pin_moment
-    mu, held = _one_load(normals, points, forces, response, count, centre_x, centre_y,
-                         length_scale, fx, fy, fm, 0.0, 0.0, half_width, gen_group,
-                         shift_group, loaded, gens, shift, SPAN_TOL, 0.0)
+    mu, held = _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                         length_scale, fx, fy, fm, 0.0, 0.0, half_width, work, SPAN_TOL, 0.0)
     code, angle = LIMIT_REACTION, math.nan
     if payload > 0.0 and mu < math.inf:
         mu0 = mu
         if load_set != LOAD_SIDE:
-            worst, phi = _in_plane_worst(normals, points, forces, response, count, centre_x,
-                                         centre_y, length_scale, fx, fy, fm, payload,
-                                         load_set, half_width, gen_group, shift_group,
-                                         loaded, gens, shift)
+            worst, phi = _in_plane_worst(normals, points, forces, count, model, mn, mc,
+                                         centre_x, centre_y, length_scale, fx, fy, fm,
+                                         payload, load_set, half_width, work)
             if worst > mu:
                 mu, code, angle = worst, LIMIT_IN_PLANE, phi
         ratio = payload / held if held > 0.0 else math.inf
@@ -242,10 +336,9 @@ def loaded_holding(normals, points, forces, patches, response, count, centre_x, 
         # set the answer
         if load_set != LOAD_TOP_DOWN and mu < math.inf and (
                 math.sqrt(mu0 * mu0 + ratio * ratio) > mu):
-            lift, _ = _one_load(normals, points, forces, response, count, centre_x,
+            lift, _ = _one_load(normals, points, forces, count, model, mn, mc, centre_x,
                                 centre_y, length_scale, fx, fy, fm, 0.0, 0.0, half_width,
-                                gen_group, shift_group, loaded, gens, shift, SPAN_TOL,
-                                payload)
+                                work, SPAN_TOL, payload)
             if lift > mu:
                 mu, code, angle = lift, LIMIT_OUT_OF_PLANE, math.nan
     if mu == 0.0:
@@ -256,9 +349,8 @@ def loaded_holding(normals, points, forces, patches, response, count, centre_x, 
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _in_plane_worst(normals, points, forces, response, count, centre_x, centre_y,
-                    length_scale, fx, fy, fm, payload, load_set, half_width, gen_group,
-                    shift_group, loaded, gens, shift):
+def _in_plane_worst(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                    length_scale, fx, fy, fm, payload, load_set, half_width, work):
     """The largest friction over the set's in-plane pulls of size ``payload`` and the
     direction of the pull that needs it [rad from +x]: top-down the gripper's axis both ways;
     any every direction (sampled, then refined by golden section about the worst sample)."""
@@ -267,9 +359,8 @@ def _in_plane_worst(normals, points, forces, response, count, centre_x, centre_y
     for k in range(samples):
         phi = (0.5 * math.pi + math.pi * k if load_set == LOAD_TOP_DOWN
                else 2.0 * math.pi * k / samples)
-        v = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
-                  fx, fy, fm, payload, phi, half_width, gen_group, shift_group, loaded, gens,
-                  shift)
+        v = _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                  length_scale, fx, fy, fm, payload, phi, half_width, work)
         if v > best:
             best, best_phi = v, phi
     if load_set == LOAD_TOP_DOWN or not best < math.inf:
@@ -277,25 +368,21 @@ def _in_plane_worst(normals, points, forces, response, count, centre_x, centre_y
     step = 2.0 * math.pi / samples
     a, b = best_phi - step, best_phi + step
     p1, p2 = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-    v1 = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
-               fx, fy, fm, payload, p1, half_width, gen_group, shift_group, loaded, gens,
-               shift)
-    v2 = _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale,
-               fx, fy, fm, payload, p2, half_width, gen_group, shift_group, loaded, gens,
-               shift)
+    v1 = _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+               length_scale, fx, fy, fm, payload, p1, half_width, work)
+    v2 = _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+               length_scale, fx, fy, fm, payload, p2, half_width, work)
     for _ in range(_REFINE_STEPS):
         if v1 >= v2:
             b, p2, v2 = p2, p1, v1
             p1 = b - _GOLDEN * (b - a)
-            v1 = _pull(normals, points, forces, response, count, centre_x, centre_y,
-                       length_scale, fx, fy, fm, payload, p1, half_width, gen_group,
-                       shift_group, loaded, gens, shift)
+            v1 = _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                       length_scale, fx, fy, fm, payload, p1, half_width, work)
         else:
             a, p1, v1 = p1, p2, v2
             p2 = a + _GOLDEN * (b - a)
-            v2 = _pull(normals, points, forces, response, count, centre_x, centre_y,
-                       length_scale, fx, fy, fm, payload, p2, half_width, gen_group,
-                       shift_group, loaded, gens, shift)
+            v2 = _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                       length_scale, fx, fy, fm, payload, p2, half_width, work)
     for v, phi in ((v1, p1), (v2, p2)):
         if v > best:
             best, best_phi = v, phi
@@ -303,23 +390,17 @@ def _in_plane_worst(normals, points, forces, response, count, centre_x, centre_y
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _pull(normals, points, forces, response, count, centre_x, centre_y, length_scale, fx, fy,
-          fm, payload, phi, half_width, gen_group, shift_group, loaded, gens, shift):
+def _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y, length_scale, fx,
+          fy, fm, payload, phi, half_width, work):
     """The friction of the pull ``payload`` along ``phi`` on top of the released reaction."""
     wx, wy = payload * math.cos(phi), payload * math.sin(phi)
-    return _one_load(normals, points, forces, response, count, centre_x, centre_y,
-                     length_scale, fx + wx, fy + wy, fm, wx, wy, half_width, gen_group,
-                     shift_group, loaded, gens, shift, SPAN_TOL, 0.0)[0]
+    return _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
+                     length_scale, fx + wx, fy + wy, fm, wx, wy, half_width, work, SPAN_TOL,
+                     0.0)[0]
 
 
-def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                       pin_moment_nm, response=None, payload_n: float = 0.0,
-                       load_set: str = DEFAULT_LOAD_SET, half_width: float = 0.0,
-                       patches=None) -> np.ndarray:
-    """:func:`loaded_holding` of plain arrays (the FEM's contact list, tests), a row
-    (N_HOLD,); ``response`` (k, N_RESPONSE), default zeros (the normal forces as solved)."""
-    from .holding import N_HOLD
-
+def _contact_arrays(normals, points, forces, patches):
+    """A contact list as the kernels' arrays (labels default: the flat-face rule)."""
     normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
@@ -328,21 +409,27 @@ def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_fo
               else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
     if labels.size != count:
         raise ValueError(f"patches needs one label per contact ({count}), got {labels.size}")
-    resp = (np.zeros((count, N_RESPONSE)) if response is None
-            else np.ascontiguousarray(response, dtype=np.float64).reshape(count, N_RESPONSE))
-    rows = max(count, 1)
+    return normals, points, forces, labels, count
+
+
+def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                       pin_moment_nm, response: Response | None = None, payload_n: float = 0.0,
+                       load_set: str = DEFAULT_LOAD_SET, half_width: float = 0.0,
+                       patches=None) -> np.ndarray:
+    """:func:`loaded_holding` of plain arrays (the FEM's contact list, tests), a row
+    (N_HOLD,); ``response`` ``None``: the normal forces as solved."""
+    from .holding import N_HOLD
+
+    normals, points, forces, labels, count = _contact_arrays(normals, points, forces, patches)
+    resp = Response.none(count) if response is None else response
     out = np.empty(N_HOLD)
-    loaded_holding(normals, points, forces, labels, resp, count, float(centre_m[0]),
-                   float(centre_m[1]), float(length_scale_m), float(pin_force_n[0]),
-                   float(pin_force_n[1]), float(pin_moment_nm), float(payload_n),
-                   load_set_code(load_set), float(half_width), np.zeros((rows, 3)),
-                   np.zeros((rows, 2)), np.zeros((rows, 2), dtype=np.int64), out)
+    loaded_holding(normals, points, forces, labels,
+                   (resp.cons, resp.weights, resp.response, resp.coupling), int(resp.mn),
+                   int(resp.mc), count, float(centre_m[0]), float(centre_m[1]),
+                   float(length_scale_m), float(pin_force_n[0]), float(pin_force_n[1]),
+                   float(pin_moment_nm), float(payload_n), load_set_code(load_set),
+                   float(half_width), out)
     return out
-
-
-# the patch-level model of the loaded grasp (the response each fidelity computes with its own
-# compliance): see docs/holding.md, "The loaded grasp"
-_LOCKED = 1e9  # a finger on its closed stop: its joint's stiffness over the force scale x r
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -450,9 +537,9 @@ def _direction(normals, i, tangential):
 @njit(cache=True, error_model="numpy")
 def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, weights,
                    centre_x, centre_y, joint_offset, kf, locked, length_scale, force_scale,
-                   response):
-    """Each contact's change of normal force per unit load on the free object, from the
-    patch-level model of the loaded grasp.
+                   response, coupling):
+    """The loaded grasp's response: each constraint's change of force per unit load on the
+    free object, and how releasing constraints moves the others', from the patch-level model.
 
     The object moves rigidly (``q``: a translation and a turn about the centre) and deforms
     elastically (``compliance``); each finger turns about its joint against its spring
@@ -466,7 +553,8 @@ def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, we
          [A_d^T,  0,   -K_f]]    [d  ]   [ 0]
 
     with ``G`` the object's compliance between the constraints (from its hub) and ``A_q``,
-    ``A_d`` what the rigid motion and the fingers' turns move them by.
+    ``A_d`` what the rigid motion and the fingers' turns move them by. Its inverse's block of
+    the constraints, ``coupling``, releases constraints (:func:`_release`).
 
     Parameters
     ----------
@@ -486,9 +574,11 @@ def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, we
     length_scale, force_scale
         ``r`` [m] and a force [N] that scale the system.
     response
-        (>= count, N_RESPONSE), written: per unit force along x, along y [N/N] and per unit
-        moment [N/(N·m)]. Zero where the system is singular (an object the contacts do not
-        hold in place: one finger touching).
+        (>= mc, N_RESPONSE), written: each constraint's change of force per unit force along
+        x, along y [N/N] and per unit moment [N/(N·m)] on the object. Zero where the system is
+        singular (an object the contacts do not hold in place: one finger touching).
+    coupling
+        (>= mc, >= mc), written: the inverse's block of the constraints (scaled).
 
     Returns
     -------
@@ -533,9 +623,11 @@ def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, we
     lu = a.copy()
     piv = np.zeros(size, dtype=np.int64)
     ok = _lu(lu, piv, size)
-    for i in range(count):
+    for c in range(mc):
         for k in range(N_RESPONSE):
-            response[i, k] = 0.0
+            response[c, k] = 0.0
+        for c2 in range(mc):
+            coupling[c, c2] = 0.0
     if not ok:
         return False
     rhs = np.zeros(size)
@@ -544,10 +636,14 @@ def patch_response(compliance, mn, mc, normals, points, fingers, count, cons, we
         rhs[mc + k] = -1.0
         _lu_solve(lu, piv, size, rhs)
         unit = 1.0 if k < 2 else 1.0 / r  # per N, per N·m
-        for i in range(count):
-            c = cons[i, 0]
-            if c >= 0:
-                response[i, k] = weights[i, 0] * rhs[c] * unit
+        for c in range(mc):
+            response[c, k] = rhs[c] * unit
+    for c in range(mc):
+        rhs[:] = 0.0
+        rhs[c] = 1.0
+        _lu_solve(lu, piv, size, rhs)
+        for c2 in range(mc):
+            coupling[c2, c] = rhs[c2]
     return True
 
 
@@ -597,27 +693,20 @@ def _lu_solve(lu, piv, n, b):
 
 
 def friction_under_load(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                        pin_moment_nm, response, load_n, half_width: float = 0.0,
-                        patches=None) -> float:
+                        pin_moment_nm, response: Response | None, load_n,
+                        half_width: float = 0.0, patches=None) -> float:
     """The friction the freed object's grasp needs under one in-plane load ``load_n`` (a
     force ``(x, y)`` [N] on the object at its centre; ``(0, 0)``: the released reaction
-    alone), the contact list and its ``response`` as for :func:`loaded_holding_row` (tests,
-    scripts: one load rather than a load set)."""
-    normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
-    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
-    forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
-    count = forces.size
-    labels = (np.full(count, NO_PATCH, dtype=np.int64) if patches is None
-              else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
-    resp = np.ascontiguousarray(response, dtype=np.float64).reshape(count, N_RESPONSE)
-    rows = max(count, 1)
-    groups = np.zeros((rows, 2), dtype=np.int64)
-    _groups(normals, points, forces, labels, count, float(length_scale_m), groups[:, 0],
-            groups[:, 1])
-    scratch = np.zeros((rows, 2))
+    alone), the contact list and its :class:`Response` as for :func:`loaded_holding_row`
+    (tests, scripts: one load rather than a load set)."""
+    normals, points, forces, labels, count = _contact_arrays(normals, points, forces, patches)
+    resp = Response.none(count) if response is None else response
+    work = _work(count, int(resp.mc))
+    _groups(normals, points, forces, labels, count, float(length_scale_m), work[0], work[1])
     wx, wy = float(load_n[0]), float(load_n[1])
-    return _one_load(normals, points, forces, resp, count, float(centre_m[0]),
-                     float(centre_m[1]), float(length_scale_m), -float(pin_force_n[0]) + wx,
+    return _one_load(normals, points, forces, count,
+                     (resp.cons, resp.weights, resp.response, resp.coupling), int(resp.mn),
+                     int(resp.mc), float(centre_m[0]), float(centre_m[1]),
+                     float(length_scale_m), -float(pin_force_n[0]) + wx,
                      -float(pin_force_n[1]) + wy, -float(pin_moment_nm), wx, wy,
-                     float(half_width), groups[:, 0], groups[:, 1], scratch[:, 0],
-                     np.zeros((rows, 3)), scratch[:, 1], SPAN_TOL, 0.0)[0]
+                     float(half_width), work, SPAN_TOL, 0.0)[0]

@@ -67,7 +67,7 @@ from envs.model.layout import (
     S_WIDTH,
     default_options,
 )
-from envs.model.loads import DEFAULT_LOAD_SET, N_RESPONSE, load_set_code
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.model.metrics import (
     M_COMPRESSION,
     M_DISPLACEMENT,
@@ -388,10 +388,9 @@ def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_s
     k = max_contacts(n)
     grad5, hess5 = np.empty(5), np.empty((5, 5))
     normals, contact_points = np.empty((k, 2)), np.empty((k, 2))
-    forces, gens = np.empty(k), np.empty((k, 3))
+    forces = np.empty(k)
     patches, fingers = np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64)
     nodes, share = np.empty((k, 2), dtype=np.int64), np.empty(k)
-    response, scratch = np.empty((k, N_RESPONSE)), np.empty((k, 2))
     groups, cons = np.empty((k, 2), dtype=np.int64), np.empty((k, 2), dtype=np.int64)
     weights = np.empty((k, 2))
     kprm = kernel_copy(prm[start], n)
@@ -401,8 +400,7 @@ def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_s
         kernel_copy_into(prm[b], n, kprm)
         holding_one(scene[b], prm[b], kprm, n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                     payload[b], load_set[b], bidx, work, grad5, hess5, normals, contact_points,
-                    forces, patches, nodes, share, fingers, response, gens, scratch, groups,
-                    cons, weights, holding[b])
+                    forces, patches, nodes, share, fingers, groups, cons, weights, holding[b])
         st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                          infos[b], points[b], interior[b], face[b], corner[b], stop[b],
                          totals[b], edges[b], metrics[b], ck[b], verdict[b])

@@ -37,7 +37,7 @@ from ..model.layout import (
     S_TORSION,
     S_YOUNG,
 )
-from ..model.loads import loaded_holding, patch_constraints, patch_response
+from ..model.loads import N_RESPONSE, loaded_holding, patch_constraints, patch_response
 from ..model.problem import stiffness_unit
 from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
 from .loaded import contact_compliance
@@ -84,7 +84,7 @@ def _corner_label(lam_face, j, c, k, k1, n):
 @njit(cache=True, error_model="numpy")
 def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, load_set, bidx,
                 work, grad5, hess5, normals, points, forces, patches, nodes, share, fingers,
-                response, gens, scratch, groups, cons, weights, out):
+                groups, cons, weights, out):
     """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer:
     the fixed centre's reaction, then the free object's grasp over the load set
     (:func:`envs.model.loads.loaded_holding`, the normal forces moved by the patch-level
@@ -103,10 +103,10 @@ def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, loa
         :mod:`envs.model.loads`).
     bidx, work
         The band index and :func:`envs.solver.loaded.response_work`'s scratch.
-    grad5, hess5, normals, points, forces, patches, nodes, share, fingers, response, gens,
-    scratch, groups, cons, weights
+    grad5, hess5, normals, points, forces, patches, nodes, share, fingers, groups, cons,
+    weights
         Scratch: (5,), (5, 5), and per contact (max_contacts(n) rows): 2 / 2 / - / - (int) /
-        2 (int) / - / - (int) / N_RESPONSE / 3 / 2 / 2 (int) / 2 (int) / 2.
+        2 (int) / - / - (int) / 2 (int) / 2 (int) / 2.
     out
         The holding row (layout ``H_*``), written: the pin force on the object [N], its
         moment about the centre [N·m], the required friction [-], the payload and the grip
@@ -188,14 +188,15 @@ def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, loa
     g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
                            weights, mc, r, force_unit)
     locked = (lam_stop[0] > 0.0, lam_stop[1] > 0.0)
-    if g.shape[0] == mc:
-        patch_response(g, mn, mc, normals, points, fingers, count, cons, weights, xc, yc,
-                       s[S_JOINT_OFFSET], s[S_TORSION], locked, r, force_unit, response)
-    else:
-        response[:count, :] = 0.0
+    response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
+    if not (g.shape[0] == mc and patch_response(g, mn, mc, normals, points, fingers, count,
+                                                cons, weights, xc, yc, s[S_JOINT_OFFSET],
+                                                s[S_TORSION], locked, r, force_unit, response,
+                                                coupling)):
+        mc = 0  # the forces as solved
     # the centre carries what the contacts leave unbalanced
-    loaded_holding(normals, points, forces, patches, response, count, xc, yc, r, -fx, -fy,
-                   -moment, payload, load_set, half_width, gens, scratch, groups, out)
+    loaded_holding(normals, points, forces, patches, (cons, weights, response, coupling), mn,
+                   mc, count, xc, yc, r, -fx, -fy, -moment, payload, load_set, half_width, out)
     return count
 
 
@@ -203,31 +204,51 @@ def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.nd
                     lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
                     payload_n: float = 0.0, load_set: int = 2) -> dict:
     """:func:`holding_one` of one scaled answer as plain arrays (tests, scripts): the contact
-    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``, ``patches``), each
-    contact's
+    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``, ``patches``), its loaded
+    grasp (``model``, a :class:`envs.model.loads.Response`) and each contact's linear
     ``response`` (k, N_RESPONSE: its normal force's change per unit load on the freed object,
-    a force along x, y [N/N] and a moment [N/(N·m)]) and the holding ``row``."""
+    a force along x, y [N/N] and a moment [N/(N·m)], before any contact is released), and the
+    holding ``row``."""
     from ..model.holding import N_HOLD
-    from ..model.loads import N_RESPONSE
+    from ..model.loads import Response
     from ..model.rings import kernel_copy, mesh_band_index
     from .loaded import response_work
 
     k = max_contacts(n)
     prm_row = np.ascontiguousarray(prm_row, dtype=np.float64)
+    scene_row = np.ascontiguousarray(scene_row, dtype=np.float64)
+    x = np.ascontiguousarray(x, dtype=np.float64)
     kprm = kernel_copy(prm_row, n)
     normals, points, forces = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k)
     fingers, patches = np.zeros(k, dtype=np.int64), np.zeros(k, dtype=np.int64)
-    resp = np.zeros((k, N_RESPONSE))
+    nodes, share = np.zeros((k, 2), dtype=np.int64), np.zeros(k)
+    groups, cons, weights = (np.zeros((k, 2), dtype=np.int64),
+                             np.zeros((k, 2), dtype=np.int64), np.zeros((k, 2)))
     row = np.empty(N_HOLD)
+    bidx = mesh_band_index(n, int(prm_row[P_RINGS]))
+    work = response_work(n, kprm)
     count = holding_one(
-        np.ascontiguousarray(scene_row, dtype=np.float64), prm_row, kprm, n,
-        np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(lam_face),
+        scene_row, prm_row, kprm, n, x, np.ascontiguousarray(lam_face),
         np.ascontiguousarray(lam_corner), np.ascontiguousarray(lam_stop, dtype=np.float64),
-        float(payload_n), int(load_set), mesh_band_index(n, int(prm_row[P_RINGS])),
-        response_work(n, kprm), np.empty(5), np.empty((5, 5)), normals, points, forces,
-        patches, np.empty((k, 2), dtype=np.int64), np.empty(k), fingers,
-        resp, np.empty((k, 3)), np.empty((k, 2)), np.empty((k, 2), dtype=np.int64),
-        np.empty((k, 2), dtype=np.int64), np.empty((k, 2)), row)
+        float(payload_n), int(load_set), bidx, work, np.empty(5), np.empty((5, 5)), normals,
+        points, forces, patches, nodes, share, fingers, groups, cons, weights, row)
+    # the loaded grasp again, kept (holding_one keeps only its row)
+    r, unit = scene_row[S_RADIUS], stiffness_unit(scene_row) * scene_row[S_RADIUS]
+    mn, mc = patch_constraints(normals, points, forces, patches, nodes, fingers, count, r,
+                               groups, cons, weights)
+    g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
+                           weights, mc, r, unit)
+    response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
+    ok = g.shape[0] == mc and patch_response(
+        g, mn, mc, normals, points, fingers, count, cons, weights, scene_row[S_OFFSET_X],
+        scene_row[S_DISTANCE] + r, scene_row[S_JOINT_OFFSET], scene_row[S_TORSION],
+        (lam_stop[0] > 0.0, lam_stop[1] > 0.0), r, unit, response, coupling)
+    model = Response(cons[:count].copy(), weights[:count].copy(), mn, mc if ok else 0,
+                     response, coupling)
+    linear = np.zeros((count, N_RESPONSE))
+    for i in range(count):
+        if ok and cons[i, 0] >= 0:
+            linear[i] = weights[i, 0] * response[cons[i, 0]]
     return {"normals": normals[:count], "points": points[:count], "forces": forces[:count],
-            "fingers": fingers[:count], "patches": patches[:count], "response": resp[:count],
-            "row": row}
+            "fingers": fingers[:count], "patches": patches[:count], "model": model,
+            "response": linear, "row": row}
