@@ -64,14 +64,6 @@ __all__ = [
 ]
 
 DEFAULT_CHUNK_SIZE = 256
-# The search judges the payload this many times heavier than the finish and verify do. Holding
-# a payload has an edge where the required friction jumps to infinity (a sideways load whose
-# moment the faces' contact patches cannot take: no friction helps), and an optimizer's designs
-# sit on it; the search model's edge lies a few percent from the finer member's, so without a
-# margin the finish rejects every one of them (the strawberry example with a +-1.5 mm placement
-# tolerance: the finer member's robust reward -1.5 for all ten best designs at margin 1, -0.077
-# at 1.1, where the search model said -0.075).
-SEARCH_PAYLOAD_MARGIN = 1.1
 # Rows per task at least. Measured on 2 cores (paper-r070, N = 20, ~0.25 ms a design in
 # process): a round trip to a spawned worker costs about 6 ms, so 9 designs in 2 tasks ran at
 # 600 designs/s against 2600 in process, and 64-row tasks reach 80-90 % of the in-process rate.
@@ -434,33 +426,32 @@ class DesignProblem:
         row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(self.n_var))
         return design_mapping(row)
 
-    def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None, *,
-                          margin: float = 1.0) -> dict[str, np.ndarray]:
+    def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None
+                          ) -> dict[str, np.ndarray]:
         """Evaluate physical designs (B, 6), (B, 10) or (B, 14) on this object without
         counting them.
 
         With scenarios, one row per design: the robust reward and the worst case of each metric
         over the scenarios (:class:`envs.scenarios.ScenarioTable` ``summary``). ``member``: a
         model member's keyword arguments instead of the problem's own (the finish's finer
-        member). ``margin``: the payload judged this many times heavier (the search's
-        :data:`SEARCH_PAYLOAD_MARGIN`).
+        member).
         """
         designs = np.asarray(designs, dtype=np.float64)
         if self.scenarios is not None:
-            return self.evaluate_scenarios(designs, member, margin=margin).summary
+            return self.evaluate_scenarios(designs, member).summary
         return evaluate_designs(
             designs, self.disk, strain_limits=self.strain_limit,
             friction_coefficients=self.friction_coefficient,
-            payload_factors=self.payload_factor * margin, **self.joint_spring_kwargs(),
+            payload_factors=self.payload_factor, **self.joint_spring_kwargs(),
             load_set=self.load_set, weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
 
-    def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None, *,
-                           margin: float = 1.0) -> ScenarioTable:
+    def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None
+                           ) -> ScenarioTable:
         """Physical designs (B, 6/10/14) under every scenario of the problem (the one nominal
-        scenario without scenarios), one batch, not counted; ``margin`` as in
+        scenario without scenarios), one batch, not counted; ``member`` as in
         :meth:`evaluate_physical`."""
         designs = np.asarray(designs, dtype=np.float64)
         scenarios = Scenarios() if self.scenarios is None else self.scenarios
@@ -469,7 +460,7 @@ class DesignProblem:
             designs, self.disk, scenarios,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
             friction_coefficient=self.friction_coefficient, robust=self.robust,
-            strain_limits=self.strain_limit, payload_factors=self.payload_factor * margin,
+            strain_limits=self.strain_limit, payload_factors=self.payload_factor,
             load_set=self.load_set, weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(rows))
@@ -485,8 +476,7 @@ class DesignProblem:
                 for j, sc in enumerate(table.scenarios)]
 
     def evaluate(self, x: Any) -> dict[str, np.ndarray]:
-        """Evaluate a population of normalized designs and record it (the search: the payload
-        judged :data:`SEARCH_PAYLOAD_MARGIN` times heavier).
+        """Evaluate a population of normalized designs and record it (the search).
 
         Parameters
         ----------
@@ -511,7 +501,7 @@ class DesignProblem:
                 f"{x.shape[0]} evaluations asked, {self.remaining} left in the budget")
         if x.shape[0] == 0:
             return {k: np.zeros((0, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
-        out = self.evaluate_physical(self.bounds.scale(x, self.disk), margin=SEARCH_PAYLOAD_MARGIN)
+        out = self.evaluate_physical(self.bounds.scale(x, self.disk))
         self._record(x, out)
         return out
 

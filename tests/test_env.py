@@ -321,7 +321,6 @@ def test_every_default_scores_relative_designs_alike_on_objects_far_apart():
         by_batch = out["reward"]
         assert out["touching"].all(axis=1).mean() > 0.5  # grasps, not 64 misses scoring alike
         problem = DesignProblem(disk)
-        # (the nominal payload: the search's evaluate judges it SEARCH_PAYLOAD_MARGIN heavier)
         by_problem = problem.evaluate_physical(problem.to_physical(a))["reward"]
         env = GripperDesignEnv()
         # evaluate_designs' defaults: payload factor 2, placed exactly
