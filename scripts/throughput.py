@@ -64,7 +64,7 @@ def measure(args: argparse.Namespace) -> dict:
 
     disk = PRESETS["paper-r070"][1]
     rng = np.random.default_rng(args.seed)
-    designs = DesignBounds(jaw=args.jaw).sample(rng, args.batch, disk)
+    designs = DesignBounds(jaw=getattr(args, "jaw", "straight")).sample(rng, args.batch, disk)
     members = {"default": {}}
     if args.fan:
         members["fan"] = {"element": "spring"}
@@ -93,7 +93,8 @@ def _run_worker(tree: Path, args: argparse.Namespace) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree))
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--batch",
            str(args.batch), "--scenario-designs", str(args.scenario_designs), "--placement-mm",
-           str(args.placement_mm), "--seed", str(args.seed), "--jaw", args.jaw] + (
+           str(args.placement_mm), "--seed", str(args.seed), "--jaw",
+           getattr(args, "jaw", "straight")] + (
                ["--fan"] if args.fan else [])
     done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True, check=False)
     if done.returncode != 0:
