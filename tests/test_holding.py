@@ -162,7 +162,8 @@ def test_corner_and_face_contacts_match_a_linear_program():
                               sol.corner_forces_n[b] / force_unit,
                               sol.stop_torques_nm[b] / (force_unit * rows[b, S_RADIUS]))
         row = got["row"]
-        np.testing.assert_array_equal(row, sol.holding[b])
+        # (the batch's compilation of the kernel and this call's may round a last bit apart)
+        np.testing.assert_allclose(row, sol.holding[b], rtol=1e-12, atol=1e-15)
         normals, points, forces = got["normals"], got["points"], got["forces"]
         # the pin carries what the contact forces leave: minus their sum
         total = (forces[:, None] * normals).sum(axis=0)

@@ -109,8 +109,9 @@ def load_set_code(load_set: str) -> int:
 def _groups(normals, points, forces, patches, count, length_scale, gen_group, shift_group):
     """Group the contacts once for every load: ``gen_group[i]`` the contact whose generator
     contact i's tangential force joins (a patch's contacts of one normal act as one, at their
-    force-weighted arm; :func:`envs.model.holding.holding_of_contacts`), ``shift_group[i]``
-    the first contact of its pressure patch (:func:`envs.model.holding._pressure_shift`)."""
+    force-weighted arm), ``shift_group[i]`` the first contact of its pressure patch (a flat
+    face's contacts of one normal on one line, or one label's: a run along the object's contour
+    on a grooved jaw, whose pressure may shift by the Hertz half-width of its total force)."""
     tol = 1e-3 * length_scale
     for i in range(count):
         gen_group[i] = i
@@ -217,11 +218,14 @@ def _release(lam, lam0, mn, mc, cons, count, coupling, released, which, small, p
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y, length_scale,
-              fx, fy, fm, wx, wy, half_width, work, tol, weight):
+              fx, fy, fm, half_width, work, tol, weight):
     """The friction the loaded grasp needs under the load ``f = (fx, fy, fm)`` on the free
-    object, of which ``(wx, wy)`` is an external force [N] (the payload; the rest released the
-    fixed centre's reaction), and ``weight`` out of the plane (0: none). Returns ``(mu,
-    total)``, ``total`` the loaded normal forces' sum."""
+    object (the released reaction, ``-pin``, and the payload's pull), and ``weight`` out of
+    the plane (0: none). Returns ``(mu, total)``, ``total`` the loaded normal forces' sum.
+
+    Friction carries what the loaded normal forces ``N'`` leave: ``-f + sum (N - N') nu``
+    (and its moment), which is ``-(sum N' nu + W)`` when the pin balances the forces as solved
+    (``pin = -sum N nu``) and the pin's force with the normal forces as solved (``mc = 0``)."""
     cons, weights, response, coupling = model
     (gen_group, shift_group, loaded, gens, shift, lam, lam0, released, which, small, piv,
      tmp) = work
@@ -234,18 +238,22 @@ def _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
             lam[cons[i, 0]] += forces[i]
     if mc > 0:
         _release(lam, lam0, mn, mc, cons, count, coupling, released, which, small, piv, tmp)
-    nx_sum = ny_sum = m_sum = 0.0
+    # what the normal forces' change leaves to friction, beside the load
+    need_x, need_y, need_m = -fx, -fy, -fm
+    grip = 0.0
     for i in range(count):
         f = forces[i]
         if not f > 0.0:
             loaded[i] = 0.0
             continue
+        grip += f
         v = f if mc == 0 else max(weights[i, 0] * lam[cons[i, 0]], 0.0)
         loaded[i] = v
-        nx_sum += v * normals[i, 0]
-        ny_sum += v * normals[i, 1]
-        m_sum += v * ((points[i, 0] - centre_x) * normals[i, 1]
-                      - (points[i, 1] - centre_y) * normals[i, 0])
+        d = f - v
+        need_x += d * normals[i, 0]
+        need_y += d * normals[i, 1]
+        need_m += d * ((points[i, 0] - centre_x) * normals[i, 1]
+                       - (points[i, 1] - centre_y) * normals[i, 0])
     # the generators: a group's tangential force at its force-weighted arm
     for i in range(count):
         gens[i, 0] = gens[i, 1] = gens[i, 2] = 0.0
@@ -270,14 +278,14 @@ def _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
         if s > 0.0:
             reach += s * half_width * math.sqrt(s)
     m = _merge(gens, count)
-    # the tangential forces carry what the normal forces and the payload leave
-    need_x, need_y = -(nx_sum + wx), -(ny_sum + wy)
-    scale = max(total, math.hypot(need_x, need_y))
+    if grip > 0.0 and not total > 0.0:
+        return math.inf, total  # the load pulls every contact off: nothing holds the object
+    scale = max(grip, math.hypot(need_x, need_y))
     if weight > 0.0:
-        mu = lift_friction(gens, m, need_x, need_y, -m_sum / length_scale,
+        mu = lift_friction(gens, m, need_x, need_y, need_m / length_scale,
                            reach / length_scale, weight, tol * scale)
     else:
-        mu = in_plane_friction(gens, m, need_x, need_y, -m_sum / length_scale,
+        mu = in_plane_friction(gens, m, need_x, need_y, need_m / length_scale,
                                reach / length_scale, 0.0, tol * scale)[0]
     return mu, total
 
@@ -291,11 +299,15 @@ def loaded_holding(normals, points, forces, patches, model, mn, mc, count, centr
     Parameters
     ----------
     normals, points, forces, patches, count, centre_x, centre_y, length_scale
-        The contact list as for :func:`envs.model.holding.holding_of_contacts`.
+        Contact ``i < count``: unit normal on the object (2,), the point where it acts [m]
+        (2,), its normal force [N] (>= 0; zero forces are skipped) and its pressure-patch
+        label (:data:`envs.model.holding.NO_PATCH`: the flat-face rule, one normal on one
+        line), the object's centre [m] and the length scale [m] of the moment row (its
+        radius).
     model, mn, mc
         The loaded grasp, ``(cons, weights, response, coupling)`` and the constraint counts
         of a :class:`Response` (``mc = 0``: the normal forces as solved, the bound of
-        :func:`envs.model.holding.holding_of_contacts`).
+        :func:`envs.model.holding.holding_row`).
     pin_x, pin_y, pin_moment
         The fixed centre's reaction on the object [N, N, N·m], released here.
     payload
@@ -321,7 +333,7 @@ def loaded_holding(normals, points, forces, patches, model, mn, mc, count, centr
     _groups(normals, points, forces, patches, count, length_scale, work[0], work[1])
     fx, fy, fm = -pin_x, -pin_y, -pin_moment
     mu, held = _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
-                         length_scale, fx, fy, fm, 0.0, 0.0, half_width, work, SPAN_TOL, 0.0)
+                         length_scale, fx, fy, fm, half_width, work, SPAN_TOL, 0.0)
     code, angle = LIMIT_REACTION, math.nan
     if payload > 0.0 and mu < math.inf:
         mu0 = mu
@@ -337,8 +349,8 @@ def loaded_holding(normals, points, forces, patches, model, mn, mc, count, centr
         if load_set != LOAD_TOP_DOWN and mu < math.inf and (
                 math.sqrt(mu0 * mu0 + ratio * ratio) > mu):
             lift, _ = _one_load(normals, points, forces, count, model, mn, mc, centre_x,
-                                centre_y, length_scale, fx, fy, fm, 0.0, 0.0, half_width,
-                                work, SPAN_TOL, payload)
+                                centre_y, length_scale, fx, fy, fm, half_width, work,
+                                SPAN_TOL, payload)
             if lift > mu:
                 mu, code, angle = lift, LIMIT_OUT_OF_PLANE, math.nan
     if mu == 0.0:
@@ -393,10 +405,9 @@ def _in_plane_worst(normals, points, forces, count, model, mn, mc, centre_x, cen
 def _pull(normals, points, forces, count, model, mn, mc, centre_x, centre_y, length_scale, fx,
           fy, fm, payload, phi, half_width, work):
     """The friction of the pull ``payload`` along ``phi`` on top of the released reaction."""
-    wx, wy = payload * math.cos(phi), payload * math.sin(phi)
     return _one_load(normals, points, forces, count, model, mn, mc, centre_x, centre_y,
-                     length_scale, fx + wx, fy + wy, fm, wx, wy, half_width, work, SPAN_TOL,
-                     0.0)[0]
+                     length_scale, fx + payload * math.cos(phi), fy + payload * math.sin(phi),
+                     fm, half_width, work, SPAN_TOL, 0.0)[0]
 
 
 def _contact_arrays(normals, points, forces, patches):
@@ -708,5 +719,5 @@ def friction_under_load(normals, points, forces, centre_m, length_scale_m, pin_f
                      (resp.cons, resp.weights, resp.response, resp.coupling), int(resp.mn),
                      int(resp.mc), float(centre_m[0]), float(centre_m[1]),
                      float(length_scale_m), -float(pin_force_n[0]) + wx,
-                     -float(pin_force_n[1]) + wy, -float(pin_moment_nm), wx, wy,
-                     float(half_width), work, SPAN_TOL, 0.0)[0]
+                     -float(pin_force_n[1]) + wy, -float(pin_moment_nm), float(half_width),
+                     work, SPAN_TOL, 0.0)[0]

@@ -9,7 +9,7 @@ centre carries what they leave unbalanced (:mod:`envs.model.holding`).
 
 Jaw grooves need nothing more: a face contact's normal is its gap's gradient on the grooved
 finger too (:func:`envs.model.jaw.jaw_gap`), and a groove's two mouth edges are corners like
-the bar's ends. The pressure shift of :func:`envs.model.holding.holding_of_contacts` groups a
+the bar's ends. The pressure shift of :mod:`envs.model.loads` groups a
 straight finger's contacts that share a normal and a line across it as one face; on a grooved
 finger a run of consecutive pressed contour points (with a mouth edge pressing an edge of the
 run) is one patch, the rule the FEM applies to its runs of rim nodes.
@@ -122,7 +122,7 @@ def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, loa
     xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
-    # np.int64, not a literal 0 (see holding_of_contacts: one compilation of it, not two)
+    # np.int64, not a literal 0: numba would compile the callees once more for Literal[int](0)
     count = np.int64(0)
     fx = fy = moment = 0.0
     for j in range(2):
