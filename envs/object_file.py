@@ -32,6 +32,15 @@ design is made for the ranges' centre and judged over the scenarios of :mod:`env
     torque_nm = 0.02              # optional (default: the command's --torque)
     torsion_stiffness_nm_per_rad = 0.001  # optional (default: relative to the object)
 
+    [gripper.tolerances]          # optional: manufacturing tolerances the design must survive
+    length_mm = 0.1               # finger length, width and joint offset, +-
+    angle_deg = 0.5               # rest angle, +-
+    spring_percent = 10           # joint spring, +-
+    torque_percent = 5            # actuation torque, +-
+
+The tolerances (:mod:`envs.tolerances`) are scenario dimensions of the design beside the
+object's ranges (the ``[gripper]`` table may hold them alone, without a gripper).
+
 Every key is checked before any work: an unknown key, a missing key or a bad value is one
 ``ValueError`` naming the file, the table, the key and the allowed range. A radius, thickness,
 modulus or density outside the plausible range of a graspable object
@@ -56,6 +65,7 @@ from .model.defaults import (
 )
 from .scenarios import RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
+from .tolerances import Tolerances, parse_tolerances
 from .validation import check_range, read_text_file, unit_slip
 
 if sys.version_info >= (3, 11):
@@ -94,6 +104,8 @@ TOLERANCE_KEY = "placement_tolerance_m"
 TOLERANCE_RULE = (0.0, math.inf, False, False, False)
 # the jaws a design problem designs (envs.design_space.DesignBounds): a word and a flag
 JAW_KEY, JAW_PER_FINGER_KEY = "jaw", "jaw_per_finger"
+# the [gripper] table's manufacturing tolerances (envs.tolerances.TOLERANCE_KEYS)
+TOLERANCES_KEY = "tolerances"
 
 
 @dataclass(frozen=True)
@@ -142,6 +154,9 @@ class ObjectSpec:
     jaw, jaw_per_finger
         The jaws to design (one of :data:`envs.design_space.JAW_KINDS`) and whether each
         finger has its own groove, or ``None`` (the caller's default: straight bars).
+    tolerances
+        The ``[gripper.tolerances]`` table (:class:`envs.tolerances.Tolerances`), or ``None``;
+        ``scenarios`` then carries them too.
     """
 
     name: str
@@ -154,6 +169,7 @@ class ObjectSpec:
     payload_factor: float | None = None
     jaw: str | None = None
     jaw_per_finger: bool | None = None
+    tolerances: Tolerances | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -226,17 +242,24 @@ def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...]
     return {k: _number(where, k, v, rules[k]) for k, v in data.items() if k in rules}
 
 
-def _gripper(where: str, data: Any) -> GripperSpec:
+def _gripper(where: str, data: Any) -> tuple[GripperSpec | None, Tolerances | None]:
+    """The ``[gripper]`` table: a gripper (``None`` when the table holds only tolerances) and
+    its ``tolerances`` sub-table (``None`` without one)."""
     if not isinstance(data, dict):
         raise ValueError(f"{where}: must be a table")
-    values = _table(where, data, GRIPPER_KEYS)
+    data = dict(data)
+    tolerances = (parse_tolerances(data.pop(TOLERANCES_KEY), f"{where}: {TOLERANCES_KEY}")
+                  if TOLERANCES_KEY in data else None)
+    if not data and tolerances is not None:
+        return None, tolerances
+    values = _table(where, data, GRIPPER_KEYS, after=(TOLERANCES_KEY,))
     if ("rest_angle_deg" in values) == ("rest_angle_rad" in values):
         raise ValueError(f"{where}: give the rest angle once, as rest_angle_deg or "
                          "rest_angle_rad")
     angle = values.pop("rest_angle_rad", None)
     if angle is None:
         angle = math.radians(values.pop("rest_angle_deg"))
-    return GripperSpec(rest_angle_rad=angle, **values)
+    return GripperSpec(rest_angle_rad=angle, **values), tolerances
 
 
 def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
@@ -261,20 +284,22 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     table, ranges = _ranges(f"{where}: [object]", table)
     values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
                     after=(JAW_KEY, JAW_PER_FINGER_KEY))
+    gripper, tolerances = (_gripper(f"{where}: [gripper]", data["gripper"])
+                           if "gripper" in data else (None, None))
     scenarios = None
-    if ranges or tolerance is not None:
+    if ranges or tolerance is not None or tolerances is not None:
         try:
-            scenarios = Scenarios.of(ranges, tolerance)
+            scenarios = Scenarios.of(ranges, tolerance, tolerances)
+            scenarios.check_placement(values["radius_m"])  # (the ranges' centre)
         except ValueError as exc:
             raise ValueError(f"{where}: [object]: {exc}") from None
     disk = SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
                     values["poisson_ratio"], values["thickness_m"],
                     values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
                     density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3))
-    gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
                       values.get("friction_coefficient"), gripper, path, scenarios,
-                      values.get("payload_factor"), jaw, per_finger)
+                      values.get("payload_factor"), jaw, per_finger, tolerances)
 
 
 def _jaws(where: str, jaw: Any, per_finger: Any) -> tuple[str | None, bool | None]:

@@ -22,6 +22,7 @@ from .model.defaults import (
     DEFAULT_STIFFNESS_SCALE,
     DEFAULT_THICKNESS_M,
     DEFAULT_YOUNGS_MODULUS_PA,
+    FOAM_DENSITY_KG_M3,
     GRAVITY_M_S2,
     MAX_PAYLOAD_FACTOR,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
@@ -258,9 +259,10 @@ class SoftDisk:
         invalid (:data:`~envs.model.problem.REST_OFFSET`).
     density_kg_m3
         Density ``rho`` of the object [kg/m^3], > 0: its mass ``rho pi r^2 t`` is the payload
-        a grasp must carry (:meth:`payload_n`). Default 50, the paper's soft foam
-        (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`); soft tissue ~1060, fruit
-        950-1050, silicone ~1100. A radius, thickness, modulus or density outside the
+        a grasp must carry (:meth:`payload_n`). Default 1000, water-like, as in an object file
+        (:data:`~envs.model.defaults.DEFAULT_DENSITY_KG_M3`); soft tissue ~1060, fruit
+        950-1050, silicone ~1100; the paper's presets are soft foam, 50
+        (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`). A radius, thickness, modulus or density outside the
         plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
         most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
         naming the likely unit.
@@ -655,9 +657,9 @@ TPU_MODULUS_PA = 29e6
 TPU_SCALE = 0.033
 
 PRESETS: dict[str, tuple[Gripper, SoftDisk]] = {
-    "paper-r050": (PAPER_GRIPPER, SoftDisk(0.05, 0.004)),
-    "paper-r070": (PAPER_GRIPPER, SoftDisk(0.07, 0.013)),
-    "paper-r100": (PAPER_GRIPPER, SoftDisk(0.10, 0.025)),
+    "paper-r050": (PAPER_GRIPPER, SoftDisk(0.05, 0.004, density_kg_m3=FOAM_DENSITY_KG_M3)),
+    "paper-r070": (PAPER_GRIPPER, SoftDisk(0.07, 0.013, density_kg_m3=FOAM_DENSITY_KG_M3)),
+    "paper-r100": (PAPER_GRIPPER, SoftDisk(0.10, 0.025, density_kg_m3=FOAM_DENSITY_KG_M3)),
 }
 for _tag, (_r_mm, _d_mm) in zip(
     "abcdef", [(2, 11), (2, 15), (2.5, 13), (2.5, 16), (3, 13), (3, 15)], strict=True

@@ -26,7 +26,7 @@ from envs.render import draw_design, draw_grasp, grasp_figure
 from envs.scene import Design, Scene, SoftDisk, design_row
 
 from .build_sheet import assembly_of
-from .result import OptimResult
+from .result import OptimResult, front_point
 
 __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure",
            "scenario_figure"]
@@ -219,8 +219,7 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
                    color="0.75",
                    label="feasible evaluated")
     if front:
-        strain = [p["peak_compression"] for p in front]
-        contact = [p["contact_score"] for p in front]
+        contact, strain = (list(v) for v in zip(*map(front_point, front), strict=True))
         ax.step(strain, contact, where="post", color="tab:red", linewidth=1)
         ax.plot(strain, contact, "o", color="tab:red", markersize=4, label="NSGA-II front")
         for k, i in enumerate(picks):
@@ -243,9 +242,10 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
     for k, i in enumerate(picks):
         sub = fig.add_subplot(grid[0, 1 + k])
         p = front[i]
+        worst = "worst " if "min_contact_score" in p else ""
         _draw_design_grasp(sub, p["design"], result.object,
-                           f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
-                           f"compression {p['peak_compression']:.3f}", legend=k == 0)
+                           f"{chr(ord('A') + k)}: {worst}contact {contact[i]:.2f}, "
+                           f"{worst}compression {strain[i]:.3f}", legend=k == 0)
     fig.tight_layout()
     return _save(fig, path)
 

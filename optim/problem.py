@@ -35,7 +35,13 @@ from envs.model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from envs.model.family import resolve_model
-from envs.scenarios import ROBUST_MEASURES, Scenarios, ScenarioTable, evaluate_scenarios
+from envs.scenarios import (
+    ENVELOPE_KEYS,
+    ROBUST_MEASURES,
+    Scenarios,
+    ScenarioTable,
+    evaluate_scenarios,
+)
 from envs.scene import (
     PRESETS,
     Scene,
@@ -85,11 +91,31 @@ BEST_METRIC_KEYS = (
     "strain_limit", "pin_force_n", "pin_moment_nm", "required_friction", "friction_coefficient",
     "payload_n", "grip_force_n", "friction_limit", "friction_limit_angle_rad",
     "holds", "penalty_slip",
-    "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
-    "reward",
+    "reward_contact", "reward_deform", "penalty_miss", "penalty_gap", "penalty_invalid",
+    "penalty_fail", "reward",
 )
 
+# with scenarios, what a summary row adds to BEST_METRIC_KEYS: the governing scenario (whose
+# own row the metrics are) and the envelopes over the scenarios, under their own names
+SCENARIO_METRIC_KEYS = ("worst_scenario", "governing_scenario", "reward_worst", "reward_mean",
+                        "reward_cvar", "reward_nominal", *ENVELOPE_KEYS)
+
 ProgressHook = Callable[[int, float], None]
+
+
+def metrics_row(out: dict[str, np.ndarray], i: int) -> dict[str, Any]:
+    """Row ``i`` of an evaluation as plain data: :data:`BEST_METRIC_KEYS` and, with
+    scenarios, :data:`SCENARIO_METRIC_KEYS` (what :attr:`OptimResult.best_metrics` holds)."""
+    keys = (*BEST_METRIC_KEYS, *(k for k in SCENARIO_METRIC_KEYS if k in out))
+    return {k: to_jsonable(out[k][i]) for k in keys}
+
+
+def front_columns(out: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The contact score and peak compression NSGA-II trades and the archive records: with
+    scenarios their envelopes (the smallest contact score, the largest compression over the
+    scenarios), else the grasp's own."""
+    return (out.get("min_contact_score", out["contact_score"]),
+            out.get("max_peak_compression", out["peak_compression"]))
 
 
 class BudgetExhaustedError(RuntimeError):
@@ -450,28 +476,31 @@ class DesignProblem:
         )
 
     def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None, *,
-                           margin: float = 1.0) -> ScenarioTable:
+                           margin: float = 1.0, full: bool = False) -> ScenarioTable:
         """Physical designs (B, 6/10/14) under every scenario of the problem (the one nominal
         scenario without scenarios), one batch, not counted; ``margin`` as in
-        :meth:`evaluate_physical`."""
+        :meth:`evaluate_physical`; ``full``: every corner of the box, not the covering set
+        (:func:`envs.scenarios.evaluate_scenarios`)."""
         designs = np.asarray(designs, dtype=np.float64)
         scenarios = Scenarios() if self.scenarios is None else self.scenarios
-        rows = designs.shape[0] * len(scenarios.scenarios())
+        rows = designs.shape[0] * len(scenarios.scenarios(full))
         return evaluate_scenarios(
             designs, self.disk, scenarios,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
             friction_coefficient=self.friction_coefficient, robust=self.robust,
             strain_limits=self.strain_limit, payload_factors=self.payload_factor * margin,
-            weights=self.weights, executor=self.executor,
+            weights=self.weights, executor=self.executor, full=full,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(rows))
 
     def scenario_rows(self, design: dict[str, float],
-                      member: dict[str, Any] | None = None) -> list[dict[str, Any]]:
-        """One design (``{field: value}``, SI) under every scenario: a row per scenario with
-        the scenario and its grasp's metrics (what a result JSON records)."""
+                      member: dict[str, Any] | None = None,
+                      full: bool = False) -> list[dict[str, Any]]:
+        """One design (``{field: value}``, SI) under every scenario (``full``: every corner):
+        a row per scenario with the scenario and its grasp's metrics (what a result JSON
+        records)."""
         row = design_row(design)[None, :]
-        table = self.evaluate_scenarios(row, member)
+        table = self.evaluate_scenarios(row, member, full=full)
         return [{"scenario": sc.as_dict(),
                  **{k: to_jsonable(table.per_scenario[k][0, j]) for k in BEST_METRIC_KEYS}}
                 for j, sc in enumerate(table.scenarios)]
@@ -523,16 +552,17 @@ class DesignProblem:
         if reward[i] > self.best_reward:
             self.best_reward = float(reward[i])
             self.best_x = x[i].copy()
-            self.best_metrics = {k: to_jsonable(out[k][i]) for k in BEST_METRIC_KEYS}
+            self.best_metrics = metrics_row(out, i)
         self.n_evaluations += x.shape[0]
         self.history_evaluations.append(self.n_evaluations)
         self.history_best_reward.append(self.best_reward)
         self.history_wall_time_s.append(self.elapsed_s)
+        contact, compression = front_columns(out)
         self._archive.append({
             "x": x.copy(),
             "reward": reward.copy(),
-            "contact_score": out["contact_score"].copy(),
-            "peak_compression": out["peak_compression"].copy(),
+            "contact_score": contact.copy(),
+            "peak_compression": compression.copy(),
             "feasible": self.feasible(out),
         })
         if self.progress is not None:
@@ -540,7 +570,10 @@ class DesignProblem:
 
     def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
         """Grasps that hold the object (converged, both fingers touching, the required friction
-        within the coefficient) and keep their peak compression within the strain limit."""
+        within the coefficient) and keep their peak compression within the strain limit; with
+        scenarios, in every scenario (``holds_all``)."""
+        if "holds_all" in out:
+            return out["holds_all"].copy()
         return out["holds"] & (out["peak_compression"] <= self.strain_limit)
 
     def archive(self) -> dict[str, np.ndarray]:
@@ -573,7 +606,8 @@ class DesignProblem:
 
     def pareto_front(self) -> list[dict[str, Any]]:
         """Non-dominated feasible evaluated designs (contact score up, peak compression down),
-        sorted by contact score."""
+        sorted by contact score; with scenarios, of their envelopes, under the envelopes'
+        names ``min_contact_score`` and ``max_peak_compression``."""
         arc = self.archive()
         rows = np.flatnonzero(arc["feasible"])
         if rows.size == 0:
@@ -581,10 +615,11 @@ class DesignProblem:
         obj = np.column_stack([-arc["contact_score"][rows], arc["peak_compression"][rows]])
         front = rows[pareto_mask(obj)]
         front = front[np.argsort(arc["contact_score"][front], kind="stable")]
+        prefix = ("min_", "max_") if self.scenarios is not None else ("", "")
         return [{
             "design": self.design_dict(arc["x"][i]),
-            "contact_score": float(arc["contact_score"][i]),
-            "peak_compression": float(arc["peak_compression"][i]),
+            f"{prefix[0]}contact_score": float(arc["contact_score"][i]),
+            f"{prefix[1]}peak_compression": float(arc["peak_compression"][i]),
             "reward": float(arc["reward"][i]),
         } for i in front.tolist()]
 
@@ -652,9 +687,21 @@ class DesignProblem:
         )
 
     def scenario_extra(self, design: dict[str, float],
-                       member: dict[str, Any] | None = None) -> dict[str, Any]:
-        """``{"scenario_rows": [...]}``: the design under every scenario (a result's extra);
-        empty without scenarios or without a design."""
+                       member: dict[str, Any] | None = None,
+                       full: bool = False) -> dict[str, Any]:
+        """``{"scenario_rows": [...], "scenario_set": ...}``: the design under every scenario
+        (``full``: every corner) and which set that is (a result's extra); empty without
+        scenarios or without a design."""
         if self.scenarios is None or not design:
             return {}
-        return {"scenario_rows": self.scenario_rows(design, member)}
+        covering = self.scenarios.uses_covering_set and not full
+        return {"scenario_rows": self.scenario_rows(design, member, full),
+                "scenario_set": "covering" if covering else "full"}
+
+    def use_spring_nm(self, torsion_stiffness_nm_per_rad: float) -> None:
+        """Build every design with this absolute joint spring [N·m/rad] from now on (the
+        spring rounded to the manufacturing resolution, :mod:`optim.parts.resolution`)."""
+        self.torsion_stiffness_rel = None
+        self._torsion_absolute = check_range("torsion_stiffness_nm_per_rad",
+                                             torsion_stiffness_nm_per_rad, 0.0, math.inf,
+                                             low_open=True)

@@ -12,9 +12,13 @@ import numpy as np
 
 from envs.validation import read_text_file
 
-__all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable"]
+__all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable",
+           "front_point"]
 
 RESULT_VERSION = 1
+# exit code of a command whose reported design does not hold its object (`optimize`, `design`,
+# `verify`, `demo`; docs/cli.md's exit table)
+NO_GRASP_EXIT = 3
 
 
 def to_jsonable(value: Any) -> Any:
@@ -32,6 +36,13 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+def front_point(point: dict[str, Any]) -> tuple[float, float]:
+    """A Pareto front entry's contact score and peak compression: with scenarios their
+    envelopes (``min_contact_score``, ``max_peak_compression``)."""
+    return (float(point.get("min_contact_score", point.get("contact_score", math.nan))),
+            float(point.get("max_peak_compression", point.get("peak_compression", math.nan))))
+
+
 class NoGraspWarning(UserWarning):
     """An optimization's best design does not grasp its object (invalid, not converged, or a
     finger that does not touch): the run's answer is not a gripper to build."""
@@ -45,7 +56,9 @@ def grasp_found(metrics: dict[str, Any]) -> bool:
     touching = metrics.get("touching") or [False, False]
     within = metrics.get("peak_compression", 0.0) <= metrics.get("strain_limit", math.inf)
     return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching)
-                and metrics.get("holds", True) and within)
+                and metrics.get("holds", True) and within
+                # with scenarios: in every one (the governing row says so too)
+                and metrics.get("holds_all", True))
 
 
 def no_grasp_reason(metrics: dict[str, Any]) -> str:
@@ -243,11 +256,25 @@ class OptimResult:
         return self.n_evaluations / self.wall_time_s if self.wall_time_s > 0 else math.inf
 
     def summary(self) -> str:
-        """One line: method, seed, best reward, contact score, peak strain, time."""
+        """One line: method, seed, best reward and the reward's terms that give it, the
+        contact score and peak compression of the grasp they come from (with scenarios the
+        governing scenario's, named), evaluations, time."""
+        from .verdict import reward_terms
+
         m = self.best_metrics
-        return (
-            f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f} "
-            f"(contact {m.get('contact_score', float('nan')):.3f}, "
-            f"peak compression {m.get('peak_compression', float('nan')):.4f}) after "
-            f"{self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
-        )
+        terms = " ".join(f"{name} {value:+.4f}" for name, value in reward_terms(m))
+        governing = m.get("governing_scenario")
+        robust = self.object.get("robust", "worst")
+        head = f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f}"
+        grasp = (f"contact {m.get('contact_score', float('nan')):.4f}, peak compression "
+                 f"{m.get('peak_compression', float('nan')):.4f}")
+        if governing is None:
+            body = f" = {terms} ({grasp})"
+        elif robust == "worst":
+            body = (f" = {terms} (governing scenario {governing!r} of "
+                    f"{m.get('n_scenarios')}: {grasp})")
+        else:
+            body = (f" ({robust} over {m.get('n_scenarios')} scenarios; the governing scenario "
+                    f"{governing!r} scores {m.get('reward', float('nan')):.4f} = {terms}: "
+                    f"{grasp})")
+        return f"{head}{body} after {self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"

@@ -134,7 +134,9 @@ MAX_PAYLOAD_FACTOR = 100.0  # a lift at 99 g: beyond any gripper
 FOAM_DENSITY_KG_M3 = 50.0
 TPU_DENSITY_KG_M3 = 1200.0
 OBJECT_DENSITY_KG_M3 = 1000.0
-DEFAULT_DENSITY_KG_M3 = FOAM_DENSITY_KG_M3  # the default disk is the paper's foam
+# one default for the API and object files: water-like (produce, tissue, silicone lie within 10 %);
+# the paper's presets are foam and say so (envs.scene.PRESETS)
+DEFAULT_DENSITY_KG_M3 = OBJECT_DENSITY_KG_M3
 
 # Plausible ranges of an object's description [SI]: a value outside is most likely typed in
 # another unit (a radius of 15 "m" meant in millimetres gives 62 m fingers). Object files and
