@@ -104,7 +104,7 @@ def add_policy_parsers(subparsers: Any) -> None:
                        "cores)")
     train.add_argument("--seed", type=int, default=0)
     add_jaw_options(train, "design", "straight: GripperDesign-v2's six actions; shaped jaws "
-                    "train in GripperDesign-v3's action space")
+                    "train in GripperJawDesign-v0's action space")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--out", required=True, help="output folder, created if its parent "
                        "exists")

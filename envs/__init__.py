@@ -1,14 +1,14 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2`` and ``GripperDesign-v3`` (v2 with shaped
-jaws in the action) with Gymnasium::
+Importing the package registers ``GripperDesign-v2`` and ``GripperJawDesign-v0`` (the same task
+with shaped jaws in the action: a separate id, not a later version of v2) with Gymnasium::
 
     import gymnasium as gym
     import envs
 
     env = gym.make("GripperDesign-v2")
     vec = gym.make_vec("GripperDesign-v2", num_envs=64, vectorization_mode="vector_entry_point")
-    jaws = gym.make("GripperDesign-v3", jaw="cradle")
+    jaws = gym.make("GripperJawDesign-v0", jaw="cradle")
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ __all__ = [
 ]
 
 ENV_ID = "GripperDesign-v2"
-JAW_ENV_ID = "GripperDesign-v3"  # with shaped jaws (envs.design_env.make_vector_env_v3)
+JAW_ENV_ID = "GripperJawDesign-v0"  # with shaped jaws (envs.design_env.make_vector_env_v3)
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):

@@ -716,7 +716,7 @@ class GripperDesignEnv(gym.Env):
 
     * v3: shaped jaws. The action gains the jaw columns of the design space
       (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``): a groove cut into the
-      gripping faces, chosen at make, `gym.make("GripperDesign-v3", jaw="cradle")` (default
+      gripping faces, chosen at make, `gym.make("GripperJawDesign-v0", jaw="cradle")` (default
       `"any"`: depth, bottom radius, opening angle and position, shape 10; `"cradle"` and
       `"vee"` 9; `jaw_per_finger=True` doubles the jaw columns). The observation, the
       objects and the reward are v2's; `bounds` may be given too (its jaw is replaced).
@@ -1080,7 +1080,7 @@ class GripperDesignVectorEnv(VectorEnv):
 
 def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
                bounds: DesignBounds | None = None) -> DesignBounds:
-    """The design space of ``GripperDesign-v3``: ``bounds`` (default the default box) with
+    """The design space of ``GripperJawDesign-v0``: ``bounds`` (default the default box) with
     the jaws ``jaw`` (one of :data:`envs.design_space.JAW_KINDS`, default ``"any"``) and
     ``jaw_per_finger`` (:meth:`~envs.evaluate.DesignBounds.with_jaw`)."""
     if bounds is not None and not isinstance(bounds, DesignBounds):
@@ -1092,7 +1092,7 @@ def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
 def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,
                        bounds: DesignBounds | None = None, **kwargs: Any
                        ) -> GripperDesignVectorEnv:
-    """The vector entry point of ``GripperDesign-v3``: a :class:`GripperDesignVectorEnv`
+    """The vector entry point of ``GripperJawDesign-v0``: a :class:`GripperDesignVectorEnv`
     whose actions carry the jaw columns (:func:`jaw_bounds`); ``kwargs`` as for the class."""
     return GripperDesignVectorEnv(num_envs, bounds=jaw_bounds(jaw, jaw_per_finger, bounds),
                                   **kwargs)

@@ -74,7 +74,7 @@ RL_HINT = "training a policy needs stable-baselines3 and torch: pip install 'psm
 POLICY_FORMAT = 1
 POLICY_FILES = ("policy.json", "policy.npz")
 SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
-# the shipped policy that designs shaped jaws too (the "any" jaw space of GripperDesign-v3)
+# the shipped policy that designs shaped jaws too (the "any" jaw space of GripperJawDesign-v0)
 SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
 SHIPPED_JAWS = {"straight": SHIPPED_POLICY, "any": SHIPPED_JAW_POLICY}
 REFINE_SIGMA = 0.1  # CMA-ES step size around the policy's design, in the normalized box
@@ -653,7 +653,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
         The policy's name in its metadata.
     jaw, jaw_per_finger
         The jaws it designs: ``"straight"`` (default: GripperDesign-v2's six actions) or a kind
-        of shaped jaws (GripperDesign-v3's action with the jaw columns of
+        of shaped jaws (GripperJawDesign-v0's action with the jaw columns of
         :func:`envs.design_env.jaw_bounds`; ``"any"``: cradles, V-grooves and the rounded
         grooves between them).
     **settings
