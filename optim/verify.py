@@ -33,8 +33,8 @@ from .finish import RANKING_MEMBER
 from .result import NO_GRASP_EXIT, OptimResult, grasp_found
 
 __all__ = ["DEFAULT_TOP", "RANKING_MEMBER", "CONFIRM_RELATIVE", "CONFIRM_ABSOLUTE",
-           "NOT_CONFIRMED_EXIT", "NO_GRASP_EXIT", "confirm_margin", "confirmed", "find_result", "verify_result",
-           "verify_run", "verify_figure", "verify_exit_code"]
+           "NOT_CONFIRMED_EXIT", "NO_GRASP_EXIT", "confirm_margin", "confirmed", "find_result",
+           "verify_result", "verify_run", "verify_figure", "verify_exit_code"]
 
 DEFAULT_TOP = 3
 # the FEM confirms the reported optimum when the reported reward lies within this share of the

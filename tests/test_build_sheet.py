@@ -133,7 +133,8 @@ def test_fingers_closer_than_half_a_width_are_stacked():
     rows = {r["quantity"]: r["value"] for r in sheet["rows"]}
     assert rows["joint_end_overlap_mm"] == pytest.approx(1.0)
     assert build_sheet(APART, OBJ)["assembly"] == ASSEMBLY_SIDE_BY_SIDE == "side by side"
-    assert assembly_of(0.0, 1e-3)[0] == ASSEMBLY_STACKED
+    assert assembly_of(0.1e-3, 1e-3)[0] == ASSEMBLY_STACKED
+    assert assembly_of(0.0, 1e-3)[0] == "common pivot"  # both fingers on one pin
     assert assembly_of(0.6e-3, 1e-3)[0] == ASSEMBLY_SIDE_BY_SIDE
 
 
