@@ -52,6 +52,10 @@ def _optimize_command(args: argparse.Namespace) -> int:
         cli_option("--payload-factor", check_payload_factor, args.payload_factor)
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
+    tolerances = (None if args.tolerances is None
+                  else cli_option("--tolerances", tolerances_option, args.tolerances))
+    parts = cli_option("--resolution/--pin-diameter", parts_option, args.resolution,
+                       args.pin_diameter)
     cli_option("--workers", check_executor_options, None, args.workers)
     cli_option("--dask", check_executor_options, args.dask, None)
     check_output_dir("--out", args.out)
@@ -84,7 +88,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust, joints_apart=args.joints_apart,
-                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger)
+                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger,
+                                 tolerances=tolerances, parts=parts)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -94,6 +99,42 @@ def _optimize_command(args: argparse.Namespace) -> int:
     if not result.extra["grasp_found"]:
         return run.NO_GRASP_EXIT
     return 0 if report is None else verify_exit_code(report)
+
+
+# --tolerances' short keys and the object file's keys they stand for (envs.tolerances)
+TOLERANCE_OPTION_KEYS = {"length": "length_mm", "angle": "angle_deg", "spring": "spring_percent",
+                         "torque": "torque_percent"}
+
+
+def tolerances_option(text: str):
+    """``--tolerances length=MM,angle=DEG,spring=PCT,torque=PCT`` (any of them; the object
+    file's key names are accepted too): :class:`envs.tolerances.Tolerances`."""
+    from envs.tolerances import parse_tolerances
+
+    values = {}
+    for item in str(text).split(","):
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep:
+            raise ValueError(f"must be KEY=VALUE pairs (length=MM, angle=DEG, spring=PCT, "
+                             f"torque=PCT), got {item!r}")
+        try:
+            values[TOLERANCE_OPTION_KEYS.get(key, key)] = float(value)
+        except ValueError:
+            raise ValueError(f"{key} must be a number, got {value!r}") from None
+    return parse_tolerances(values, "tolerances")
+
+
+def parts_option(resolution: str | None, pin_diameter_mm: float | None):
+    """``--resolution MM[,DEG[,DIGITS]]`` (or ``none``: the design as found, unrounded) and
+    ``--pin-diameter MM``: :class:`optim.parts.options.PartOptions`."""
+    from optim.parts.options import PartOptions
+    from optim.parts.resolution import DEFAULT_RESOLUTION, parse_resolution
+
+    res = (DEFAULT_RESOLUTION if resolution is None else None if resolution.strip() == "none"
+           else parse_resolution(resolution))
+    pin = None if pin_diameter_mm is None else pin_diameter_mm * 1e-3
+    return PartOptions(res, pin)
 
 
 def placement_tolerance(text: str) -> float | tuple[float, float]:
@@ -297,6 +338,18 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="placement error the design must survive, +- metres: one number for "
                    "both ways, or ALONG,ACROSS the gripper's axis (default: the object file's "
                    "placement_tolerance_m, else none)")
+    p.add_argument("--tolerances", default=None, metavar="length=MM,angle=DEG,...",
+                   help="manufacturing tolerances the design must survive, +-: length=MM "
+                   "(finger length, width, joint offset), angle=DEG (rest angle), spring=PCT "
+                   "and torque=PCT, each a scenario dimension beside the object's (default: "
+                   "the object file's [gripper.tolerances], else none)")
+    p.add_argument("--resolution", default=None, metavar="MM[,DEG[,DIGITS]]",
+                   help="manufacturing resolution the reported design is rounded to before "
+                   "it is scored: lengths, angles, significant figures of torque and spring "
+                   "(default 0.1,0.1,3; 'none': unrounded)")
+    p.add_argument("--pin-diameter", type=float, default=None, metavar="MM",
+                   help="the joint pin's diameter (default: half the finger width, rounded "
+                   "down to the resolution)")
     p.add_argument("--robust", default=None, choices=ROBUST_MEASURES,
                    help="with scenarios (ranges in the object file, a placement tolerance): "
                    "the reward over them, the worst scenario's (default), the mean or the "

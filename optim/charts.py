@@ -153,12 +153,20 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     millimetres (every length in its title too), the centre held where the object sits."""
     from envs.solver import simulate
 
+    from .verdict import verdict_of
+
     obj = result.object
     d, m = result.best_design, result.best_metrics
     name = obj.get("name") or "the object"
-    title = (f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
+    governing = m.get("governing_scenario")
+    # with scenarios the numbers are the governing scenario's, the drawing the nominal grasp
+    where = (f"governing scenario {governing}: " if governing is not None else "")
+    banner = verdict_of(m, result.extra.get("scenario_rows")).banner
+    title = ((f"{banner}\n" if banner else "")
+             + f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
-             f"contact {m.get('contact_score', math.nan):.2f}, "
+             + (f"drawn: the nominal scenario; {where}" if governing is not None else "")
+             + f"contact {m.get('contact_score', math.nan):.2f}, "
              f"compression {m.get('peak_compression', math.nan):.3f}; fingers "
              f"{assembly_of(d['joint_offset_m'], d['finger_width_m'])[0]}\n"
              f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
@@ -179,6 +187,9 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     res = simulate(scene, result.best_design["torque_nm"], **member)
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
                        figsize=(6.0, 6.0), length_unit="mm")
+    if banner:
+        fig.suptitle(banner, color="white", backgroundcolor="tab:red", fontsize=9,
+                     fontweight="bold")
     return _save(fig, path)
 
 

@@ -24,7 +24,7 @@ def mesh_available() -> bool:
     import importlib.util
 
     return all(importlib.util.find_spec(m) is not None
-               for m in ("trimesh", "manifold3d", "shapely"))
+               for m in ("trimesh", "manifold3d"))
 
 
 def _rings(polygon) -> list[np.ndarray]:
