@@ -84,8 +84,10 @@ def write_part_dxf(part: FingerPart, path: str | Path, notes: list[str],
 def _dimensions(space, part: FingerPart, size: float) -> None:
     """Length (pivot to tip), width, the half-lap's length, the hole's diameter [mm]."""
     length, hw = part.length_m * MM, part.width_m / 2 * MM
+    # the drawing's own units (ezdxf's styles scale by 100 for metres in centimetres), a
+    # decimal point, two decimals: 0.01 mm
     style = {"dimtxt": 0.18 * size, "dimasz": 0.15 * size, "dimexe": 0.05 * size,
-             "dimexo": 0.05 * size}
+             "dimexo": 0.05 * size, "dimlfac": 1.0, "dimdsep": ord("."), "dimdec": 2}
     attribs: dict[str, Any] = {"layer": "DIMENSIONS"}
     space.add_linear_dim(base=(0.0, -hw - 1.2 * size), p1=(0.0, 0.0), p2=(length, 0.0),
                          override=style, dxfattribs=attribs).render()

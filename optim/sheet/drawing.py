@@ -173,9 +173,7 @@ def _scenario_cells(sheet: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
         header += ["payload [N]", "grip [N]"]
     cells = []
     for row in sheet["scenarios"]:
-        # the result's labels name quantities in SI ("dx_m+"); the sheet's table is in mm
-        label = " ".join(part.replace("_m", "", 1) if part[:-1].endswith("_m") else part
-                         for part in row["label"].split())
+        label = short_label(row["label"])
         line = [label, f"{row.get('dx_mm', 0.0):+.3g}", f"{row.get('dy_mm', 0.0):+.3g}",
                 f"{row.get('reward', math.nan):.4f}", "yes" if row.get("holds") else "no",
                 f"{row.get('peak_compression', math.nan):.3f}",
@@ -184,6 +182,20 @@ def _scenario_cells(sheet: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
             line += [_text(row.get("payload_n"), ".3g"), _text(row.get("grip_force_n"), ".3g")]
         cells.append(line)
     return header, cells
+
+
+# the drawing's short names of the scenario dimensions (the CSV keeps the result's labels)
+SHORT_NAMES = {"radius_m": "r", "youngs_modulus_pa": "E", "poisson_ratio": "nu",
+               "thickness_m": "t", "density_kg_m3": "rho", "friction_coefficient": "mu",
+               "dx_m": "dx", "dy_m": "dy", "finger_length_m": "l", "finger_width_m": "w",
+               "joint_offset_m": "d3", "rest_angle_rad": "θ0", "closing_moment": "M"}
+
+
+def short_label(label: str) -> str:
+    """A scenario's label with short names (``dx_m+ finger_length_m-`` -> ``dx+ l-``)."""
+    return " ".join(SHORT_NAMES.get(part[:-1], part[:-1]) + part[-1]
+                    if part[-1:] in "+-" and part[:-1] in SHORT_NAMES else part
+                    for part in label.split())
 
 
 def _text(value: Any, fmt: str) -> str:
@@ -241,7 +253,8 @@ def _draw_table(ax, sheet: dict[str, Any]) -> None:
              f"; the nominal and the {len(shown) - 1} lowest rewards of {total}, every row in "
              "the scenarios CSV")
     ax.set_title("scenarios: the design under every object, placement and build it was checked "
-                 f"for (dx across, dy along the axis{which})", fontsize=8)
+                 f"for\n(dx across, dy along the axis; M: the closing moment, torque up and "
+                 f"spring down{which})", fontsize=7)
 
 
 def _jaw_profiles(sheet: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:

@@ -77,9 +77,10 @@ def parts_section(design: dict[str, Any], obj: dict[str, Any], metrics: dict[str
         "faces_meet_deg": math.degrees(stops.faces_meet_rad),
         "smallest_grasp_angle_deg": math.degrees(stops.smallest_grasp_rad),
     }
-    # no grasp to judge by (a sheet without metrics): said as null, not as NaN
-    values = {k: None if isinstance(v, float) and math.isnan(v) else v
-              for k, v in values.items()}
+    # no grasp to judge by (a sheet without metrics): said as null, not as NaN; an angle of
+    # 1e-17 degrees is 0
+    values = {k: None if isinstance(v, float) and math.isnan(v) else
+              round(v, 9) + 0.0 if isinstance(v, float) else v for k, v in values.items()}
     same = jaws[0] == jaws[1]
     section = {
         "values": values, "pin_rule": pivot.pin_rule, "stacking": pivot.stacking,
