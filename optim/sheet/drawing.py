@@ -133,13 +133,13 @@ def _verdict_lines(sheet: dict[str, Any]) -> list[str]:
     grasp = sheet.get("grasp") or {}
     env = sheet.get("envelopes") or {}
     if grasp.get("scenario"):
+        total = verdict.get("scenarios", 0)
         lines.append(
             f"governing scenario (the lowest reward; its own grasp is stated): "
-            f"{grasp['scenario']}" + (
-                f"; over all {env['n_scenarios']} scenarios: holds in "
-                f"{env['scenarios_holding']}, largest friction needed "
-                f"{_text(env.get('max_required_friction'), '.3g')}, largest compression "
-                f"{_text(env.get('max_peak_compression'), '.3g')}" if env else ""))
+            f"{grasp['scenario']}; over all {total} scenarios: holds in "
+            f"{total - verdict.get('failing', 0)}, largest friction needed "
+            f"{_text(env.get('max_required_friction'), '.3g')}, largest compression "
+            f"{_text(env.get('max_peak_compression'), '.3g')}")
     return lines
 
 
