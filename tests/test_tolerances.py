@@ -117,3 +117,56 @@ def test_a_placement_tolerance_larger_than_the_object_is_refused_with_a_unit_hin
 
     with pytest.raises(ValueError, match="typed in millimetres"):
         DesignProblem(disk, scenarios=Scenarios.of({}, (0.002, 1.5)))
+
+
+@pytest.mark.slow
+def test_a_design_optimized_with_tolerances_holds_in_every_corner_as_built(tmp_path):
+    """The strawberry (placed within +-1.5 mm) built within +-0.1 mm, +-0.5 deg, spring +-10 %
+    and torque +-5 %: the optimized design, rebuilt from its build sheet's numbers at every
+    corner of the box (placement and build, 2^7) and evaluated independently through
+    evaluate_designs with the model that reported it, holds within the strain limit in each."""
+    import json
+
+    from cli.main import main
+
+    code = main(["optimize", "--object", "examples/objects/strawberry.toml", "--budget", "300",
+                 "--tolerances", "length=0.1,angle=0.5,spring=10,torque=5", "--no-progress",
+                 "--out", str(tmp_path)])
+    assert code == 0
+    sheet = json.loads((tmp_path / "cmaes_seed0_design.json").read_text())
+    result = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    rows = {r["quantity"]: r["value"] for r in sheet["rows"]}
+    cond = {r["quantity"]: r["value"] for r in sheet["conditions"]}
+    tol = sheet["checked"]["tolerances"]
+    spec = parse_object({"object": {"radius_m": rows["object_diameter_mm"] / 2e3,
+                                    "youngs_modulus_pa": sheet["object"]["youngs_modulus_pa"],
+                                    "poisson_ratio": sheet["object"]["poisson_ratio"],
+                                    "thickness_m": sheet["object"]["thickness_mm"] / 1e3,
+                                    "density_kg_m3": sheet["object"]["density_kg_m3"]}}, "f")
+    nominal = np.array([rows["finger_length_mm"] / 1e3, math.radians(rows["rest_angle_deg"]),
+                        rows["joint_offset_mm"] / 1e3, rows["finger_width_mm"] / 1e3,
+                        rows["torque_nm"], rows["object_distance_mm"] / 1e3])
+    designs, springs, offsets = [], [], []
+    for dx, dy, dl, dw, dd, da, closing in itertools.product((-1.0, 1.0), repeat=7):
+        row = nominal.copy()
+        row[COLUMN["finger_length_m"]] += dl * tol["length_mm"] / 1e3
+        row[COLUMN["finger_width_m"]] += dw * tol["length_mm"] / 1e3
+        if row[COLUMN["joint_offset_m"]] > 0.0:
+            row[COLUMN["joint_offset_m"]] = max(0.0, row[COLUMN["joint_offset_m"]]
+                                                + dd * tol["length_mm"] / 1e3)
+        row[COLUMN["rest_angle_rad"]] += da * math.radians(tol["angle_deg"])
+        row[COLUMN["torque_nm"]] *= 1.0 + closing * tol["torque_percent"] / 100
+        row[COLUMN["distance_m"]] += dy * cond["placement_tolerance_along_mm"] / 1e3
+        designs.append(row)
+        springs.append(rows["torsion_stiffness_nm_per_rad"]
+                       * (1.0 - closing * tol["spring_percent"] / 100))
+        offsets.append(dx * cond["placement_tolerance_across_mm"] / 1e3)
+    out = evaluate_designs(np.array(designs), spec.disk,
+                           torsion_stiffness_nm_per_rad=np.array(springs),
+                           offsets_x_m=np.array(offsets),
+                           strain_limits=cond["strain_limit"],
+                           friction_coefficients=cond["friction_coefficient"],
+                           payload_factors=2.0, **result["extra"]["reward_model"])
+    within = out["holds"] & (out["peak_compression"] <= cond["strain_limit"])
+    assert within.all(), f"{int((~within).sum())} of 128 corners do not hold"
+    assert sheet["verdict"]["holds"] and sheet["verdict"]["banner"] is None
