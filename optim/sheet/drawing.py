@@ -245,12 +245,14 @@ def _draw_table(ax, sheet: dict[str, Any]) -> None:
     ax.axis("off")
     header, cells = _scenario_cells(sheet)
     shown, total = _shown_scenarios(sheet)
+    first = 0.3 if any(len(c[0]) > 12 for c in cells) else 0.16  # the labels' column
     table = ax.table(cellText=[cells[i] for i in shown], colLabels=header,
+                     colWidths=[first] + [(1.0 - first) / (len(header) - 1)] * (len(header) - 1),
                      loc="upper center", bbox=[0.0, 0.0, 1.0, 1.0])
     table.auto_set_font_size(False)
     table.set_fontsize(6.5)
     which = ("" if len(shown) == total else
-             f"; the nominal and the {len(shown) - 1} lowest rewards of {total}, every row in "
+             f";\nthe nominal and the {len(shown) - 1} lowest rewards of {total}: every row in "
              "the scenarios CSV")
     ax.set_title("scenarios: the design under every object, placement and build it was checked "
                  f"for\n(dx across, dy along the axis; M: the closing moment, torque up and "
