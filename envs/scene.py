@@ -263,9 +263,9 @@ class SoftDisk:
         (:data:`~envs.model.defaults.DEFAULT_DENSITY_KG_M3`); soft tissue ~1060, fruit
         950-1050, silicone ~1100; the paper's presets are soft foam, 50
         (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`). A radius, thickness, modulus or
-        density outside the plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
-        most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
-        naming the likely unit.
+        density outside the plausible range of a graspable object
+        (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
+        gives a :class:`~envs.validation.UnitSlipWarning` naming the likely unit.
     """
 
     radius_m: float
