@@ -31,6 +31,7 @@ from .result import OptimResult, front_point
 __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure",
            "scenario_figure"]
 
+SCENARIO_LABELS_MAX = 30  # scenarios whose labels a scenario chart writes under its bars
 METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
                   "random": "tab:gray", "policy": "tab:purple"}
 
@@ -274,13 +275,19 @@ def scenario_figure(result: OptimResult, path: str | Path | None = None) -> Figu
     rows = result.extra.get("scenario_rows")
     if not rows:
         raise ValueError("the result has no scenario rows (a run without scenarios)")
-    labels = [r["scenario"]["label"].replace(" ", "\n") for r in rows]
+    from .sheet.drawing import short_label
+
+    many = len(rows) > SCENARIO_LABELS_MAX
+    # many scenarios: their indices (the scenarios CSV names them), not their labels
+    labels = [str(i) if many else short_label(r["scenario"]["label"]).replace(" ", "\n")
+              for i, r in enumerate(rows)]
     reward = np.array([r["reward"] for r in rows])
     compression = np.array([r["peak_compression"] for r in rows])
     limit = float(rows[0]["strain_limit"])
     ok = np.array([bool(r["holds"]) and r["peak_compression"] <= r["strain_limit"]
                    for r in rows])
-    fig = Figure(figsize=(max(6.0, 0.55 * len(rows) + 2.0), 5.2), layout="constrained")
+    fig = Figure(figsize=(min(max(6.0, 0.55 * len(rows) + 2.0), 14.0), 5.2),
+                 layout="constrained")
     ax, ax2 = fig.subplots(2, 1, sharex=True)
     x = np.arange(len(rows))
     ax.bar(x, reward, color=np.where(ok, "tab:blue", "tab:red"))
@@ -296,5 +303,8 @@ def scenario_figure(result: OptimResult, path: str | Path | None = None) -> Figu
     ax2.axhline(limit, color="tab:red", lw=1.0, label=f"strain limit {limit:g}")
     ax2.set_ylabel("peak compression")
     ax2.legend(fontsize=8)
-    ax2.set_xticks(x, labels, fontsize=6)
+    step = max(1, len(rows) // 36)
+    ax2.set_xticks(x[::step], labels[::step], fontsize=6)
+    if many:
+        ax2.set_xlabel("scenario (its row in the scenarios CSV; 0 the nominal)", fontsize=8)
     return _save(fig, path)
