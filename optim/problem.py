@@ -277,8 +277,9 @@ class DesignProblem:
         relative design space is scaled to), the joint spring is that of the nominal object for
         every scenario (one physical gripper), and every design is solved under every scenario
         in one batch (:func:`envs.scenarios.evaluate_scenarios`): its reward is the
-        ``robust`` measure, its metrics the worst case over the scenarios (a design is
-        feasible when it holds within the strain limit in every scenario).
+        ``robust`` measure, its metrics the governing (lowest reward) scenario's own row with
+        the envelopes over the scenarios under their own names (a design is feasible when it
+        holds within the strain limit in every scenario, ``holds_all``).
     robust
         The robust reward with scenarios: ``"worst"`` (default), ``"mean"`` or ``"cvar"``.
     joints_apart
@@ -457,8 +458,9 @@ class DesignProblem:
         """Evaluate physical designs (B, 6), (B, 10) or (B, 14) on this object without
         counting them.
 
-        With scenarios, one row per design: the robust reward and the worst case of each metric
-        over the scenarios (:class:`envs.scenarios.ScenarioTable` ``summary``). ``member``: a
+        With scenarios, one row per design: the robust reward, the governing scenario's own
+        row and the envelopes over the scenarios (:class:`envs.scenarios.ScenarioTable`
+        ``summary``). ``member``: a
         model member's keyword arguments instead of the problem's own (the finish's finer
         member). ``margin``: the payload judged this many times heavier (the search's
         :data:`SEARCH_PAYLOAD_MARGIN`).
