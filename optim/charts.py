@@ -154,7 +154,7 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     millimetres (every length in its title too), the centre held where the object sits."""
     from envs.solver import simulate
 
-    from .verdict import verdict_of
+    from .design_verdict import verdict_of
 
     obj = result.object
     d, m = result.best_design, result.best_metrics

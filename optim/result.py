@@ -16,9 +16,6 @@ __all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "t
            "front_point"]
 
 RESULT_VERSION = 1
-# exit code of a command whose reported design does not hold its object (`optimize`, `design`,
-# `verify`, `demo`; docs/cli.md's exit table)
-NO_GRASP_EXIT = 3
 
 
 def to_jsonable(value: Any) -> Any:
@@ -259,7 +256,7 @@ class OptimResult:
         """One line: method, seed, best reward and the reward's terms that give it, the
         contact score and peak compression of the grasp they come from (with scenarios the
         governing scenario's, named), evaluations, time."""
-        from .verdict import reward_terms
+        from .design_verdict import reward_terms
 
         m = self.best_metrics
         terms = " ".join(f"{name} {value:+.4f}" for name, value in reward_terms(m))

@@ -46,7 +46,7 @@ from .problem import (
     paper_design,
     paper_design_for,
 )
-from .result import NO_GRASP_EXIT, NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
+from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
 
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
            "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
@@ -59,6 +59,7 @@ DEMO_TOLERANCE_M = 0.002
 # spring's +-10 %, an actuator's torque +-5 % (envs.tolerances)
 DEMO_TOLERANCES = {"length_mm": 0.1, "angle_deg": 0.5, "spring_percent": 10.0,
                    "torque_percent": 5.0}
+NO_GRASP_EXIT = 3  # exit code of `optimize` when the best design found is not a grasp
 DEMO_BUDGET = 2000
 DEMO_VERIFY_TOP = 3
 DEMO_SCENE = "paper-r070"
@@ -175,7 +176,7 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
 def _print_scenarios(result: OptimResult, rows: list[dict[str, Any]]) -> None:
     """The scenario lines of the run's summary: the set, the nominal and governing rewards,
     the envelopes under their own names, and the verdict."""
-    from .verdict import verdict_of
+    from .design_verdict import verdict_of
 
     m = result.best_metrics
     worst = min(rows, key=lambda r: r["reward"])

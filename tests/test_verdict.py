@@ -13,10 +13,9 @@ import pytest
 
 from cli.main import main
 from optim import OptimResult
-from optim.result import NO_GRASP_EXIT
+from optim.design_verdict import verdict_of
 from optim.sheet import drawing_figure, write_build_sheet
-from optim.verdict import verdict_of
-from optim.verify import NOT_CONFIRMED_EXIT, verify_exit_code
+from optim.verify import NO_GRASP_EXIT, NOT_CONFIRMED_EXIT, verify_exit_code
 
 OBJ = {"name": "berry", "radius_m": 0.008, "thickness_m": 0.016, "youngs_modulus_pa": 4e5,
        "poisson_ratio": 0.45, "strain_limit": 0.08, "friction_coefficient": 0.5,

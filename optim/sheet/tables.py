@@ -255,8 +255,8 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         peak compression, required friction: the governing scenario's own row, named under
         ``scenario``); ``envelopes`` over the scenarios under their own names (the largest
         payload, friction needed and compression, the smallest contact score and margins);
-        ``verdict`` (:func:`optim.verdict.verdict_of`: whether it holds in every scenario, and
-        its ``banner`` when it does not); ``checked`` (the scenario set, placement, ranges,
+        ``verdict`` (:func:`optim.design_verdict.verdict_of`: whether it holds in every
+        scenario, and its ``banner`` when it does not); ``checked`` (the scenario set, placement, ranges,
         tolerances, resolution and load set); ``parts`` and ``part_rows`` (pivot, plate,
         half-lap, pad, spring and stops; each finger's part, :mod:`optim.parts`).
 
@@ -288,7 +288,7 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
                 for side, name in enumerate(FINGERS)}
     conditions = _conditions(obj, metrics, scenario_rows)
     jaw_entries = _jaws(jaws, ln, th0, d3, w, r)  # (a groove that does not fit: named first)
-    from optim.verdict import verdict_of
+    from optim.design_verdict import verdict_of
 
     from .parts import checked_section, part_rows, parts_section
 
