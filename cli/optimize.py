@@ -32,6 +32,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
         check_payload_factor,
         check_seed,
         check_strain_limit,
+        check_time_limit,
     )
     from optim.verify import MAX_TOP, verify_exit_code
 
@@ -44,6 +45,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                args.element or DEFAULT_ELEMENT)
     cli_option("--budget", check_budget, args.budget)
     cli_option("--seed", check_seed, args.seed)
+    if args.time is not None:
+        cli_option("--time", check_time_limit, args.time)
     if args.strain_limit is not None:
         cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     if args.friction is not None:
@@ -84,7 +87,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust, joints_apart=args.joints_apart,
-                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger)
+                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger,
+                                 time_s=args.time)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -249,6 +253,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
     p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
+    p.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                   help="wall seconds the search may take, beside --budget: it stops at "
+                   "whichever ends first (the finish and the files come after it)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default="out",
                    help="output folder, created if its parent exists (default %(default)s)")

@@ -43,6 +43,7 @@ from .problem import (
     check_payload_factor,
     check_seed,
     check_strain_limit,
+    check_time_limit,
     paper_design,
     paper_design_for,
 )
@@ -315,6 +316,7 @@ def run_optimize(
     joints_apart: bool = False,
     jaw: str | None = None,
     jaw_per_finger: bool | None = None,
+    time_s: float | None = None,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -342,6 +344,9 @@ def run_optimize(
     straight bars. The result's designs then carry the jaw fields by name
     (:data:`envs.model.jaw.JAW_FIELDS`, ``left_...`` per finger) and its extra records both.
     The design policy designs straight jaws, or any shaped jaws alike on both fingers.
+
+    ``time_s``: the search's wall-time limit [s] beside the budget (whichever ends first; the
+    finish, the charts and the files come after it). ``None``: the budget alone.
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -376,6 +381,7 @@ def run_optimize(
                                       payload_factor=payload_factor, jaw=jaw,
                                       jaw_per_finger=jaw_per_finger)
     budget, seed = check_budget(budget), check_seed(seed)
+    time_s = None if time_s is None else check_time_limit(time_s)
     check_joints_apart(method, joints_apart)
     check_policy_jaw(method, settings)
     if method == "policy":
@@ -392,6 +398,7 @@ def run_optimize(
             problem = DesignProblem.from_scene(target, **common)
         else:
             problem = DesignProblem(target, name=obj.name, **common)
+        problem.time_limit_s = time_s
         try:
             with warnings.catch_warnings():
                 # said once below, with the files written
