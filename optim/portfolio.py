@@ -12,6 +12,9 @@ differ several-fold in reward. The portfolio spends its budget so that no single
    in the normalized box), and, with shaped jaws, a start confined to straight bars (from the
    best screened straight bar): the grooved search then never ends below a straight search
    that had its share.
+   With shaped jaws the search reads the groove's position as an offset from where the
+   object meets the finger (:data:`ALIGN_REACH_R` radii either way), so that a sampled groove
+   lies under the object, not elsewhere on the finger.
 3. **Race**: every live start is a CMA-ES (step :data:`SIGMA0`) asked for a population each
    round; the rounds' populations are evaluated in one batch. At :data:`HALVING_SHARES` of the
    budget the worse half of the live starts (by their best reward) stop, so the budget goes to
@@ -47,6 +50,9 @@ STRAIGHT_SHARE = 0.25
 STRAIGHT_LABEL = "straight bars"
 # CMA-ES's initial step in the normalized box [-1, 1]^n from a screened start
 SIGMA0 = 0.25
+# with shaped jaws the search puts the groove's centre within this many object radii of
+# where the object meets the finger (envs.design_space.DesignBounds.aligned)
+ALIGN_REACH_R = 1.0
 # starts closer than this in every normalized coordinate to a better one are the same basin
 START_SPACING = 0.3
 # shares of the budget left after the screen, after which the worse half of the live starts
@@ -137,6 +143,12 @@ class _Portfolio:
         self.starts: list[_Start] = []
         self.spare: list[np.ndarray] = []
 
+    def to_box(self, y: np.ndarray) -> np.ndarray:
+        """The problem's normalized rows of search coordinates ``y``: with shaped jaws the
+        groove's position is searched as an offset from where the object meets the finger
+        (:meth:`envs.design_space.DesignBounds.aligned`, :data:`ALIGN_REACH_R`)."""
+        return self.problem.bounds.aligned(y, ALIGN_REACH_R)
+
     def add(self, label: str, x0: np.ndarray, free: np.ndarray | None = None) -> None:
         """A new start at ``x0`` (searching the coordinates ``free``; default all)."""
         n = self.problem.n_var
@@ -172,7 +184,7 @@ class _Portfolio:
         problem = self.problem
         live = [s for s in self.starts if s.live]
         asked = [(s, s.es.ask()) for s in live]
-        rows = np.concatenate([s.full(xs) for s, xs in asked])
+        rows = self.to_box(np.concatenate([s.full(xs) for s, xs in asked]))
         n = min(len(rows), problem.remaining)
         if n <= 0:
             return False
@@ -248,8 +260,8 @@ def run_portfolio(
         raise ValueError(f"popsize must be None or an integer >= 2, got {popsize!r}")
     problem.start(budget)
     race = _Portfolio(problem, seed, float(sigma0), popsize)
-    x = _screen(problem, budget, seed)
-    reward = problem.evaluate(x[:problem.remaining])["reward"]
+    x = _screen(problem, budget, seed)  # in search coordinates (_Portfolio.to_box)
+    reward = problem.evaluate(race.to_box(x[:problem.remaining]))["reward"]
     x = x[:len(reward)]
     order = np.argsort(-reward, kind="stable")
     straight = _straight_columns(problem)

@@ -40,6 +40,7 @@ def test_time_limit_refused_by_name(bad):
 
 def test_time_limit_ends_a_run_after_its_batch():
     problem = make_problem()
+    problem.evaluate(np.zeros((1, 6)))  # loads (or compiles) the kernels outside the clock
     problem.time_limit_s = 0.3
     t0 = time.perf_counter()
     result = optimize("random", problem, budget=10**6, seed=0, batch_size=20)
@@ -141,3 +142,60 @@ def test_verdict_undecided_for_one_start():
     assert v["verdict"] == UNDECIDED and "one start (cmaes)" in v["message"]
     one = replace(_result(False, [{"label": "start 1", "holds": False}]))
     assert search_verdict(one)["verdict"] == UNDECIDED
+
+
+# --- the search's groove coordinates ----------------------------------------------------------
+
+
+def test_touch_foot_matches_a_closing_finger():
+    """The closed form against a finger closed in small steps from rest: the first angle at
+    which the straight face comes within one radius of the centre, and the foot there."""
+    from envs.design_space import DesignBounds, touch_foot_r
+    from envs.scene import design_from_relative
+
+    rng = np.random.default_rng(4)
+    bounds = DesignBounds()
+    rel = bounds.relative(rng.uniform(-1, 1, (40, 6)))
+    feet = touch_foot_r(rel)
+    si = design_from_relative(rel, 1.0, 1.0)
+    for row, foot in zip(si, feet, strict=True):
+        length, rest, offset, width, _, distance = row
+        centre, joint = np.array([0.0, distance + 1.0]), np.array([offset, 0.0])
+        for theta in np.arange(rest, 0.0, -1e-5):
+            e = np.array([np.sin(theta), np.cos(theta)])
+            n = np.array([-np.cos(theta), np.sin(theta)])
+            if n @ (centre - joint) - width / 2 <= 1.0:  # the face line meets the disk
+                assert foot == pytest.approx(e @ (centre - joint), abs=2e-4)
+                break
+        else:
+            pytest.fail("the face never met the disk")
+
+
+def test_aligned_coordinates_put_the_groove_at_the_foot():
+    from envs.design_space import DesignBounds, touch_foot_r
+
+    bounds = DesignBounds(jaw="any")
+    rng = np.random.default_rng(5)
+    y = rng.uniform(-1, 1, (200, bounds.n_var))
+    k = bounds.fields.index("jaw_position")
+    y[:, k] = 0.0  # no offset: the groove's centre at the foot, where the span allows
+    x = bounds.aligned(y, reach_r=1.0)
+    assert np.all(np.abs(x) <= 1.0)
+    np.testing.assert_array_equal(np.delete(x, k, axis=1), np.delete(y, k, axis=1))
+    si = bounds.scale(x, envs_disk())
+    r = envs_disk().radius_m
+    foot = touch_foot_r(bounds.relative(x)) * r
+    centre = si[:, 9]
+    inside = (x[:, k] > -1.0) & (x[:, k] < 1.0)
+    assert inside.mean() > 0.5
+    np.testing.assert_allclose(centre[inside], foot[inside], rtol=1e-9, atol=1e-12)
+    # straight jaws pass whole
+    straight = DesignBounds()
+    z = rng.uniform(-1, 1, (5, 6))
+    np.testing.assert_array_equal(straight.aligned(z), z)
+
+
+def envs_disk():
+    from envs.scene import Scene
+
+    return Scene.preset(SCENE).disk
