@@ -523,6 +523,21 @@ class DesignBounds:
             a[..., k] = 2.0 * np.nan_to_num(share, nan=0.5) - 1.0
         return a
 
+    def unaligned(self, action, reach_r: float = 1.0) -> np.ndarray:
+        """The inverse of :meth:`aligned` (search coordinates of this box's actions), where
+        the groove's centre lies within ``reach_r`` radii of the touch foot; farther grooves
+        are brought to that reach."""
+        a = np.array(action, dtype=np.float64)
+        self._check_width(a, self.n_var, "action")
+        if not self._fingers():
+            return a
+        rel = self.relative(a)
+        foot = touch_foot_r(rel)
+        centres = self._jaws_si(rel, np.ones(rel.shape[:-1]))
+        for cols, jaw in zip(self._fingers(), centres, strict=True):
+            a[..., cols[_POSITION]] = np.clip((jaw[..., 3] - foot) / reach_r, -1.0, 1.0)
+        return a
+
     def sample(self, rng: np.random.Generator, size: int, disks) -> np.ndarray:
         """Draw ``size`` SI designs uniformly in the box for the object(s), shape (size,
         :attr:`design_width`)."""

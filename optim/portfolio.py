@@ -55,6 +55,11 @@ SIGMA0 = 0.25
 ALIGN_REACH_R = 1.0
 # starts closer than this in every normalized coordinate to a better one are the same basin
 START_SPACING = 0.3
+# the nominal screen (run_portfolio's screen="nominal"): this many times the robust screen's
+# designs on the nominal scenario alone, then the best few per start judged robustly
+NOMINAL_SCREEN_FACTOR = 3
+POOL_PER_START = 3
+SCREENS = ("robust", "nominal")
 # shares of the budget left after the screen, after which the worse half of the live starts
 # stop (the straight bars' start is spared the first: it converges in its own smaller space)
 HALVING_SHARES = (0.5, 0.75)
@@ -105,9 +110,15 @@ def _straight_columns(problem: DesignProblem) -> dict[int, float]:
             if name == depth or name == "left_" + depth}
 
 
-def _screen(problem: DesignProblem, budget: int, seed: int) -> np.ndarray:
-    """The screen's points: Sobol, a :data:`STRAIGHT_SHARE` of them made straight bars."""
-    n = min(budget, max(MIN_SCREEN_PER_VAR * problem.n_var, round(SCREEN_SHARE * budget)))
+def _screen_size(problem: DesignProblem, budget: int) -> int:
+    """Designs the robust screen judges: :data:`SCREEN_SHARE` of the budget, at least
+    :data:`MIN_SCREEN_PER_VAR` a coordinate, at most the budget."""
+    return min(budget, max(MIN_SCREEN_PER_VAR * problem.n_var, round(SCREEN_SHARE * budget)))
+
+
+def _screen(problem: DesignProblem, n: int, seed: int) -> np.ndarray:
+    """``n`` screen points in search coordinates: Sobol, a :data:`STRAIGHT_SHARE` of them
+    made straight bars when the jaws are shaped."""
     x = _sobol(n, problem.n_var, seed)
     straight = _straight_columns(problem)
     if straight:
@@ -216,6 +227,66 @@ class _Portfolio:
             s.live = spare_straight and s.label == STRAIGHT_LABEL
 
 
+def _screened_pool(problem: DesignProblem, race: _Portfolio, budget: int, seed: int,
+                   screen: str, policy: bool, starts: int) -> tuple[np.ndarray, np.ndarray]:
+    """The screen: designs in search coordinates and their robust rewards, from which the
+    starts are chosen (the shipped policy's candidates first, with ``policy``).
+
+    The nominal screen judges ``K`` times the robust screen's designs on the nominal scenario
+    for the same charge (``K`` scenarios), then robustly the best :data:`POOL_PER_START` per
+    start of them, apart from each other, and as many of its best straight bars."""
+    n = _screen_size(problem, budget)
+    nominal = screen == "nominal" and problem.scenario_count > 1
+    y = _screen(problem, n * problem.scenario_count if nominal else n, seed)
+    if policy:
+        from .rl import policy_starts
+
+        y = np.concatenate([problem.bounds.unaligned(policy_starts(problem), ALIGN_REACH_R),
+                            y])
+    if nominal:
+        pool = POOL_PER_START * (starts + 1)
+        y = y[:problem.scenario_count * max(problem.remaining - pool, 1)]
+        judged = problem.screen(race.to_box(y))["reward"]
+        order = np.argsort(-judged, kind="stable")
+        keep = _apart(y, order, START_SPACING / 2, POOL_PER_START * starts, [])
+        straight = _straight_rows(problem, y)
+        keep += [i for i in order.tolist() if straight[i] and i not in keep][:POOL_PER_START]
+        y = y[sorted(keep)]
+    reward = problem.evaluate(race.to_box(y[:problem.remaining]))["reward"]
+    return y[:len(reward)], reward
+
+
+def _straight_rows(problem: DesignProblem, y: np.ndarray) -> np.ndarray:
+    """Which rows of search coordinates are straight bars (all True for straight jaws)."""
+    straight = _straight_columns(problem)
+    if not straight:
+        return np.ones(len(y), dtype=bool)
+    return np.all([y[:, k] == v for k, v in straight.items()], axis=0)
+
+
+def _seat_starts(problem: DesignProblem, race: _Portfolio, y: np.ndarray, reward: np.ndarray,
+                 starts: int) -> None:
+    """The race's starts from the screened pool: the best straight bar (with shaped jaws,
+    confined to straight bars), then the best designs apart from each other; the rest of the
+    pool, best first, is left for restarts."""
+    order = np.argsort(-reward, kind="stable")
+    straight = _straight_columns(problem)
+    taken: list[int] = []
+    if straight and starts > 1 and len(reward):
+        is_straight = _straight_rows(problem, y)
+        best = [i for i in order.tolist() if is_straight[i]]
+        if best:
+            free = np.ones(problem.n_var, dtype=bool)
+            free[list(straight)] = False
+            race.add(STRAIGHT_LABEL, y[best[0]], free)
+            taken.append(best[0])
+    picked = _apart(y, order, START_SPACING, starts - len(taken), [y[i] for i in taken])
+    for j, i in enumerate(picked):
+        race.add(f"start {j + 1}", y[i])
+    taken += picked
+    race.spare = [y[i] for i in order.tolist() if i not in taken]
+
+
 def run_portfolio(
     problem: DesignProblem,
     *,
@@ -224,6 +295,8 @@ def run_portfolio(
     starts: int = DEFAULT_STARTS,
     sigma0: float = SIGMA0,
     popsize: int | None = None,
+    policy: bool = True,
+    screen: str = "robust",
 ) -> OptimResult:
     """Maximize the reward with a portfolio of CMA-ES starts from a screened sample of the box.
 
@@ -241,6 +314,16 @@ def run_portfolio(
         Each start's initial step in the normalized box, in (0, 2].
     popsize
         Each start's population (default pycma's ``4 + floor(3 ln n)``), >= 2.
+    policy
+        Screen the shipped design policy's candidate designs too, where one designs in the
+        problem's box and observes its object (:func:`optim.rl.policy_starts`; a few
+        evaluations): they become starts only when they screen better than the sample.
+    screen
+        ``"robust"``: the screen judges each design as the search does (every scenario);
+        ``"nominal"``: on the nominal scenario alone, at a ninth of the cost with 9 scenarios
+        (:meth:`~optim.problem.DesignProblem.screen`), :data:`NOMINAL_SCREEN_FACTOR` times as
+        many designs, of which the best :data:`POOL_PER_START` per start, apart from each
+        other, are then judged robustly.
 
     Returns
     -------
@@ -258,26 +341,14 @@ def run_portfolio(
     if popsize is not None and (isinstance(popsize, bool) or int(popsize) != popsize
                                 or popsize < 2):
         raise ValueError(f"popsize must be None or an integer >= 2, got {popsize!r}")
+    if not isinstance(policy, bool):
+        raise ValueError(f"policy must be True or False, got {policy!r}")
+    if screen not in SCREENS:
+        raise ValueError(f"screen must be one of {SCREENS}, got {screen!r}")
     problem.start(budget)
     race = _Portfolio(problem, seed, float(sigma0), popsize)
-    x = _screen(problem, budget, seed)  # in search coordinates (_Portfolio.to_box)
-    reward = problem.evaluate(race.to_box(x[:problem.remaining]))["reward"]
-    x = x[:len(reward)]
-    order = np.argsort(-reward, kind="stable")
-    straight = _straight_columns(problem)
-    taken: list[np.ndarray] = []
-    if straight and starts > 1 and len(reward):
-        is_straight = np.all([x[:, k] == v for k, v in straight.items()], axis=0)
-        best = [i for i in order.tolist() if is_straight[i]]
-        if best:
-            free = np.ones(problem.n_var, dtype=bool)
-            free[list(straight)] = False
-            race.add(STRAIGHT_LABEL, x[best[0]], free)
-            taken.append(x[best[0]])
-    for j, i in enumerate(_apart(x, order, START_SPACING, starts - len(taken), taken)):
-        race.add(f"start {j + 1}", x[i])
-        taken.append(x[i])
-    race.spare = [x[i] for i in order.tolist() if not any(x[i] is t for t in taken)]
+    y, reward = _screened_pool(problem, race, budget, seed, screen, policy, starts)
+    _seat_starts(problem, race, y, reward, starts)
     screened = problem.n_evaluations
     checkpoints = [screened + (budget - screened) * share for share in HALVING_SHARES]
     while race.starts and race.round():
@@ -286,8 +357,9 @@ def run_portfolio(
             checkpoints.pop(0)
     return problem.result(
         "portfolio", seed,
-        options={"starts": int(starts), "sigma0": float(sigma0), "popsize": popsize},
-        extra={"screened": int(len(reward)),
+        options={"starts": int(starts), "sigma0": float(sigma0), "popsize": popsize,
+                 "policy": bool(policy), "screen": screen},
+        extra={"screened": int(len(reward)), "screen": screen,
                "starts": [{"label": s.label, "best_reward": s.best_reward,
                            "holds": s.best_feasible, "evaluations": s.evaluations,
                            "restarts": s.restarts} for s in race.starts],

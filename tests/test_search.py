@@ -199,3 +199,58 @@ def envs_disk():
     from envs.scene import Scene
 
     return Scene.preset(SCENE).disk
+
+
+def test_unaligned_inverts_aligned_within_reach():
+    from envs.design_space import DesignBounds
+
+    bounds = DesignBounds(jaw="any")
+    rng = np.random.default_rng(6)
+    y = rng.uniform(-1, 1, (300, bounds.n_var))
+    x = bounds.aligned(y, reach_r=0.7)
+    k = bounds.fields.index("jaw_position")
+    inside = (x[:, k] > -1.0) & (x[:, k] < 1.0)
+    back = bounds.unaligned(x, reach_r=0.7)
+    np.testing.assert_allclose(back[inside], y[inside], atol=1e-9)
+
+
+def test_policy_starts_for_shaped_jaws():
+    from optim.rl import policy_starts
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, jaw="any")
+    rows = policy_starts(problem)
+    assert rows.shape == (3, problem.n_var) and np.all(np.abs(rows) <= 1.0)
+    depth = problem.bounds.fields.index("jaw_depth_w")
+    assert rows[2, depth] == -1.0  # the straight policy's gripper as a straight bar
+    # no shipped policy designs per-finger grooves
+    per_finger = DesignProblem.from_scene(SCENE, 0.15, jaw="any", jaw_per_finger=True)
+    assert policy_starts(per_finger).shape == (0, per_finger.n_var)
+
+
+def test_nominal_screen_is_the_nominal_scenario_at_its_share_of_the_cost():
+    from envs.scenarios import Scenarios
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, scenarios=Scenarios.of({}, 0.002))
+    assert problem.scenario_count == 9
+    rng = np.random.default_rng(7)
+    x = rng.uniform(-1, 1, (20, 6))
+    problem.start(100)
+    out = problem.screen(x)
+    assert problem.n_evaluations == 3  # ceil(20 / 9)
+    assert problem.top_designs() == [] and problem.best_reward == -math.inf
+    robust = problem.evaluate(x)
+    # the search's payload margin on both: the nominal scenario of the robust table
+    table = problem.evaluate_scenarios(problem.to_physical(x), margin=1.1)
+    np.testing.assert_allclose(out["reward"], table.per_scenario["reward"][:, 0], atol=1e-12)
+    assert np.all(robust["reward"] <= out["reward"] + 1e-12)
+
+
+def test_portfolio_with_a_nominal_screen_spends_its_budget():
+    from envs.scenarios import Scenarios
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, payload_factor=0.0,
+                                       scenarios=Scenarios.of({}, 0.002))
+    result = optimize("portfolio", problem, budget=120, seed=0, screen="nominal")
+    assert result.n_evaluations == 120
+    assert result.extra["screen"] == "nominal"
+    assert result.extra["screened"] <= 3 * 7
