@@ -32,7 +32,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
         check_payload_factor,
         check_seed,
         check_strain_limit,
+        check_time_limit,
     )
+    from optim.verdict import verdict_exit_code
     from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
@@ -44,6 +46,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
                args.element or DEFAULT_ELEMENT)
     cli_option("--budget", check_budget, args.budget)
     cli_option("--seed", check_seed, args.seed)
+    if args.time is not None:
+        cli_option("--time", check_time_limit, args.time)
     if args.strain_limit is not None:
         cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     if args.friction is not None:
@@ -89,7 +93,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust, joints_apart=args.joints_apart,
                                  jaw=args.jaw, jaw_per_finger=args.jaw_per_finger,
-                                 tolerances=tolerances, parts=parts)
+                                 tolerances=tolerances, parts=parts, time_s=args.time)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -97,7 +101,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
-        return run.NO_GRASP_EXIT
+        return verdict_exit_code(result.extra["verdict"])
     return 0 if report is None else verify_exit_code(report)
 
 
@@ -290,6 +294,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
     p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
+    p.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                   help="wall seconds the search may take, beside --budget: it stops at "
+                   "whichever ends first (the finish and the files come after it)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default="out",
                    help="output folder, created if its parent exists (default %(default)s)")

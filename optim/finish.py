@@ -81,6 +81,20 @@ def _full_check(problem, designs: np.ndarray, order: np.ndarray, scorer: dict[st
     return int(first[best]), {k: v[best:best + 1] for k, v in full.items()}
 
 
+def _candidates(result: OptimResult, top: int) -> list[dict[str, Any]]:
+    """The designs the finish re-scores: the run's ``top`` best distinct designs, then the
+    best design of each of its independent starts (``extra["start_designs"]``, a portfolio's)
+    that is not among them: a start's basin may be the one the finer member prefers."""
+    picks = list(result.top_designs)[:top]
+    seen = {tuple(design_row(p["design"]).tolist()) for p in picks}
+    for pick in result.extra.get("start_designs", ()):
+        key = tuple(design_row(pick["design"]).tolist())
+        if key not in seen:
+            seen.add(key)
+            picks.append({"design": dict(pick["design"]), "reward": float(pick["reward"])})
+    return picks
+
+
 def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = None,
                   top: int = FINISH_TOP, resolution=None) -> OptimResult:
     """The run's best distinct designs re-scored by a finer member; the best of them reported.
@@ -117,7 +131,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     member = dict(RANKING_MEMBER if member is None else member)
     own = problem.model.kwargs()
     finer = _finer(member, own)
-    picks = _rounded_picks(list(result.top_designs)[:top], resolution)
+    picks = _rounded_picks(_candidates(result, top), resolution)
     if not picks or (not finer and resolution is None):
         return replace(result, extra={**result.extra, "reward_model": to_jsonable(own)})
     scorer = member if finer else own
@@ -127,12 +141,16 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     order = np.argsort(-out["reward"], kind="stable")
     best, full = _full_check(problem, designs, order, scorer)
     reward = float(out["reward"][best] if full is None else full["reward"][0])
+    holds = problem.feasible(out)
+    if full is not None:
+        holds[best] = bool(full["holds_all"][0])
     # the reported design first, with its reward as reported (on every corner where checked)
     ranked = tuple({"design": picks[i]["design"],
                     "reward": reward if i == best else float(out["reward"][i]),
-                    "search_reward": float(picks[i]["reward"])}
+                    "search_reward": float(picks[i]["reward"]), "holds": bool(holds[i])}
                    for i in [best, *(j for j in order.tolist() if j != best)])
     extra = {**result.extra,
+             "search_grasp_found": bool(result.extra.get("grasp_found")),
              "reward_model": to_jsonable(scorer),
              "search_model": to_jsonable(own),
              "search_reward": float(picks[best]["reward"]),

@@ -63,6 +63,7 @@ __all__ = [
     "DesignProblem",
     "check_budget",
     "check_seed",
+    "check_time_limit",
     "pareto_mask",
     "paper_design",
     "paper_design_for",
@@ -81,6 +82,7 @@ SEARCH_PAYLOAD_MARGIN = 1.1
 # process): a round trip to a spawned worker costs about 6 ms, so 9 designs in 2 tasks ran at
 # 600 designs/s against 2600 in process, and 64-row tasks reach 80-90 % of the in-process rate.
 MIN_CHUNK_SIZE = 64
+MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
 DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design box's width
 # metric keys copied into OptimResult.best_metrics
@@ -133,6 +135,17 @@ def check_budget(budget: Any) -> int:
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
         raise ValueError(f"budget must be an integer >= 1 (evaluations), got {budget!r}")
     return int(budget)
+
+
+def check_time_limit(time_limit_s: Any) -> float:
+    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`].
+
+    Raises
+    ------
+    ValueError
+        Naming the value and the allowed range.
+    """
+    return check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
 
 
 def check_seed(seed: Any) -> int:
@@ -358,6 +371,7 @@ class DesignProblem:
         self.chunk_size = None if chunk_size is None else int(chunk_size)
         self.progress = progress
         self.name = name
+        self.time_limit_s: float | None = None
         self.start(None)
 
     @property
@@ -406,9 +420,17 @@ class DesignProblem:
 
     # --- bookkeeping --------------------------------------------------------------------------
 
-    def start(self, budget: int | None) -> None:
-        """Reset the count, best, history, archive and clock; set the budget (None: unlimited)."""
+    def start(self, budget: int | None, time_limit_s: float | None = None) -> None:
+        """Reset the count, best, history, archive and clock; set the budget (None: unlimited).
+
+        ``time_limit_s``: wall seconds the run may take from now (default
+        :attr:`time_limit_s`, set by whoever hands the problem to a driver; ``None``: no
+        limit). Once it has passed, :attr:`remaining` is 0, so every driver stops after the
+        batch under way (a batch is never cut short).
+        """
         self.budget = None if budget is None else check_budget(budget)
+        if time_limit_s is not None:
+            self.time_limit_s = check_time_limit(time_limit_s)
         self.n_evaluations = 0
         self.best_reward = -math.inf
         self.best_x: np.ndarray | None = None
@@ -421,10 +443,18 @@ class DesignProblem:
 
     @property
     def remaining(self) -> int:
-        """Evaluations left in the budget (a large number when unlimited)."""
+        """Evaluations left in the budget (a large number when unlimited); 0 once the time
+        limit (:attr:`time_limit_s`) has passed."""
+        if self.out_of_time:
+            return 0
         if self.budget is None:
             return 2**62
         return self.budget - self.n_evaluations
+
+    @property
+    def out_of_time(self) -> bool:
+        """Whether the run's time limit has passed (never without one)."""
+        return self.time_limit_s is not None and self.elapsed_s >= self.time_limit_s
 
     @property
     def elapsed_s(self) -> float:
@@ -536,6 +566,52 @@ class DesignProblem:
             return {k: np.zeros((0, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
         out = self.evaluate_physical(self.bounds.scale(x, self.disk), margin=SEARCH_PAYLOAD_MARGIN)
         self._record(x, out)
+        return out
+
+    @property
+    def scenario_count(self) -> int:
+        """Scenarios every evaluation solves (1 without scenarios)."""
+        return 1 if self.scenarios is None else len(self.scenarios.scenarios())
+
+    def screen_cost(self, rows: int) -> int:
+        """Evaluations :meth:`screen` charges for ``rows`` designs: a ninth of one each with 9
+        scenarios, rounded up over the batch."""
+        return math.ceil(rows / self.scenario_count)
+
+    def screen(self, x: Any) -> dict[str, np.ndarray]:
+        """Evaluate normalized designs on the nominal scenario alone (the search's payload
+        margin as in :meth:`evaluate`): a cheap first look, charged :meth:`screen_cost`
+        evaluations, not recorded as the run's designs (its best, archive and top designs
+        hold robust judgements only).
+
+        Raises
+        ------
+        BudgetExhaustedError
+            If the charge exceeds :attr:`remaining`.
+        """
+        x = np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0)
+        if x.ndim != 2 or x.shape[1] != self.n_var:
+            raise ValueError(f"x must have shape (B, {self.n_var}), got {x.shape}")
+        cost = self.screen_cost(x.shape[0])
+        if cost > self.remaining:
+            raise BudgetExhaustedError(
+                f"a screen of {x.shape[0]} designs costs {cost} evaluations, {self.remaining} "
+                "left in the budget")
+        designs = self.bounds.scale(x, self.disk)
+        out = evaluate_designs(
+            designs, self.disk, strain_limits=self.strain_limit,
+            friction_coefficients=self.friction_coefficient,
+            payload_factors=self.payload_factor * SEARCH_PAYLOAD_MARGIN,
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            weights=self.weights, executor=self.executor, **self.model.kwargs(),
+            chunk_size=self._chunk_size_for(designs.shape[0]))
+        self.n_evaluations += cost
+        if math.isfinite(self.best_reward):  # (the history holds robust judgements only)
+            self.history_evaluations.append(self.n_evaluations)
+            self.history_best_reward.append(self.best_reward)
+            self.history_wall_time_s.append(self.elapsed_s)
+        if self.progress is not None:
+            self.progress(cost, self.best_reward)
         return out
 
     def add_external_evaluations(self, count: int) -> None:
@@ -682,6 +758,8 @@ class DesignProblem:
             options=to_jsonable(dict(options or {})),
             executor=_describe_executor(self.executor),
             extra=to_jsonable({**(extra or {}), "grasp_found": found,
+                               "time_limit_s": self.time_limit_s,
+                               "out_of_time": self.out_of_time,
                                "joints_apart": self.bounds.joints_apart,
                                "jaw": self.bounds.jaw,
                                "jaw_per_finger": self.bounds.jaw_per_finger,

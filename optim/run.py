@@ -43,15 +43,17 @@ from .problem import (
     check_payload_factor,
     check_seed,
     check_strain_limit,
+    check_time_limit,
     paper_design,
     paper_design_for,
 )
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
+from .verdict import NO_GRASP_EXIT, UNDECIDED_EXIT, search_verdict
 
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
            "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
            "check_observable", "jaw_settings", "check_policy_jaw", "NO_GRASP_EXIT",
-           "DEMO_SCENE"]
+           "UNDECIDED_EXIT", "DEMO_SCENE"]
 
 # the demo's placement tolerance, +- both ways [m] (3 % of the disk's radius)
 DEMO_TOLERANCE_M = 0.002
@@ -59,7 +61,6 @@ DEMO_TOLERANCE_M = 0.002
 # spring's +-10 %, an actuator's torque +-5 % (envs.tolerances)
 DEMO_TOLERANCES = {"length_mm": 0.1, "angle_deg": 0.5, "spring_percent": 10.0,
                    "torque_percent": 5.0}
-NO_GRASP_EXIT = 3  # exit code of `optimize` when the best design found is not a grasp
 DEMO_BUDGET = 2000
 DEMO_VERIFY_TOP = 3
 DEMO_SCENE = "paper-r070"
@@ -355,6 +356,7 @@ def run_optimize(
     jaw_per_finger: bool | None = None,
     tolerances=None,
     parts=None,
+    time_s: float | None = None,
     **options: Any,
 ) -> tuple[OptimResult, dict[str, Path]]:
     """Run one method on an object and write its files (what ``optimize`` does).
@@ -390,11 +392,16 @@ def run_optimize(
     the search, the designs before the finish scores them: the sheet states the rounded design,
     the one scored) and the parts' options (pin diameter); default the defaults.
 
+    ``time_s``: the search's wall-time limit [s] beside the budget (whichever ends first; the
+    finish, the charts and the files come after it). ``None``: the budget alone.
+
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
     grasp that holds the object (valid, converged, both fingers touching, the friction it
     needs within the object's); when it is not, a warning goes to stderr (and ``psm-grasp
-    optimize`` exits with :data:`NO_GRASP_EXIT`).
+    optimize`` exits with :data:`NO_GRASP_EXIT` when the run's independent starts agree that
+    nothing holds, :data:`UNDECIDED_EXIT` when they cannot say: ``extra["verdict"]``,
+    :func:`optim.verdict.search_verdict`).
 
     Raises
     ------
@@ -424,6 +431,7 @@ def run_optimize(
                                       jaw_per_finger=jaw_per_finger, tolerances=tolerances)
     parts = check_parts(parts)
     budget, seed = check_budget(budget), check_seed(seed)
+    time_s = None if time_s is None else check_time_limit(time_s)
     check_joints_apart(method, joints_apart)
     check_policy_jaw(method, settings)
     if method == "policy":
@@ -441,6 +449,7 @@ def run_optimize(
         else:
             problem = DesignProblem(target, name=obj.name, **common)
         _apply_resolution(problem, parts)
+        problem.time_limit_s = time_s
         try:
             with warnings.catch_warnings():
                 # said once below, with the files written
@@ -450,15 +459,17 @@ def run_optimize(
             bar.close()
         if obj is not None:
             result = replace(result, object={**result.object, "file": obj.info()["file"]})
+        search_s = result.wall_time_s
         result = _finish(problem, result, finish, parts)
+        result = replace(result, extra={**result.extra,
+                                        "verdict": search_verdict(result, search_s)})
         reference = paper_reference(problem, scene)
         paths = write_outputs(result, out_dir, prefix, problem,
                               None if reference is None else reference[0], parts)
     if verbose:
         _print_summary(result, reference, paths)
     if not result.extra["grasp_found"]:
-        print(f"psm-grasp: warning: {method} found no grasp in {result.n_evaluations} "
-              f"evaluations: its best design {no_grasp_reason(result.best_metrics)} (reward "
+        print(f"psm-grasp: warning: {method}: {result.extra['verdict']['message']} (reward "
               f"{result.best_reward:.4f}); the files in {str(out_dir)!r} describe that design",
               file=sys.stderr)
     return result, paths
@@ -556,10 +567,11 @@ def run_demo(out_dir: Path) -> int:
     (``verify.json``, ``verify.png``): designs that differ, so that the FEM's ranking can
     disagree with the model's. Every design is judged over the placements within
     :data:`DEMO_TOLERANCE_M` and the manufacturing tolerances :data:`DEMO_TOLERANCES`. Takes
-    seconds on 2 cores once the kernels are compiled. Returns 0, :data:`NO_GRASP_EXIT` when
-    CMA-ES's optimum does not hold in every scenario, else
-    :data:`optim.verify.NOT_CONFIRMED_EXIT` when the FEM does not confirm it (the exit codes
-    of ``verify``).
+    seconds on 2 cores once the kernels are compiled. Returns 0, else the exit code of CMA-ES's
+    verdict when its optimum does not hold in every scenario
+    (:func:`optim.verdict.verdict_exit_code`: :data:`UNDECIDED_EXIT` for its one start), else
+    :func:`optim.verify.verify_exit_code`'s (:data:`optim.verify.NOT_CONFIRMED_EXIT` when the FEM
+    does not confirm it).
     """
     from envs.tolerances import parse_tolerances
 
@@ -598,6 +610,8 @@ def run_demo(out_dir: Path) -> int:
         print_report(report, paths)
         code = verify_exit_code(report)
     if not best.extra["grasp_found"]:
-        code = NO_GRASP_EXIT
+        from .verdict import verdict_exit_code
+
+        code = verdict_exit_code(best.extra["verdict"])
     print(f"demo done in {time.perf_counter() - t0:.1f} s")
     return code

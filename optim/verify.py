@@ -31,8 +31,7 @@ from envs.validation import check_integer
 from .charts import disk_of, model_of
 from .finish import RANKING_MEMBER
 from .result import OptimResult, grasp_found
-
-NO_GRASP_EXIT = 3  # the reported design does not hold its object (docs/cli.md's exit table)
+from .verdict import NO_GRASP_EXIT
 
 __all__ = ["DEFAULT_TOP", "RANKING_MEMBER", "CONFIRM_RELATIVE", "CONFIRM_ABSOLUTE",
            "NOT_CONFIRMED_EXIT", "NO_GRASP_EXIT", "confirm_margin", "confirmed", "find_result",

@@ -256,9 +256,9 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         ``scenario``); ``envelopes`` over the scenarios under their own names (the largest
         payload, friction needed and compression, the smallest contact score and margins);
         ``verdict`` (:func:`optim.design_verdict.verdict_of`: whether it holds in every
-        scenario, and its ``banner`` when it does not); ``checked`` (the scenario set, placement, ranges,
-        tolerances, resolution and load set); ``parts`` and ``part_rows`` (pivot, plate,
-        half-lap, pad, spring and stops; each finger's part, :mod:`optim.parts`).
+        scenario, and its ``banner`` when it does not); ``checked`` (the scenario set,
+        placement, ranges, tolerances, resolution and load set); ``parts`` and ``part_rows``
+        (pivot, plate, half-lap, pad, spring and stops; each finger's part, :mod:`optim.parts`).
 
     Raises
     ------
