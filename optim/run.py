@@ -156,7 +156,9 @@ def _print_summary(result: OptimResult, reference: tuple[float, float] | None,
             print(f"  {line}")
     if m.get("required_friction") is not None:
         payload = m.get("payload_n", 0.0)
-        print(f"  holding: needs friction {float(m['required_friction']):.3g} (the object's "
+        where = " (the governing scenario)" if m.get("governing_scenario") else ""
+        print(f"  holding{where}: needs friction {float(m['required_friction']):.3g} (the "
+              f"object's "
               f"{m.get('friction_coefficient', float('nan')):.3g}) with a payload of "
               f"{payload:.3g} N and a grip of {m.get('grip_force_n', float('nan')):.3g} N: "
               + ("holds and lifts it" if m.get("holds") else "would drop it without the pin")
