@@ -389,7 +389,10 @@ def _write_run(folder: Path, grasp_found: bool = True):
                          object={"name": "puck", **DISK_FIELDS},
                          top_designs=({"design": design,
                                                                 "reward": 0.0466},),
-                         extra={"grasp_found": grasp_found})
+                         extra={"grasp_found": grasp_found,
+                                # (the search's verdict: its starts agree, for exit 3)
+                                "verdict": {"verdict": "holds" if grasp_found
+                                            else "nothing holds"}})
     result.to_json(folder / "cmaes_seed0_result.json")
     return result
 

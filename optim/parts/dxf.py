@@ -47,9 +47,9 @@ def write_part_dxf(part: FingerPart, path: str | Path, notes: list[str],
     ValueError
         Without ezdxf (the extra ``dxf``).
     """
-    from optim.sheet import dxf_available
+    import importlib.util
 
-    if not dxf_available():
+    if importlib.util.find_spec("ezdxf") is None:
         raise ValueError("the DXF needs ezdxf: pip install -e '.[dxf]'")
     import ezdxf
 
