@@ -89,3 +89,26 @@ def test_the_lanes_probe_answers_as_the_package(tmp_path):
         ceiling = row[f"ceiling_{lanes}"]
         # the optimistic ceiling is above the parts-only one, lockstep groups below refill
         assert ceiling["all_free"] >= ceiling["parts_free"] >= ceiling["parts_fixed"]
+
+
+def test_the_scenario_profile_breaks_an_object_batch_down(tmp_path):
+    """scripts/scenario_profile.py --objects: an object file's own scenario batch split into
+    its stages and its grasps from rest by contact, for each jaw; the shares add up."""
+    profile = _script("scenario_profile")
+    out = tmp_path / "w.json"
+    obj = ROOT / "examples" / "objects" / "strawberry.toml"
+    profile.main(["--objects", str(obj), "--designs", "2", "--repeats", "1", "--out", str(out)])
+    per_jaw = json.loads(out.read_text())["where"][str(obj)]
+    assert set(per_jaw) == {"straight", "any"}
+    for row in per_jaw.values():
+        assert row["scenarios"] == 9 and row["cpu_s"] > 0.0
+        assert set(row["stages_cpu_s"]) == {"from_rest", "fast_path", "finish", "python"}
+        rest = row["from_rest"]
+        shares = [rest[k]["share_of_time"] for k in ("faces", "mouth_edge", "bar_corner")
+                  if k in rest]
+        assert abs(sum(shares) - 1.0) < 1e-9
+        assert sum(rest[k]["rows"] for k in ("faces", "mouth_edge", "bar_corner")
+                   if k in rest) == rest["rows"]
+    # grooved designs lead no scenario; straight ones do
+    assert per_jaw["any"]["followers_tried"] == 0 and per_jaw["straight"]["followers_tried"] > 0
+    assert per_jaw["straight"]["cpu_over_straight"] == 1.0
