@@ -30,11 +30,16 @@ def test_a_baseline_that_is_no_checkout_is_refused(tmp_path, capsys):
 
 def test_one_measurement_has_every_figure():
     throughput = _script("throughput")
-    args = argparse.Namespace(batch=8, scenario_designs=2, placement_mm=2.0, seed=0, fan=True)
+    strawberry = ROOT / "examples" / "objects" / "strawberry.toml"
+    args = argparse.Namespace(batch=8, scenario_designs=2, placement_mm=2.0, seed=0, fan=True,
+                              scenario_jaws=["straight", "any"], objects=[strawberry],
+                              object_jaws=["straight", "any"])
     row = throughput.measure(args)
     assert Path(row["envs"]) == ROOT / "envs"
     for key in ("batch_default_designs_per_s", "batch_fan_designs_per_s",
-                "scenarios_independent_s"):
+                "scenarios_independent_s", "scenarios_any_warm_cpu_s",
+                "object_strawberry_straight_designs_per_s", "object_strawberry_any_s",
+                "object_strawberry_any_cpu_s"):
         assert row[key] > 0.0, key
     # the medians the printed ratios are taken of (a key a checkout lacks has none)
     rows = [{"x_per_s": 1.0}, {"x_per_s": 3.0}, {"x_per_s": 2.0}]
