@@ -18,7 +18,8 @@
    strain limit, friction and payload, as ``psm-grasp optimize --object`` judges designs),
    for ``--designs`` random designs of each jaw of ``--jaws`` (``straight`` and ``any``: the
    shaped jaws), on one thread: the CPU seconds of the batch as the search runs it (the
-   default ``warm_start=True``) split into the solves from rest, the fast path, the finish
+   default ``warm_start=True``; the medians of ``--repeats``, each beside the same batch
+   with every scenario from rest) split into the solves from rest, the fast path, the finish
    (metrics, the independent check, what the centre carries and the grip the payload needs,
    compiled) and the Python around them (packing, the contact and holding scores, the
    reward); then every grasp of the batch solved from rest alone (the best of two), by the
@@ -263,19 +264,23 @@ def where(paths: list[Path], jaws: list[str], n_designs: int, repeats: int, seed
                                           warm_start=warm, **kwargs)
 
             batch(True)  # load (or compile) and warm up
-            times, stages, infos = [], {}, np.zeros((0, 2))
+            times, rest_times, stages, infos = [], [], {}, np.zeros((0, 2))
             for _ in range(repeats):
+                rest_times.append(_cpu(lambda batch=batch: batch(False))[0])
                 with _Timer() as timer:
                     seconds, table = _cpu(lambda batch=batch: batch(True))
                 times.append(seconds)
                 stages, infos = timer.seconds, (np.concatenate(timer.infos) if timer.infos
                                                 else np.zeros((0, 2)))
             cpu = statistics.median(times)
+            rest_cpu = statistics.median(rest_times)
             stages = dict(stages, python=max(0.0, times[-1] - sum(stages.values())))
             starts = _starts_from_rest(lambda batch=batch: batch(False))
             per_jaw[jaw] = {
                 "designs": n_designs, "scenarios": len(table.scenarios),
                 "cpu_s": cpu, "ms_per_design": 1e3 * cpu / n_designs,
+                "every_scenario_from_rest_cpu_s": rest_cpu,
+                "from_rest_over_warm": rest_cpu / cpu,
                 "stages_cpu_s": stages,
                 "followers_tried": int(infos.shape[0]),
                 "fast_path_settled": float((infos[:, I_STATUS] == OK).mean())
@@ -295,7 +300,8 @@ def _print_where(result: dict) -> None:
             st = row["stages_cpu_s"]
             print(f"{Path(path).stem} {jaw}: {row['ms_per_design']:.2f} ms CPU a design "
                   f"({row['scenarios']} scenarios; {row.get('cpu_over_straight', 1.0):.2f}x "
-                  f"straight); from rest {st['from_rest']:.3f} s, fast path "
+                  f"straight; every scenario from rest: {row['from_rest_over_warm']:.2f}x "
+                  f"the time); from rest {st['from_rest']:.3f} s, fast path "
                   f"{st['fast_path']:.3f} s ({row['fast_path_settled']:.0%} of "
                   f"{row['followers_tried']} settled), finish {st['finish']:.3f} s, Python "
                   f"{st['python']:.3f} s")

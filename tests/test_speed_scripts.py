@@ -107,6 +107,7 @@ def test_the_scenario_profile_breaks_an_object_batch_down(tmp_path):
     assert set(per_jaw) == {"straight", "any"}
     for row in per_jaw.values():
         assert row["scenarios"] == 9 and row["cpu_s"] > 0.0
+        assert row["from_rest_over_warm"] > 0.0
         assert set(row["stages_cpu_s"]) == {"from_rest", "fast_path", "finish", "python"}
         rest = row["from_rest"]
         shares = [rest[k]["share_of_time"] for k in ("faces", "mouth_edge", "bar_corner")
