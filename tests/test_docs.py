@@ -310,6 +310,8 @@ def test_the_pages_run_as_written(page, tmp_path, monkeypatch, capsys):
         args = shlex.split(line)[1:]
         if args[0] == "train-policy":
             pytest.importorskip("stable_baselines3")
+            if "--steps" not in args:  # (the default trains for 200,000 designs)
+                args += ["--steps", "256"]
         if "--policy" in args and not Path(args[args.index("--policy") + 1]).exists():
             continue  # (a policy the page trained with more steps than a test takes)
         code = main(args)
