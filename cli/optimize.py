@@ -231,8 +231,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     from envs.model.family import ELEMENTS
     from envs.scenarios import ROBUST_MEASURES
     from envs.scene import PRESETS
+    from optim.executors import MAX_WORKERS_PER_CPU
     from optim.optimize import METHODS
-    from optim.problem import DEFAULT_STRAIN_LIMIT
+    from optim.problem import DEFAULT_STRAIN_LIMIT, MAX_BUDGET
     from optim.verify import MAX_TOP
 
     p = subparsers.add_parser(
@@ -252,7 +253,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
-    p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
+    p.add_argument("--budget", type=int, default=2000,
+                   help=f"evaluations, in [1, {MAX_BUDGET:,}] (default %(default)s)")
     p.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="wall seconds the search may take, beside --budget: it stops at "
                    "whichever ends first (the finish and the files come after it)")
@@ -266,7 +268,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "designs (GA, random search): each task carries at least 64 designs")
     p.add_argument("--workers", type=int,
                    help="parallel workers: local processes without --dask, LocalCluster "
-                        "workers with --dask local (default: in-process, batched, already on "
+                        f"workers with --dask local, at most {MAX_WORKERS_PER_CPU} per core "
+                        "(default: in-process, batched, already on "
                         "every core; on one machine workers do not pay, least of all for "
                         "CMA-ES's 9-design populations)")
     p.add_argument("--strain-limit", type=float, default=None,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from typing import Any
 
@@ -85,10 +86,14 @@ def run_simulate(args: argparse.Namespace) -> int:
     spec = cli_option("--triangles/--rings/--element/--calibrated", check_model,
                       args.triangles, args.rings, element, calibrated)
     if args.torque is not None:
-        check_range("--torque", args.torque, 0.0, math.inf)
+        check_range("--torque", args.torque, 0.0, math.inf)  # its ceiling: with the scene
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene, torque, name, friction, factor = _scene_of(args)
+    if args.torque is not None:  # (a file's torque_nm is checked with the file)
+        cli_option("--torque", scene.check_torque, args.torque)
     args.torque = torque
+    for words in scene.warnings:  # a gripper that cannot reach the object, ...
+        print(f"psm-grasp: warning: {words}", file=sys.stderr)
     model = {"stiffness_rule": args.rule, "payload_factor": factor, **spec.kwargs()}
     n_tri = model.pop("n_triangles")
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
@@ -114,6 +119,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         grasp_figure(scene, res, path=plot)
         if not args.json:
             print(f"  plot           : {plot}")
+    if not res.converged:
+        print(f"psm-grasp: warning: the grasp did not converge ({res.message}): exit code 1",
+              file=sys.stderr)
     return 0 if res.converged else 1
 
 

@@ -678,7 +678,8 @@ class GripperDesignEnv(gym.Env):
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
     `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v2"))`
-    passes. Stepping again without a reset evaluates another design on the same object.
+    passes. Stepping again without a reset raises `gymnasium.error.ResetNeeded` (a step after
+    `terminated=True` is a forgotten reset: its reward would belong to no episode).
 
     Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v2", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
@@ -762,6 +763,7 @@ class GripperDesignEnv(gym.Env):
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces(self.bounds)
         self._disk: SoftDisk | None = None
+        self._terminated = False
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
         self._last_design: np.ndarray | None = None
@@ -784,6 +786,7 @@ class GripperDesignEnv(gym.Env):
         self._disk, self._needs, self._obs = _draw_object(
             self.np_random, self.distribution, opts)
         self._last_design = None
+        self._terminated = False
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), _object_info(self._disk, self._needs)
@@ -791,6 +794,9 @@ class GripperDesignEnv(gym.Env):
     def step(self, action):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
+        if self._terminated:
+            raise ResetNeeded("the episode ended with its one step (terminated=True): call "
+                              "reset() before step()")
         act, clipped = _check_actions(action, (self.bounds.n_var,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
@@ -801,6 +807,7 @@ class GripperDesignEnv(gym.Env):
         info["design"] = design
         info.update(_object_info(self._disk, self._needs))
         self._last_design = design
+        self._terminated = True
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), float(out["reward"][0]), True, False, info

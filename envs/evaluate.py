@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 
 import numpy as np
 
@@ -56,6 +57,7 @@ from .batch_inputs import (  # noqa: F401 (re-exported: the layouts of the batch
     _joint_springs,
     _payloads,
     _per_row,
+    nonfinite_rows,
 )
 from .batch_metrics import (  # noqa: F401 (re-exported: the metrics' definitions)
     METRIC_KEYS,
@@ -88,10 +90,11 @@ from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
     Design,
+    design_fields,
 )
 from .solver.pipeline import solve_columns
-from .solver.status import NOT_SOLVED
-from .validation import check_integer
+from .solver.status import NOT_FINITE, NOT_SOLVED
+from .validation import InputWarning, check_integer
 
 __all__ = [
     "DESIGN_FIELDS",
@@ -130,6 +133,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     out["friction_coefficient"][:] = needs[:, NEED_FRICTION]
     out["payload_n"][:] = needs[:, NEED_PAYLOAD]
     out["status"][:] = NOT_SOLVED
+    out["status"][nonfinite_rows(des)] = NOT_FINITE
     material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
         disk = disk.copy()
@@ -167,6 +171,25 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                        & (out["required_friction"] <= out["friction_coefficient"]))
     add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
+
+
+def _warn_nonfinite(des: np.ndarray) -> None:
+    """One :class:`~envs.validation.InputWarning` naming the rows whose design holds a value
+    that is not a finite number (the first one's column and value): they are flagged
+    (``status`` :data:`~envs.solver.status.NOT_FINITE`, invalid at rest), the others answered."""
+    rows = nonfinite_rows(des)
+    if not rows.size:
+        return
+    first = int(rows[0])
+    col = int(np.flatnonzero(~np.isfinite(des[first]))[0])
+    names = design_fields(des.shape[1])
+    shown = ", ".join(map(str, rows[:5].tolist())) + (", ..." if rows.size > 5 else "")
+    value = float(des[first, col])
+    warnings.warn(
+        f"evaluate_designs: {rows.size} of {des.shape[0]} design rows hold a value that is not a "
+        f"finite number (row {first}: {names[col]} = {value!r}; rows {shown}): they "
+        f"are not solved (status {NOT_FINITE}, valid_at_rest False, the invalid penalty), the "
+        "other rows are answered", InputWarning, stacklevel=3)
 
 
 def _group_leaders(leaders: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
@@ -357,7 +380,9 @@ def evaluate_designs(
           and every output is finite (FEM: Newton converged, no element inverted).
         - ``stable``, ``status``, ``iterations``: solver diagnostics; ``status`` is a public
           code of :mod:`envs.solver.status` (-1: not solved, 0: converged, 8: folded, 11: the
-          independent check failed, 12: the FEM did not converge, ...; message in
+          independent check failed, 12: the FEM did not converge, 13: a design value is not a
+          finite number, NaN or inf: not solved, and an
+          :class:`~envs.validation.InputWarning` names the rows; ...; message in
           ``STATUS_MESSAGES``); FEM: Newton iterations.
         - ``n_triangles``: the model's contour points ``N`` (FEM: its quadratic triangles).
         - ``jaw_angles_rad`` (B, 2): right and left finger angles [rad].
@@ -429,8 +454,9 @@ def evaluate_designs(
     Raises
     ------
     ValueError
-        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets). Physically
-        invalid designs do not raise.
+        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets; designs of
+        strings or booleans, which numpy would turn into numbers). Physically invalid designs
+        do not raise, nor do rows holding NaN or inf (status 13, see above).
     """
     weights = RewardWeights() if weights is None else weights
     if not isinstance(weights, RewardWeights):
@@ -448,6 +474,7 @@ def evaluate_designs(
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
+    _warn_nonfinite(des)
     n_each = np.asarray(n_triangles, dtype=object)
     spec = resolve_model(None if n_each.ndim else n_triangles, n_rings,
                          DEFAULT_ELEMENT if element is None else element, calibrated)

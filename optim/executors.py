@@ -340,6 +340,14 @@ class DaskExecutor(RetryingExecutor):
             self.cluster.close()
 
 
+MAX_WORKERS_PER_CPU = 4  # local workers per core at most (--workers)
+
+
+def max_workers() -> int:
+    """The most local workers ``--workers`` may start: :data:`MAX_WORKERS_PER_CPU` per core."""
+    return MAX_WORKERS_PER_CPU * (os.cpu_count() or 1)
+
+
 def check_executor_options(dask: str | None = None, workers: int | None = None) -> None:
     """Validate the CLI's ``--dask`` and ``--workers`` without starting anything.
 
@@ -348,9 +356,14 @@ def check_executor_options(dask: str | None = None, workers: int | None = None) 
     ValueError
         Naming the option and the user's value.
     """
+    most = max_workers()
     if workers is not None and (isinstance(workers, bool) or int(workers) != workers
                                 or workers < 1):
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+        raise ValueError(f"workers must be an integer in [1, {most}], got {workers!r}")
+    if workers is not None and workers > most:
+        raise ValueError(f"workers = {workers} is outside the allowed range [1, {most}] "
+                         f"({MAX_WORKERS_PER_CPU} per core of this machine's "
+                         f"{os.cpu_count() or 1}: more local processes only compete for them)")
     if dask is not None and not str(dask).strip():
         raise ValueError(f"dask must be 'local' or a scheduler address such as "
                          f"tcp://host:8786, got {dask!r}")

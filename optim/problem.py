@@ -76,6 +76,9 @@ SEARCH_PAYLOAD_MARGIN = 1.1
 # process): a round trip to a spawned worker costs about 6 ms, so 9 designs in 2 tasks ran at
 # 600 designs/s against 2600 in process, and 64-row tasks reach 80-90 % of the in-process rate.
 MIN_CHUNK_SIZE = 64
+# the most evaluations a run may be given: about an hour of the default model in process on 2
+# cores (~2,600 designs/s, MIN_CHUNK_SIZE's note); a larger budget is a typo (an extra 000)
+MAX_BUDGET = 10_000_000
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
 DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design box's width
@@ -99,7 +102,7 @@ class BudgetExhaustedError(RuntimeError):
 
 
 def check_budget(budget: Any) -> int:
-    """Validate an evaluation budget: an integer >= 1.
+    """Validate an evaluation budget: an integer in [1, :data:`MAX_BUDGET`].
 
     Raises
     ------
@@ -107,7 +110,13 @@ def check_budget(budget: Any) -> int:
         Naming the value and the allowed range.
     """
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
-        raise ValueError(f"budget must be an integer >= 1 (evaluations), got {budget!r}")
+        raise ValueError(f"budget must be an integer in [1, {MAX_BUDGET:,}] (evaluations), got "
+                         f"{budget!r}")
+    if budget > MAX_BUDGET:
+        raise ValueError(f"budget = {int(budget):,} is outside the allowed range [1, "
+                         f"{MAX_BUDGET:,}] (evaluations: {MAX_BUDGET:.0e} take about an hour at "
+                         "the in-process rate of ~2,600 designs/s on 2 cores; for a longer "
+                         "search give --time SECONDS)")
     return int(budget)
 
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from envs.validation import read_text_file
+from envs.validation import PsmGraspWarning, read_text_file
 
 __all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable"]
 
@@ -32,7 +32,7 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
-class NoGraspWarning(UserWarning):
+class NoGraspWarning(PsmGraspWarning):
     """An optimization's best design does not grasp its object (invalid, not converged, or a
     finger that does not touch): the run's answer is not a gripper to build."""
 
