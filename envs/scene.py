@@ -162,6 +162,10 @@ RELATIVE_FIELDS = (
 class Gripper:
     """Symmetric angular gripper with two rigid fingers on revolute joints.
 
+    A length or a joint spring outside its plausible range
+    (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: ``finger_length_m = 200`` was most likely
+    typed in millimetres) is refused, naming the likely unit.
+
     Parameters
     ----------
     finger_length_m
@@ -181,10 +185,6 @@ class Gripper:
     left_jaw
         The left finger's groove where it differs from the right one's (default ``None``: the
         same as ``jaw``).
-
-    A length or a joint spring outside its plausible range
-    (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: ``finger_length_m = 200`` was most likely
-    typed in millimetres) is refused, naming the likely unit.
     """
 
     finger_length_m: float
@@ -234,6 +234,10 @@ class Gripper:
 class SoftDisk:
     """Soft 2-D disk (extruded by a thickness) whose centre is pinned where it was placed.
 
+    A radius, thickness, modulus, density, stiffness scale or placement outside its plausible
+    range (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
+    is refused, naming the likely unit (:func:`~envs.validation.check_plausible`).
+
     Parameters
     ----------
     radius_m
@@ -271,10 +275,6 @@ class SoftDisk:
         a grasp must carry (:meth:`payload_n`). Default 50, the paper's soft foam
         (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`); soft tissue ~1060, fruit
         950-1050, silicone ~1100.
-
-    A radius, thickness, modulus, density, stiffness scale or placement outside its plausible
-    range (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
-    is refused, naming the likely unit (:func:`~envs.validation.check_plausible`).
     """
 
     radius_m: float

@@ -455,8 +455,8 @@ class DesignProblem:
 
     def to_physical(self, x: Any) -> np.ndarray:
         """Normalized rows (..., :attr:`n_var`), clipped to [-1, 1], in physical units (SI:
-        6, 10 or 14 columns, :attr:`DesignBounds.design_width
-        <envs.evaluate.DesignBounds.design_width>`)."""
+        6, 10 or 14 columns,
+        :attr:`~envs.design_space.DesignBounds.design_width`)."""
         return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
