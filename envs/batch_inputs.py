@@ -6,7 +6,6 @@ and the joint springs. One bad row is named by its index.
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Sequence
 
 import numpy as np
@@ -23,7 +22,7 @@ from .scene import (
     Design,
     SoftDisk,
 )
-from .validation import check_integer, check_range
+from .validation import check_integer, check_range, real_array
 
 # ---------------------------------------------------------------------------------------------
 # input normalization
@@ -40,20 +39,7 @@ def _design_table(designs) -> np.ndarray:
             raise ValueError("designs mixes Design objects and other values")
         width = max(d.width for d in designs)
         return np.stack([d.to_array(width) for d in designs])
-    try:
-        raw = np.asarray(designs)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"designs must be a (B, {N_DESIGN}) array of numbers: {exc}") from None
-    if raw.dtype.kind not in "fiuO":
-        # numpy turns strings into numbers and True into 1: neither is a design
-        raise ValueError(f"designs must be a (B, {N_DESIGN}) array of numbers, got an array "
-                         f"of {_dtype_words(raw.dtype)}")
-    if raw.dtype.kind == "O":
-        for index, v in np.ndenumerate(raw):
-            if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Real):
-                raise ValueError(f"designs{list(index)} must be a number, got {v!r} "
-                                 f"({type(v).__name__})")
-    arr = raw.astype(np.float64)
+    arr = real_array("designs", designs, f"numbers of shape (B, {N_DESIGN})")
     if arr.ndim != 2 or arr.shape[1] not in DESIGN_WIDTHS:
         raise ValueError(
             f"designs must have shape (B, {N_DESIGN}) with columns {DESIGN_FIELDS}, or (B, 10) "
@@ -62,12 +48,6 @@ def _design_table(designs) -> np.ndarray:
             "designs[None] for a single row)"
         )
     return arr
-
-
-def _dtype_words(dtype: np.dtype) -> str:
-    """An array's element type in words (``str``, ``bool``, ``complex``, ...)."""
-    return {"U": "str", "S": "bytes", "b": "bool", "c": "complex", "M": "datetime",
-            "m": "timedelta", "V": "records"}.get(dtype.kind, str(dtype))
 
 
 def nonfinite_rows(des: np.ndarray) -> np.ndarray:

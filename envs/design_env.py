@@ -39,7 +39,7 @@ from .model.defaults import (
 from .model.family import ModelSpec, resolve_model
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
-from .validation import check_range
+from .validation import check_range, real_array
 
 __all__ = [
     "OBS_FIELDS",
@@ -345,10 +345,7 @@ def _object_info(disk: SoftDisk, needs: np.ndarray) -> dict[str, float]:
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Validate actions; return them clipped to [-1, 1] (float64) and a per-row clipped flag."""
-    try:
-        a = np.array(actions, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be numeric with shape {shape}: {exc}") from None
+    a = real_array("action", actions, f"numbers of shape {shape}")
     if a.shape != shape:
         raise ValueError(f"action must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):

@@ -24,6 +24,7 @@ __all__ = [
     "check_n_triangles",
     "check_choice",
     "check_real",
+    "real_array",
     "check_output_file",
     "check_output_dir",
     "check_plausible",
@@ -219,6 +220,33 @@ def check_real(name: str, value) -> float:
     if v is None:
         raise ValueError(f"{name} must be a real number, got {_kind(value)}")
     return v
+
+
+_DTYPE_WORDS = {"U": "str", "S": "bytes", "b": "bool", "c": "complex", "M": "datetime",
+                "m": "timedelta", "V": "records"}
+
+
+def real_array(name: str, value, what: str = "numbers") -> np.ndarray:
+    """``value`` as a float64 array if it holds real numbers only; one ``ValueError`` naming
+    ``name`` otherwise. numpy would turn the strings ``"0.1"`` into numbers and ``True`` into
+    1: an array of strings, bytes, bools or complex numbers, or an object array holding one, is
+    refused (``what``: the array's meaning in the message). A ragged sequence is refused too."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an array of {what}: {exc}") from None
+    if raw.dtype.kind == "O":
+        for index, v in np.ndenumerate(raw):
+            if _real(v) is None:
+                raise ValueError(f"{name}[{', '.join(map(str, index))}] must be a real number, "
+                                 f"got {_kind(v)}")
+    elif raw.dtype.kind not in "fiu":
+        raise ValueError(f"{name} must be an array of {what}, got an array of "
+                         f"{_DTYPE_WORDS.get(raw.dtype.kind, str(raw.dtype))}")
+    try:
+        return raw.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of {what}: {exc}") from None
 
 
 def check_choice(name: str, value, allowed) -> str:

@@ -47,7 +47,7 @@ from envs.scene import (
     joint_spring_kwargs,
     relative_from_design,
 )
-from envs.validation import check_range
+from envs.validation import check_range, real_array
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
 
@@ -457,7 +457,7 @@ class DesignProblem:
         """Normalized rows (..., :attr:`n_var`), clipped to [-1, 1], in physical units (SI:
         6, 10 or 14 columns,
         :attr:`~envs.design_space.DesignBounds.design_width`)."""
-        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
+        return self.bounds.scale(np.clip(real_array("x", x), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
         """One normalized row as ``{field: value}`` in physical units (the jaw fields of
