@@ -13,6 +13,7 @@ import numpy as np
 from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
     PAPER_TORSION_STIFFNESS_REL,
+    PLAUSIBLE_RANGES,
 )
 from .model.jaw import DESIGN_WIDTHS, JAW_FIELDS, LEFT_JAW_FIELDS
 from .scene import (
@@ -120,8 +121,8 @@ def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
     if absolute is not None:
         if rel is not None:
             raise ValueError(SPRING_TWICE)
-        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0, math.inf,
-                        low_open=True)
+        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0,
+                        PLAUSIBLE_RANGES["torsion_stiffness_nm_per_rad"][1], low_open=True)
     rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,
                    batch, 0.0, math.inf, low_open=True)
     unit = (disk[:, DISK_SCALE] * disk[:, DISK_YOUNG] * disk[:, DISK_THICKNESS]

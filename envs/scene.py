@@ -214,8 +214,8 @@ class Gripper:
         )
         for f in fields(self):
             if f.name not in ("jaw", "left_jaw"):
-                object.__setattr__(self, f.name, float(getattr(self, f.name)))
                 check_plausible(f.name, getattr(self, f.name))
+                object.__setattr__(self, f.name, float(getattr(self, f.name)))
         for name in ("jaw", "left_jaw"):
             value = getattr(self, name)
             if value is None and name == "left_jaw":
@@ -301,10 +301,10 @@ class SoftDisk:
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         check_range("offset_x_m", self.offset_x_m)
         check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
+        for name in PLAUSIBLE_DISK_FIELDS:  # (as given: quoted as the caller wrote it)
+            check_plausible(name, getattr(self, name))
         for f in fields(self):
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
-        for name in PLAUSIBLE_DISK_FIELDS:
-            check_plausible(name, getattr(self, name))
 
     @property
     def mass_kg(self) -> float:
@@ -611,8 +611,10 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
     if torsion_stiffness_nm_per_rad is not None:
         if torsion_stiffness_rel is not None:
             raise ValueError(SPRING_TWICE)
-        return None, check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad,
-                                 0.0, math.inf, low_open=True)
+        check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0,
+                    math.inf, low_open=True)
+        return None, check_plausible("torsion_stiffness_nm_per_rad",
+                                     torsion_stiffness_nm_per_rad)
     rel = PAPER_TORSION_STIFFNESS_REL if torsion_stiffness_rel is None else torsion_stiffness_rel
     return check_range("torsion_stiffness_rel", rel, 0.0, math.inf, low_open=True), None
 

@@ -310,9 +310,12 @@ def _check_design(name: str, design: Any, obj: dict[str, Any]) -> None:
     the gripper's in their plausible ranges and the torque plausible on the object
     (:func:`envs.scene.check_torque`)."""
     from envs.model.defaults import PAPER_TORSION_STIFFNESS_REL
-    from envs.scene import check_torque, design_fields, design_row
+    from envs.scene import DESIGN_FIELDS, check_torque, design_fields, design_row
     from envs.validation import check_plausible
 
+    absent = [k for k in DESIGN_FIELDS if isinstance(design, dict) and k not in design]
+    if absent:
+        raise ValueError(f"{name} has no {absent[0]!r}")
     try:
         row = design_row(design)
         for key, v in zip(design_fields(row.size), row.tolist(), strict=True):

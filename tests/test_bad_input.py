@@ -481,7 +481,7 @@ def test_a_corrupted_policy_is_one_line_naming_the_file(policy_copy, tmp_path, c
     ("{bad", "not valid JSON: Expecting property name enclosed in double quotes: line 1 "
              "column 2"),
     ("[1, 2]", "not a result written by psm-grasp optimize (a JSON list"),
-    ('{"method": "cmaes"}', "not a result written by psm-grasp optimize (OptimResult"),
+    ('{"method": "cmaes"}', "not a result written by psm-grasp optimize (no field 'seed'"),
     ("\udcff", "not a text (JSON) file"),
 ], ids=["broken", "list", "partial", "binary"])
 def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what):
@@ -497,7 +497,7 @@ def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what
 @pytest.mark.parametrize("edit, what", [
     (lambda d: d["object"].pop("radius_m"), "its object has no 'radius_m'"),
     (lambda d: d["top_designs"][0]["design"].pop("torque_nm"),
-     "top_designs[0] has no 'torque_nm'"),
+     "top_designs[0].design has no 'torque_nm'"),
     (lambda d: d["top_designs"][0].pop("reward"), "top_designs[0] has no 'reward'"),
 ], ids=["object", "design", "reward"])
 def test_a_hand_edited_result_is_one_line_naming_what_is_missing(tmp_path, capsys, edit, what):
