@@ -24,9 +24,18 @@ BROKEN_PIPE_EXIT = 128 + 13
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")  # terminal colours (Gymnasium colours its warnings)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, its errors one line like every refused input (argparse prints the
+    usage first: the error, which names the option, scrolls out of sight)."""
+
+    def error(self, message: str):
+        self.exit(ERROR_EXIT, f"psm-grasp: error: {message} ({self.prog} --help lists the "
+                              "options)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``psm-grasp`` parser: one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="psm-grasp", description=__doc__)
+    parser = _Parser(prog="psm-grasp", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     add_simulate_parser(sub)
     add_demo_parser(sub)

@@ -121,11 +121,12 @@ def placement_tolerance(text: str) -> float | tuple[float, float]:
 
 
 def _verify_command(args: argparse.Namespace) -> int:
-    from envs.validation import check_output_dir
+    from envs.validation import check_integer, check_output_dir
     from optim.result import OptimResult
-    from optim.verify import find_result, verify_exit_code
+    from optim.verify import MAX_TOP, find_result, verify_exit_code
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
+    check_integer("--top", args.top, 1, MAX_TOP)
     path = find_result(args.out_dir, args.result)
     check_output_dir("OUT_DIR", args.out_dir)
     recorded = OptimResult.from_json(path)

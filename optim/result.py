@@ -307,11 +307,11 @@ def _check_object(obj: dict[str, Any]) -> None:
 
 def _check_design(name: str, design: Any, obj: dict[str, Any]) -> None:
     """A recorded design: its fields (:func:`envs.scene.design_row`), each a finite number,
-    the gripper's in their plausible ranges and the torque plausible on the object
-    (:func:`envs.scene.check_torque`)."""
+    the gripper's by the rules of a ``[gripper]`` table (range and plausible range) and the
+    torque plausible on the object (:func:`envs.scene.check_torque`)."""
     from envs.model.defaults import PAPER_TORSION_STIFFNESS_REL
+    from envs.object_file import GRIPPER_KEYS, check_value
     from envs.scene import DESIGN_FIELDS, check_torque, design_fields, design_row
-    from envs.validation import check_plausible
 
     absent = [k for k in DESIGN_FIELDS if isinstance(design, dict) and k not in design]
     if absent:
@@ -319,9 +319,10 @@ def _check_design(name: str, design: Any, obj: dict[str, Any]) -> None:
     try:
         row = design_row(design)
         for key, v in zip(design_fields(row.size), row.tolist(), strict=True):
-            if not math.isfinite(v):
+            if key in GRIPPER_KEYS:  # a gripper's field: as in a [gripper] table
+                check_value(key, design[key], GRIPPER_KEYS[key])
+            elif not math.isfinite(v):
                 raise ValueError(f"{key} = {design[key]!r} is not a finite number")
-            check_plausible(key, v)
         unit = _torque_unit_nm(obj)
         if unit is not None:
             rel = obj.get("torsion_stiffness_rel") or PAPER_TORSION_STIFFNESS_REL

@@ -77,6 +77,12 @@ POLICY_FILES = ("policy.json", "policy.npz")
 ACTIVATIONS = ("relu", "tanh")  # of the hidden layers (DesignPolicy.actions)
 SQUASHES = ("tanh", "clip")  # of the output: SAC's tanh, PPO's clipped mean
 MAX_LAYERS = 64  # a policy's linear layers at most (the shipped ones have 3)
+# the type of each key of a policy's metadata (DesignPolicy.save, train_policy's meta)
+POLICY_META_TYPES: dict[str, type] = {
+    "format": int, "obs_fields": list, "bounds": dict, "name": str, "package_version": str,
+    "reward_weights": dict, "model": dict, "joint_spring": dict, "distribution": dict,
+    "method": str, "training": dict, "activation": str, "squash": str, "n_layers": int}
+_KIND_WORDS = {int: "an integer", list: "a list", dict: "an object ({...})", str: "a string"}
 SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
 # the shipped policy that designs shaped jaws too (the "any" jaw space of GripperDesign-v3)
 SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
@@ -465,6 +471,11 @@ def _read_meta(path: Path) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise ValueError(f"{str(path)!r}: not a policy's metadata (a JSON "
                          f"{type(meta).__name__}, not an object)")
+    for key, kind in POLICY_META_TYPES.items():
+        value = meta.get(key)
+        if key in meta and (not isinstance(value, kind) or isinstance(value, bool)):
+            raise ValueError(f"{str(path)!r}: not a policy's metadata ({key} = {value!r} is "
+                             f"not {_KIND_WORDS[kind]})")
     missing = [k for k in ("n_layers", "activation", "squash") if k not in meta]
     n = meta.get("n_layers")
     if missing or isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_LAYERS:
