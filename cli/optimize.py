@@ -13,7 +13,7 @@ from typing import Any
 
 from optim import run
 
-from .options import cli_option
+from .options import cli_option, object_option
 
 __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 
@@ -21,7 +21,6 @@ __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 def _optimize_command(args: argparse.Namespace) -> int:
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
-    from envs.object_file import load_object
     from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
@@ -40,7 +39,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other: the object is a preset's "
                          "disk or your own")
-    obj = None if args.object is None else load_object(args.object)
+    obj = None if args.object is None else object_option(args.object)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
     cli_option("--budget", check_budget, args.budget)
@@ -140,9 +139,8 @@ def _verify_command(args: argparse.Namespace) -> int:
 
 def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
     """``verify --object FILE``: the run in OUT_DIR must be a run for that object."""
-    from envs.object_file import load_object
 
-    spec = load_object(object_file)
+    spec = object_option(object_file)
     fields = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
               "stiffness_scale")
     differ = [k for k in fields

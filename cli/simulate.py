@@ -9,7 +9,7 @@ import sys
 import time
 from typing import Any
 
-from .options import cli_option
+from .options import cli_option, object_option
 
 __all__ = ["add_simulate_parser", "run_simulate"]
 
@@ -129,7 +129,6 @@ def _scene_of(args: argparse.Namespace):
     """The scene, torque [N·m], name, friction coefficient and payload factor of the
     command's options."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
-    from envs.object_file import load_object
     from envs.scene import Design, Scene
     from optim.problem import check_friction, check_payload_factor, paper_design_for
 
@@ -145,7 +144,7 @@ def _scene_of(args: argparse.Namespace):
         friction = DEFAULT_FRICTION_COEFFICIENT if args.friction is None else args.friction
         factor = DEFAULT_PAYLOAD_FACTOR if args.payload_factor is None else args.payload_factor
         return Scene.preset(name), torque, name, friction, factor
-    spec = load_object(args.object)
+    spec = object_option(args.object)
     factor = (args.payload_factor if args.payload_factor is not None else spec.payload_factor
               if spec.payload_factor is not None else DEFAULT_PAYLOAD_FACTOR)
     friction = (args.friction if args.friction is not None else spec.friction_coefficient

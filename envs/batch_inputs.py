@@ -5,13 +5,13 @@ and the joint springs. One bad row is named by its index.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
+    MAX_SPRING_REL,
     PAPER_TORSION_STIFFNESS_REL,
     PLAUSIBLE_RANGES,
 )
@@ -124,7 +124,7 @@ def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
         return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0,
                         PLAUSIBLE_RANGES["torsion_stiffness_nm_per_rad"][1], low_open=True)
     rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,
-                   batch, 0.0, math.inf, low_open=True)
+                   batch, 0.0, MAX_SPRING_REL, low_open=True)
     unit = (disk[:, DISK_SCALE] * disk[:, DISK_YOUNG] * disk[:, DISK_THICKNESS]
             * disk[:, DISK_RADIUS] ** 2)
     return rel * unit

@@ -39,7 +39,7 @@ from .model.defaults import (
 from .model.family import ModelSpec, resolve_model
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
-from .validation import check_range, real_array
+from .validation import check_integer, check_range, check_sequence, real_array
 
 __all__ = [
     "OBS_FIELDS",
@@ -84,11 +84,15 @@ RENDER_FPS = 4
 ROBUST_KEYS = {"reward_nominal": (np.float64, ()), "worst_scenario": (np.int64, ())}
 
 
+MAX_NUM_ENVS = 2**20  # sub-envs of a vector env at most (each step solves one grasp per sub-env)
+
+
 def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
           high_open: bool = False) -> tuple[float, float]:
-    pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=low_open,
-                             high_open=high_open) for v in value)
-    if len(pair) != 2 or pair[0] > pair[1]:
+    pair = tuple(check_range(f"{name}[{i}]", v, low, high, low_open=low_open,
+                             high_open=high_open)
+                 for i, v in enumerate(check_sequence(name, value, 2)))
+    if pair[0] > pair[1]:
         raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
     return pair
 
@@ -906,13 +910,13 @@ class GripperDesignVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
     ) -> None:
-        if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        num_envs = check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
-        if max_episode_steps is not None and max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps!r}")
+        if max_episode_steps is not None:
+            max_episode_steps = check_integer("max_episode_steps", max_episode_steps, 1,
+                                              2**62)
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)

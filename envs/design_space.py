@@ -23,7 +23,7 @@ from .scene import (
     design_from_relative,
     relative_from_design,
 )
-from .validation import check_range
+from .validation import check_range, check_sequence
 
 __all__ = [
     "DesignBounds",
@@ -234,9 +234,7 @@ class DesignBounds:
 
     def __post_init__(self) -> None:
         for name in ("low", "high"):
-            given = tuple(getattr(self, name))
-            if len(given) != N_DESIGN:
-                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(given)}")
+            given = check_sequence(f"DesignBounds.{name}", getattr(self, name), N_DESIGN)
             # checked as given, not after float(): "0.2" and True are not bounds
             vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v,
                                      *RELATIVE_LIMITS[field_name][:2],
@@ -275,7 +273,7 @@ class DesignBounds:
             given = getattr(self, name)
             if given is None:
                 given = tuple(JAW_BOUNDS[self.jaw][c][index] for c in columns)
-            given = tuple(given)
+            given = check_sequence(f"DesignBounds.{name}", given)
             if len(given) != len(columns):
                 raise ValueError(f"DesignBounds.{name} needs {len(columns)} values for jaw "
                                  f"{self.jaw!r} ({', '.join(columns)}), got {len(given)}")

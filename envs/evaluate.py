@@ -33,7 +33,6 @@ fields prefixed ``left_``). A depth of 0 is the straight bar.
 from __future__ import annotations
 
 import functools
-import math
 import warnings
 
 import numpy as np
@@ -82,6 +81,7 @@ from .model.defaults import (
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
     MAX_FRICTION_COEFFICIENT,
+    PLAUSIBLE_RANGES,
 )
 from .model.family import resolve_model, triangle_range
 from .model.problem import REST_OK, rest_codes
@@ -111,6 +111,7 @@ __all__ = [
 ]
 
 DEFAULT_CHUNK_SIZE = 256
+MAX_CHUNK_SIZE = 10_000_000  # rows of a chunk at most (MAX_BUDGET's evaluations in one)
 FIDELITIES = ("psm", "fem")
 
 
@@ -470,7 +471,7 @@ def evaluate_designs(
         if given:
             raise ValueError(f"{', '.join(given)} choose a point-spring member: leave them None "
                              "with fidelity='fem' (its mesh is set by fem_rings)")
-        fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
+    fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
@@ -496,13 +497,12 @@ def evaluate_designs(
                                        if payload_factors is None else payload_factors)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if offsets_x_m is not None:
-        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
-                                          math.inf, low_open=False)
+        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch,
+                                          *PLAUSIBLE_RANGES["offset_x_m"], low_open=False)
     leaders = _check_leaders(leaders, batch) if fidelity == "psm" else None
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
-    if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
-        raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    chunk_size = check_integer("chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
     if executor is None:
         return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
                                 fem_rings, leaders)

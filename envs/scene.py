@@ -23,6 +23,7 @@ from .model.defaults import (
     DEFAULT_YOUNGS_MODULUS_PA,
     GRAVITY_M_S2,
     MAX_PAYLOAD_FACTOR,
+    MAX_SPRING_REL,
     MAX_TORQUE_UNITS,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
     PAPER_TORSION_STIFFNESS_REL,
@@ -600,8 +601,10 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
     ``torsion_stiffness_rel`` is ``k_f`` in the object's torque unit ``s E t r^2`` per radian
     [1/rad] (:attr:`SoftDisk.torque_unit_nm`), the default (both ``None``) the paper gripper's
     ``0.073 N·m/rad`` over its r = 0.07 m disk's 4.9 N·m
-    (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`). An absolute spring is asked for
-    by name, ``torsion_stiffness_nm_per_rad`` [N·m/rad]. Both must be positive and finite.
+    (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`), at most
+    :data:`~envs.model.defaults.MAX_SPRING_REL`. An absolute spring is asked for by name,
+    ``torsion_stiffness_nm_per_rad`` [N·m/rad], in its plausible range (up to 1e4 N·m/rad).
+    Both must be positive and finite.
 
     Raises
     ------
@@ -616,7 +619,7 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
         return None, check_plausible("torsion_stiffness_nm_per_rad",
                                      torsion_stiffness_nm_per_rad)
     rel = PAPER_TORSION_STIFFNESS_REL if torsion_stiffness_rel is None else torsion_stiffness_rel
-    return check_range("torsion_stiffness_rel", rel, 0.0, math.inf, low_open=True), None
+    return check_range("torsion_stiffness_rel", rel, 0.0, MAX_SPRING_REL, low_open=True), None
 
 
 def joint_spring_kwargs(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None

@@ -25,6 +25,7 @@ __all__ = [
     "check_choice",
     "check_real",
     "real_array",
+    "check_sequence",
     "check_output_file",
     "check_output_dir",
     "check_plausible",
@@ -247,6 +248,21 @@ def real_array(name: str, value, what: str = "numbers") -> np.ndarray:
         return raw.astype(np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be an array of {what}: {exc}") from None
+
+
+def check_sequence(name: str, value, length: int | None = None) -> tuple:
+    """``value`` as a tuple if it is a sequence of values (a tuple, a list, a 1-D array; not
+    a string, a mapping or a number), of ``length`` items if given; ``ValueError`` naming
+    ``name`` otherwise."""
+    if isinstance(value, str | bytes | dict) or not hasattr(value, "__iter__") or (
+            isinstance(value, np.ndarray) and value.ndim != 1):
+        raise ValueError(f"{name} must be a sequence of numbers"
+                         + (f" ({length})" if length is not None else "")
+                         + f", got {_kind(value)}")
+    items = tuple(value)
+    if length is not None and len(items) != length:
+        raise ValueError(f"{name} needs {length} values, got {len(items)}")
+    return items
 
 
 def check_choice(name: str, value, allowed) -> str:

@@ -33,6 +33,8 @@ import uuid
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
+from envs.validation import check_integer
+
 __all__ = [
     "check_executor_options",
     "ChunkFailedError",
@@ -357,13 +359,13 @@ def check_executor_options(dask: str | None = None, workers: int | None = None) 
         Naming the option and the user's value.
     """
     most = max_workers()
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
-                                or workers < 1):
-        raise ValueError(f"workers must be an integer in [1, {most}], got {workers!r}")
-    if workers is not None and workers > most:
-        raise ValueError(f"workers = {workers} is outside the allowed range [1, {most}] "
-                         f"({MAX_WORKERS_PER_CPU} per core of this machine's "
-                         f"{os.cpu_count() or 1}: more local processes only compete for them)")
+    if workers is not None:
+        try:
+            check_integer("workers", workers, 1, most)
+        except ValueError as exc:
+            raise ValueError(f"{exc} ({MAX_WORKERS_PER_CPU} per core of this machine's "
+                             f"{os.cpu_count() or 1}: more local processes only compete for "
+                             "them)") from None
     if dask is not None and not str(dask).strip():
         raise ValueError(f"dask must be 'local' or a scheduler address such as "
                          f"tcp://host:8786, got {dask!r}")

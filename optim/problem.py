@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.evaluate import (
+    MAX_CHUNK_SIZE,
     METRIC_KEYS,
     DesignBounds,
     RewardWeights,
@@ -47,7 +48,7 @@ from envs.scene import (
     joint_spring_kwargs,
     relative_from_design,
 )
-from envs.validation import check_range, real_array
+from envs.validation import check_integer, check_range, real_array
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
 
@@ -120,15 +121,16 @@ def check_budget(budget: Any) -> int:
     return int(budget)
 
 
-def check_time_limit(time_limit_s: Any) -> float:
-    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`].
+def check_time_limit(time_limit_s: Any, name: str = "time_limit_s") -> float:
+    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`] (``name``: the
+    parameter's, for the message).
 
     Raises
     ------
     ValueError
         Naming the value and the allowed range.
     """
-    return check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
+    return check_range(name, time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
 
 
 def check_seed(seed: Any) -> int:
@@ -348,9 +350,8 @@ class DesignProblem:
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")
         self.executor = executor
-        if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
-            raise ValueError(f"chunk_size must be None or an integer >= 1, got {chunk_size!r}")
-        self.chunk_size = None if chunk_size is None else int(chunk_size)
+        self.chunk_size = None if chunk_size is None else check_integer(
+            "chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
         self.progress = progress
         self.name = name
         self.time_limit_s: float | None = None

@@ -101,13 +101,14 @@ def _inside(value: float, rule, plausible) -> bool:
     return plausible is None or plausible[0] <= value <= plausible[1]
 
 
-def number_values(rule, plausible) -> list[tuple[Any, str]]:
+def number_values(rule, plausible, typical: float | None = None) -> list[tuple[Any, str]]:
     """Values of a number with a rule ``(low, high, low_open, high_open, ...)`` and a plausible
     range (or None), each with its expected outcome: the ends of both ranges and beyond them,
     the unit slips of a typical value (millimetres, degrees: a factor 1000 and 57), what is no
-    number, not finite or huge."""
+    number, not finite or huge. ``typical``: a valid value (default: one inside both ranges)."""
     low, high = rule[0], rule[1]
-    typical = _typical(low, high, plausible)
+    if typical is None:
+        typical = _typical(low, high, plausible)
     numbers = {typical, typical * 1000.0, typical / 1000.0, typical * 180.0 / math.pi}
     for end in (low, high, *(plausible or ())):
         if math.isfinite(end):
@@ -167,7 +168,8 @@ def object_file_cases() -> list[dict[str, Any]]:
     for table, rules in numeric.items():
         for key, rule in rules.items():
             plausible = PLAUSIBLE_RANGES.get(key)
-            for value, expect in number_values(rule, plausible):
+            good = {**GOOD_OBJECT, **GOOD_GRIPPER}.get(key)
+            for value, expect in number_values(rule, plausible, good):
                 tables = {"object": dict(GOOD_OBJECT)}
                 if table == "gripper":
                     tables["gripper"] = _alternatives(key, {**GOOD_GRIPPER, key: value})
@@ -214,7 +216,7 @@ def _torque_expect(torque: float, tables: dict) -> str:
 
 def _range_cases(key: str, rule, plausible) -> list[dict[str, Any]]:
     typical = _typical(rule[0], rule[1], plausible)
-    lo, hi = typical * 0.9, typical * 1.1
+    lo, hi = sorted((typical * 0.9, typical * 1.1))
     far = (plausible[1] * 1000.0 if plausible else math.inf)
     values = [([lo, hi], "valid"), ([hi, lo], "refused"), ([typical], "refused"),
               ([lo, typical, hi], "refused"), (["a", "b"], "refused"), ([True, False], "refused"),
@@ -535,7 +537,7 @@ def policy_cases() -> list[dict[str, Any]]:
     with np.load(Path(SHIPPED_POLICY) / "policy.npz") as data:
         names = list(data.files)
     for array in names:
-        for damage in ("transpose", "nan", "inf", "row", "delete"):
+        for damage in ("widen", "nan", "inf", "row", "delete"):
             cases.append({"entry": "policy folder", "name": array, "expect": "refused",
                           "label": f"policy.npz {array}: {damage}", "array": [array, damage]})
     cases.append({"entry": "policy folder", "name": "", "expect": "valid",
@@ -575,6 +577,7 @@ def stand_ins() -> Iterator[None]:
     checks are over): a grasp's solve, a run's executor, the FEM verification, the training,
     the demo; and no compile notice."""
     import envs.solver.warmup
+    import optim.executors
     import optim.rl
     import optim.run
     import optim.verify
@@ -583,7 +586,7 @@ def stand_ins() -> Iterator[None]:
         raise Accepted
 
     simulate_module = sys.modules["envs.solver.simulate"]
-    targets = [(simulate_module, "_solve_newton"), (optim.run, "make_executor"),
+    targets = [(simulate_module, "_solve_newton"), (optim.executors, "make_executor"),
                (optim.run, "run_demo"), (optim.verify, "verify_result"),
                (optim.rl, "train_policy")]
     saved = [(obj, name, getattr(obj, name)) for obj, name in targets]
@@ -682,6 +685,11 @@ class Fixtures:
         self.result = good_result()
         (self.run / "cmaes_seed0_result.json").write_text(json.dumps(self.result))
         self.n = 0
+        import envs
+
+        # the kernels loaded (or compiled) now, not inside a case's deadline
+        envs.evaluate_designs(np.array([[0.2, 0.785, 0.025, 0.01, 0.2, 0.013]]),
+                              envs.Scene.preset("paper-r070").disk)
 
     def fresh(self) -> Path:
         self.n += 1
@@ -749,8 +757,9 @@ def _damage_array(folder: Path, array: str, damage: str) -> None:
     with np.load(path) as data:
         arrays = {k: data[k] for k in data.files}
     a = arrays[array]
-    if damage == "transpose":
-        arrays[array] = a.T if a.ndim == 2 else np.concatenate([a, a])
+    if damage == "widen":  # one input more (a matrix) or one output more (a bias)
+        arrays[array] = (np.concatenate([a, a[:, :1]], axis=1) if a.ndim == 2
+                         else np.concatenate([a, a[:1]]))
     elif damage == "nan":
         arrays[array] = np.full_like(a, np.nan)
     elif damage == "inf":
@@ -772,9 +781,9 @@ def _api_call(case: dict[str, Any], fx: Fixtures) -> Callable[[], Any]:
         return lambda: _dataclass(target)(**kwargs)
     if target == "simulate":
         return lambda: envs.simulate(envs.Scene.preset("paper-r070"), **kwargs)
-    if target == "evaluate_designs":
-        row = np.array([[0.2, 0.785, 0.025, 0.01, 0.2, 0.013]])
-        return lambda: envs.evaluate_designs(row, disk, **kwargs)
+    if target == "evaluate_designs":  # (two rows: a list of one value is the wrong shape)
+        rows = np.array([[0.2, 0.785, 0.025, 0.01, 0.2, 0.013]] * 2)
+        return lambda: envs.evaluate_designs(rows, disk, **kwargs)
     if target == "DesignProblem":
         return lambda: _function(target)(disk, **kwargs)
     if target == "run_optimize":

@@ -167,3 +167,6 @@ PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
 # "paper-r070"), 50.0): peak compression 0.750, peak strain 2.3); a larger torque is a unit slip
 # (N·mm typed for N·m) or not meant, and far beyond the model's range.
 MAX_TORQUE_UNITS = 10.0
+# A relative joint spring at most, in the object's torque unit per radian: it would take the
+# largest plausible squeeze (MAX_TORQUE_UNITS) in a tenth of a radian (the paper's is 0.0149)
+MAX_SPRING_REL = 100.0

@@ -258,7 +258,7 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
         raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
     check_choice("method", method, METHODS)
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
-    check_range("phase_rad", phase_rad)
+    check_range("phase_rad", phase_rad, -2.0 * math.pi, 2.0 * math.pi)
     check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
     if element is None:
         # the baselines solve the paper's fan; Newton the default model
@@ -325,7 +325,8 @@ def simulate(
     stiffness_rule
         ``"van_gelder"`` (default) or ``"cst_fit"``.
     phase_rad
-        Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
+        Angle of the first contour point [rad], in [-2 pi, 2 pi]; pi/2 (top) is
+        mirror-symmetric for even N.
     time_limit_s
         Wall-time budget for the baselines [s], in (0, 3600] (the Newton solver needs none).
     payload_factor
