@@ -282,7 +282,7 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
     if gripper is not None and gripper.torque_nm is not None:
         try:  # a torque far beyond what squeezes this object (N·mm typed for N·m)
-            check_torque("torque_nm", gripper.torque_nm, disk.torque_unit_nm,
+            check_torque("torque_nm", data["gripper"]["torque_nm"], disk.torque_unit_nm,
                          joint_spring_nm_per_rad(disk, None,
                                                  gripper.torsion_stiffness_nm_per_rad))
         except ValueError as exc:

@@ -43,6 +43,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--run", metavar="JSON", help="run these cases instead of generating")
     ap.add_argument("--show", type=int, default=20, metavar="K",
                     help="print K of the mismatched cases (default %(default)s)")
+    ap.add_argument("--memory-gb", type=float, default=8.0,
+                    help="address-space limit of this process (a version that accepts a "
+                    "huge size allocates it; default %(default)s GB)")
+    ap.add_argument("--log", metavar="FILE", help="write each case's label before running it")
     args = ap.parse_args(argv)
     fuzz = _fuzz_module()
     cases = json.loads(Path(args.run).read_text()) if args.run else fuzz.all_cases()
@@ -50,12 +54,25 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.write).write_text(json.dumps(cases))
         print(f"{len(cases)} cases written to {args.write}")
         return 0
+    import resource
+
     import envs
 
+    limit = int(args.memory_gb * 2**30)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     print(f"package: {Path(envs.__file__).resolve().parents[1]}")
+    log = open(args.log, "w") if args.log else None  # noqa: SIM115 - closed below
+
+    def progress(i: int) -> None:
+        if log is not None and i + 1 < len(cases):
+            log.write(f"{i + 1} {cases[i + 1]['entry']}: {cases[i + 1]['label']}\n")
+            log.flush()
+
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
-        outcomes = fuzz.run_all(cases, Path(tmp))
+        outcomes = fuzz.run_all(cases, Path(tmp), progress)
+    if log is not None:
+        log.close()
     wall = time.perf_counter() - t0
     table: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     mismatched = []
