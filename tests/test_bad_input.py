@@ -155,9 +155,9 @@ def test_the_other_parameter_dataclasses_refuse_strings():
         DesignBounds(low=tuple(low))
     with pytest.raises(ValueError, match=r"RewardWeights\.miss must be a real number"):
         RewardWeights(miss="0.5")
-    with pytest.raises(ValueError, match=r"poisson_ratio_range\[i\] must be a real number"):
+    with pytest.raises(ValueError, match=r"poisson_ratio_range\[0\] must be a real number"):
         ObjectDistribution(poisson_ratio_range=("0.3", 0.45))
-    with pytest.raises(ValueError, match=r"radius_range_m\[i\] must be a real number"):
+    with pytest.raises(ValueError, match=r"radius_range_m\[1\] must be a real number"):
         ObjectDistribution(radius_range_m=(0.05, True))
 
 
@@ -569,8 +569,8 @@ def test_a_finger_shorter_than_wide_names_both_lengths(tmp_path):
 
 
 @pytest.mark.parametrize("argv, option, what", [
-    (["--workers", "0"], "--workers", "got 0"),
-    (["--workers", "-2"], "--workers", "got -2"),
+    (["--workers", "0"], "--workers", "workers = 0 is outside the allowed range [1, "),
+    (["--workers", "-2"], "--workers", "workers = -2 is outside the allowed range [1, "),
     (["--dask", " "], "--dask", "got ' '"),
 ], ids=["workers-0", "workers-negative", "dask-blank"])
 def test_the_executor_options_are_named_as_typed(tmp_path, capsys, argv, option, what):

@@ -90,3 +90,32 @@ def test_the_fuzzing_finds_an_input_accepted_without_a_word(monkeypatch, fixture
 def test_a_fifo_ends_in_a_refusal_not_a_hang(fixtures):
     case = next(c for c in BY_ENTRY["object file"] if c.get("file") == "fifo")
     assert fuzz.run_case(case, fixtures)[0] == "refused"
+
+
+@pytest.mark.slow
+def test_random_numbers_in_every_key_of_an_object_file(fixtures):
+    """A wider sweep: 20 log-uniform numbers of either sign from 1e-12 to 1e12 per numeric key
+    of both tables, each refused exactly when it lies outside the key's allowed or plausible
+    range (the torque: its ceiling on the object)."""
+    import numpy as np
+
+    from envs.model.defaults import PLAUSIBLE_RANGES
+    from envs.object_file import GRIPPER_KEYS, OBJECT_KEYS
+
+    rng = np.random.default_rng(47)
+    cases = []
+    for table, rules in (("object", OBJECT_KEYS), ("gripper", GRIPPER_KEYS)):
+        for key, rule in rules.items():
+            for _ in range(20):
+                v = float(rng.choice([-1, 1]) * 10.0 ** rng.uniform(-12, 12))
+                expect = "valid" if fuzz._inside(v, rule, PLAUSIBLE_RANGES.get(key)) else "refused"
+                tables = {"object": dict(fuzz.GOOD_OBJECT)}
+                if table == "gripper":
+                    tables["gripper"] = fuzz._alternatives(key, {**fuzz.GOOD_GRIPPER, key: v})
+                    if key == "torque_nm" and expect == "valid":
+                        expect = fuzz._torque_expect(v, tables)
+                else:
+                    tables["object"][key] = v
+                cases.append(fuzz._file_case(f"[{table}] {key} = {v!r}", tables, key, expect))
+    bad = _mismatches(cases, fixtures)
+    assert not bad, "\n".join(bad[:40])
