@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import operator
 import textwrap
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -39,7 +40,13 @@ from .model.defaults import (
 from .model.family import ModelSpec, resolve_model
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
-from .validation import check_integer, check_range, check_sequence, real_array
+from .validation import (
+    PsmGraspWarning,
+    check_integer,
+    check_range,
+    check_sequence,
+    real_array,
+)
 
 __all__ = [
     "OBS_FIELDS",
@@ -679,8 +686,9 @@ class GripperDesignEnv(gym.Env):
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
     `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v2"))`
-    passes. Stepping again without a reset raises `gymnasium.error.ResetNeeded` (a step after
-    `terminated=True` is a forgotten reset: its reward would belong to no episode).
+    passes. Stepping again without a reset evaluates another design on the same object, with a
+    warning once an episode (:class:`~envs.validation.PsmGraspWarning`, as Gymnasium's own
+    environments warn): in a training loop it is a forgotten reset.
 
     Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v2", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
@@ -764,7 +772,7 @@ class GripperDesignEnv(gym.Env):
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.action_space, self.observation_space = _spaces(self.bounds)
         self._disk: SoftDisk | None = None
-        self._terminated = False
+        self._terminated = 0  # steps since the episode ended (it ends with its first)
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
         self._last_design: np.ndarray | None = None
@@ -787,7 +795,7 @@ class GripperDesignEnv(gym.Env):
         self._disk, self._needs, self._obs = _draw_object(
             self.np_random, self.distribution, opts)
         self._last_design = None
-        self._terminated = False
+        self._terminated = 0
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), _object_info(self._disk, self._needs)
@@ -795,9 +803,10 @@ class GripperDesignEnv(gym.Env):
     def step(self, action):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
-        if self._terminated:
-            raise ResetNeeded("the episode ended with its one step (terminated=True): call "
-                              "reset() before step()")
+        if self._terminated == 1:  # said once an episode, as Gymnasium's own envs do
+            warnings.warn("GripperDesignEnv.step() after the episode ended (terminated=True): "
+                          "it evaluates another design on the same object; call reset() for "
+                          "the next episode", PsmGraspWarning, stacklevel=2)
         act, clipped = _check_actions(action, (self.bounds.n_var,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
@@ -808,7 +817,7 @@ class GripperDesignEnv(gym.Env):
         info["design"] = design
         info.update(_object_info(self._disk, self._needs))
         self._last_design = design
-        self._terminated = True
+        self._terminated += 1
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), float(out["reward"][0]), True, False, info

@@ -367,16 +367,15 @@ def check_result_data(data: dict[str, Any]) -> None:
         One line naming the field (``best_reward``, ``object.radius_m``, ``top_designs[2]``)
         and what is wrong with it.
     """
-    from .problem import check_budget, check_seed
-
     missing = [f.name for f in fields(OptimResult) if f.default is MISSING
                and f.default_factory is MISSING and f.name not in data]
     if missing:
         raise ValueError(f"no field {missing[0]!r}")
     if not isinstance(data["method"], str) or not data["method"].strip():
         raise ValueError(f"method must be a non-empty string, got {data['method']!r}")
-    check_seed(data["seed"])
-    budget = check_budget(data["budget"])
+    check_integer("seed", data["seed"], 0, 2**32 - 1)
+    # (any budget a run may have had: optim.problem.MAX_BUDGET may change between versions)
+    budget = check_integer("budget", data["budget"], 1, 2**62)
     _json_real("best_reward", data["best_reward"])
     _json_dict("best_metrics", data["best_metrics"])
     for name, low in (("history_best_reward", -math.inf), ("history_wall_time_s", 0.0)):

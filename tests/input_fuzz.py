@@ -471,7 +471,7 @@ def env_cases() -> list[dict[str, Any]]:
         for kind in ("str", "bool", "nan", "shape"):
             cases.append({"entry": f"api env {env}", "name": "action", "expect": "refused",
                           "label": f"{env} step(action of {kind})", "action": kind})
-    cases.append({"entry": "api env single", "name": "reset", "expect": "refused",
+    cases.append({"entry": "api env single", "name": "reset()", "expect": "handled",
                   "label": "step after terminated=True", "action": "again"})
     return cases
 
