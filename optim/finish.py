@@ -44,6 +44,20 @@ def _finer(member: dict[str, Any], than: dict[str, Any]) -> bool:
     return (a.n_rings, a.n_triangles) > (b.n_rings, b.n_triangles)
 
 
+def _candidates(result: OptimResult, top: int) -> list[dict[str, Any]]:
+    """The designs the finish re-scores: the run's ``top`` best distinct designs, then the
+    best design of each of its independent starts (``extra["start_designs"]``, a portfolio's)
+    that is not among them: a start's basin may be the one the finer member prefers."""
+    picks = list(result.top_designs)[:top]
+    seen = {tuple(design_row(p["design"]).tolist()) for p in picks}
+    for pick in result.extra.get("start_designs", ()):
+        key = tuple(design_row(pick["design"]).tolist())
+        if key not in seen:
+            seen.add(key)
+            picks.append({"design": dict(pick["design"]), "reward": float(pick["reward"])})
+    return picks
+
+
 def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = None,
                   top: int = FINISH_TOP) -> OptimResult:
     """The run's best distinct designs re-scored by a finer member; the best of them reported.
@@ -74,7 +88,7 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
 
     member = dict(RANKING_MEMBER if member is None else member)
     own = problem.model.kwargs()
-    picks = list(result.top_designs)[:top]
+    picks = _candidates(result, top)
     if not picks or not _finer(member, own):
         return replace(result, extra={**result.extra, "reward_model": to_jsonable(own)})
     t0 = time.perf_counter()
@@ -82,9 +96,12 @@ def finish_result(problem, result: OptimResult, member: dict[str, Any] | None = 
     out = problem.evaluate_physical(designs, member)
     order = np.argsort(-out["reward"], kind="stable")
     best = int(order[0])
+    holds = problem.feasible(out)
     ranked = tuple({"design": picks[i]["design"], "reward": float(out["reward"][i]),
-                    "search_reward": float(picks[i]["reward"])} for i in order.tolist())
+                    "search_reward": float(picks[i]["reward"]), "holds": bool(holds[i])}
+                   for i in order.tolist())
     extra = {**result.extra,
+             "search_grasp_found": bool(result.extra.get("grasp_found")),
              "reward_model": to_jsonable(member),
              "search_model": to_jsonable(own),
              "search_reward": float(picks[best]["reward"]),

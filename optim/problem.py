@@ -547,6 +547,52 @@ class DesignProblem:
         self._record(x, out)
         return out
 
+    @property
+    def scenario_count(self) -> int:
+        """Scenarios every evaluation solves (1 without scenarios)."""
+        return 1 if self.scenarios is None else len(self.scenarios.scenarios())
+
+    def screen_cost(self, rows: int) -> int:
+        """Evaluations :meth:`screen` charges for ``rows`` designs: a ninth of one each with 9
+        scenarios, rounded up over the batch."""
+        return math.ceil(rows / self.scenario_count)
+
+    def screen(self, x: Any) -> dict[str, np.ndarray]:
+        """Evaluate normalized designs on the nominal scenario alone (the search's payload
+        margin as in :meth:`evaluate`): a cheap first look, charged :meth:`screen_cost`
+        evaluations, not recorded as the run's designs (its best, archive and top designs
+        hold robust judgements only).
+
+        Raises
+        ------
+        BudgetExhaustedError
+            If the charge exceeds :attr:`remaining`.
+        """
+        x = np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0)
+        if x.ndim != 2 or x.shape[1] != self.n_var:
+            raise ValueError(f"x must have shape (B, {self.n_var}), got {x.shape}")
+        cost = self.screen_cost(x.shape[0])
+        if cost > self.remaining:
+            raise BudgetExhaustedError(
+                f"a screen of {x.shape[0]} designs costs {cost} evaluations, {self.remaining} "
+                "left in the budget")
+        designs = self.bounds.scale(x, self.disk)
+        out = evaluate_designs(
+            designs, self.disk, strain_limits=self.strain_limit,
+            friction_coefficients=self.friction_coefficient,
+            payload_factors=self.payload_factor * SEARCH_PAYLOAD_MARGIN,
+            torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
+            weights=self.weights, executor=self.executor, **self.model.kwargs(),
+            chunk_size=self._chunk_size_for(designs.shape[0]))
+        self.n_evaluations += cost
+        if math.isfinite(self.best_reward):  # (the history holds robust judgements only)
+            self.history_evaluations.append(self.n_evaluations)
+            self.history_best_reward.append(self.best_reward)
+            self.history_wall_time_s.append(self.elapsed_s)
+        if self.progress is not None:
+            self.progress(cost, self.best_reward)
+        return out
+
     def add_external_evaluations(self, count: int) -> None:
         """Count evaluations done elsewhere (RL training steps on other objects)."""
         count = int(count)

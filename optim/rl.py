@@ -268,24 +268,46 @@ class DesignPolicy:
                                             dtype=float))
         return self.actions(obs)[0]
 
+    def starts(self, problem: DesignProblem) -> np.ndarray:
+        """The policy's candidate designs for a problem's object, normalized rows (k,
+        :attr:`~optim.problem.DesignProblem.n_var`): its own design and, for a policy of shaped
+        jaws, the same gripper with its groove centred where the object meets the finger
+        (:meth:`~envs.design_space.DesignBounds.aligned`) and the shipped straight policy's
+        design as a straight bar. A policy of shaped jaws places grooves where its training
+        left them, often away from the contact."""
+        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient,
+                             problem.payload_factor, problem_tolerance_rel(problem))
+        if self.jaw == "straight":
+            return x0[None, :]
+        fields = self.bounds.fields
+        at_foot = x0.copy()
+        at_foot[fields.index("jaw_position")] = 0.0
+        bar = np.zeros_like(x0)
+        bar[:6] = _shipped_policy("straight").normalized(
+            problem.disk, problem.strain_limit, problem.friction_coefficient,
+            problem.payload_factor, problem_tolerance_rel(problem))
+        bar[fields.index("jaw_depth_w")] = -1.0  # depth 0: a straight bar
+        return np.stack([x0, self.bounds.aligned(at_foot[None, :])[0], bar])
+
     def run(self, problem: DesignProblem, *, budget: int = 1, seed: int = 0) -> OptimResult:
-        """The policy's design for a problem's object, then ``budget - 1`` evaluations of
-        CMA-ES started at it (step size :data:`REFINE_SIGMA`, :data:`REFINE_JAW_SIGMA` in the
-        jaw columns, :func:`refine_stds`): an :class:`OptimResult` with method ``"policy"``."""
+        """The best of the policy's candidate designs for a problem's object (:meth:`starts`),
+        then CMA-ES started at it for the rest of the budget (step size :data:`REFINE_SIGMA`,
+        :data:`REFINE_JAW_SIGMA` in the jaw columns, :func:`refine_stds`): an
+        :class:`OptimResult` with method ``"policy"``."""
         from .cmaes import run_cmaes
 
         budget, seed = check_budget(budget), check_seed(seed)
         if problem.bounds != self.bounds:
             raise ValueError(f"the problem's design box {problem.bounds} is not the one the "
                              f"policy designs in, {self.bounds}")
-        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient,
-                             problem.payload_factor, problem_tolerance_rel(problem))
+        starts = self.starts(problem)
         problem.start(budget)
-        problem.evaluate(x0[None, :])
+        first_out = problem.evaluate(starts[:budget])
+        x0 = starts[int(np.argmax(first_out["reward"]))]
         first = (problem.best_reward, problem.n_evaluations)
         stds = refine_stds(self.bounds)
-        if budget > 1:
-            run_cmaes(_Continue(problem), budget=budget - 1, seed=seed,
+        if budget > first[1]:
+            run_cmaes(_Continue(problem), budget=budget - first[1], seed=seed,
                       x0=np.clip(x0, -1.0, 1.0), sigma0=REFINE_SIGMA, stds=stds)
         return problem.result("policy", seed, options={"refine": budget - 1,
                                                        "sigma0": REFINE_SIGMA,
@@ -335,7 +357,7 @@ class _Continue:
     def __init__(self, problem: DesignProblem) -> None:
         self._problem = problem
 
-    def start(self, budget: int | None) -> None:
+    def start(self, budget: int | None, time_limit_s: float | None = None) -> None:
         pass
 
     def result(self, *args: Any, **kwargs: Any) -> None:
@@ -520,6 +542,23 @@ def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,
     elif not isinstance(policy, DesignPolicy):
         policy = load_policy(policy)
     return policy.run(problem, budget=budget, seed=seed)
+
+
+def policy_starts(problem: DesignProblem) -> np.ndarray:
+    """The shipped policy's candidate designs for a problem (:meth:`DesignPolicy.starts`),
+    normalized rows; none (shape (0, n_var)) where no shipped policy designs in the problem's
+    box or observes its object: a search's optional starts (:mod:`optim.portfolio`)."""
+    none = np.zeros((0, problem.n_var))
+    jaw = problem.bounds.jaw
+    if jaw not in SHIPPED_JAWS or problem.bounds.jaw_per_finger:
+        return none
+    try:
+        policy = _shipped_policy(jaw)
+        if problem.bounds != policy.bounds:
+            return none
+        return policy.starts(problem)
+    except (ValueError, OSError):  # an object it cannot observe, a policy that does not fit
+        return none
 
 
 @functools.cache

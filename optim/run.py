@@ -48,17 +48,17 @@ from .problem import (
     paper_design_for,
 )
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason
+from .verdict import NO_GRASP_EXIT, UNDECIDED_EXIT, search_verdict
 
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
            "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
            "check_observable", "jaw_settings", "check_policy_jaw", "NO_GRASP_EXIT",
-           "DEMO_SCENE"]
+           "UNDECIDED_EXIT", "DEMO_SCENE"]
 
 # the demo's placement tolerance, +- both ways [m] (3 % of the disk's radius)
 DEMO_TOLERANCE_M = 0.002
 DEMO_BUDGET = 2000
 DEMO_VERIFY_TOP = 3
-NO_GRASP_EXIT = 3  # exit code of `optimize` when the best design found is not a grasp
 DEMO_SCENE = "paper-r070"
 REFERENCE_TORQUES_NM = (0.05, 0.1, 0.2, 0.3, 0.5)
 
@@ -352,7 +352,9 @@ def run_optimize(
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
     grasp that holds the object (valid, converged, both fingers touching, the friction it
     needs within the object's); when it is not, a warning goes to stderr (and ``psm-grasp
-    optimize`` exits with :data:`NO_GRASP_EXIT`).
+    optimize`` exits with :data:`NO_GRASP_EXIT` when the run's independent starts agree that
+    nothing holds, :data:`UNDECIDED_EXIT` when they cannot say: ``extra["verdict"]``,
+    :func:`optim.verdict.search_verdict`).
 
     Raises
     ------
@@ -408,18 +410,20 @@ def run_optimize(
             bar.close()
         if obj is not None:
             result = replace(result, object={**result.object, "file": obj.info()["file"]})
+        search_s = result.wall_time_s
         if finish:
             from .finish import finish_result
 
             result = finish_result(problem, result)
+        result = replace(result, extra={**result.extra,
+                                        "verdict": search_verdict(result, search_s)})
         reference = paper_reference(problem, scene)
         paths = write_outputs(result, out_dir, prefix, problem,
                               None if reference is None else reference[0])
     if verbose:
         _print_summary(result, reference, paths)
     if not result.extra["grasp_found"]:
-        print(f"psm-grasp: warning: {method} found no grasp in {result.n_evaluations} "
-              f"evaluations: its best design {no_grasp_reason(result.best_metrics)} (reward "
+        print(f"psm-grasp: warning: {method}: {result.extra['verdict']['message']} (reward "
               f"{result.best_reward:.4f}); the files in {str(out_dir)!r} describe that design",
               file=sys.stderr)
     return result, paths
