@@ -34,6 +34,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .evaluate import METRIC_KEYS, evaluate_designs
+from .model.defaults import PLAUSIBLE_RANGES
 from .model.jaw import DESIGN_WIDTHS
 from .scene import DESIGN_FIELDS, SoftDisk
 from .validation import check_range
@@ -152,9 +153,9 @@ class Scenarios:
                 raise ValueError(f"ranges: unknown field {name!r}; allowed: {allowed}")
             checked[name] = _check_range_pair(name, pair)
         object.__setattr__(self, "ranges", checked)
+        high = PLAUSIBLE_RANGES["placement_tolerance_m"][1]
         for name in ("placement_along_m", "placement_across_m"):
-            object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0,
-                                                       math.inf))
+            object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0, high))
 
     @classmethod
     def of(cls, ranges: Mapping[str, Any] | None = None,
@@ -164,10 +165,12 @@ class Scenarios:
         along = across = 0.0
         if placement_tolerance_m is not None:
             tol = placement_tolerance_m
+            high = PLAUSIBLE_RANGES["placement_tolerance_m"][1]
             if isinstance(tol, int | float) and not isinstance(tol, bool):
-                along = across = float(tol)
+                along = across = check_range("placement_tolerance_m", tol, 0.0, high)
             elif hasattr(tol, "__len__") and len(tol) == 2 and not isinstance(tol, str):
-                along, across = tol
+                along, across = (check_range(f"placement_tolerance_m[{i}]", v, 0.0, high)
+                                 for i, v in enumerate(tol))
             else:
                 raise ValueError("placement_tolerance_m must be a number or a pair (along, "
                                  f"across) [m], got {tol!r}")
