@@ -13,7 +13,7 @@ from typing import Any
 
 from optim import run
 
-from .options import cli_option
+from .options import cli_option, object_option
 
 __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 
@@ -21,7 +21,6 @@ __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 def _optimize_command(args: argparse.Namespace) -> int:
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
-    from envs.object_file import load_object
     from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
@@ -41,7 +40,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other: the object is a preset's "
                          "disk or your own")
-    obj = None if args.object is None else load_object(args.object)
+    obj = None if args.object is None else object_option(args.object)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
     cli_option("--budget", check_budget, args.budget)
@@ -162,11 +161,12 @@ def placement_tolerance(text: str) -> float | tuple[float, float]:
 
 
 def _verify_command(args: argparse.Namespace) -> int:
-    from envs.validation import check_output_dir
+    from envs.validation import check_integer, check_output_dir
     from optim.result import OptimResult
-    from optim.verify import find_result, verify_exit_code
+    from optim.verify import MAX_TOP, find_result, verify_exit_code
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
+    check_integer("--top", args.top, 1, MAX_TOP)
     path = find_result(args.out_dir, args.result)
     check_output_dir("OUT_DIR", args.out_dir)
     recorded = OptimResult.from_json(path)
@@ -180,9 +180,8 @@ def _verify_command(args: argparse.Namespace) -> int:
 
 def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
     """``verify --object FILE``: the run in OUT_DIR must be a run for that object."""
-    from envs.object_file import load_object
 
-    spec = load_object(object_file)
+    spec = object_option(object_file)
     fields = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
               "stiffness_scale")
     differ = [k for k in fields
@@ -272,8 +271,9 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     from envs.model.family import ELEMENTS
     from envs.scenarios import ROBUST_MEASURES
     from envs.scene import PRESETS
+    from optim.executors import MAX_WORKERS_PER_CPU
     from optim.optimize import METHODS
-    from optim.problem import DEFAULT_STRAIN_LIMIT
+    from optim.problem import DEFAULT_STRAIN_LIMIT, MAX_BUDGET
     from optim.verify import MAX_TOP
 
     p = subparsers.add_parser(
@@ -293,7 +293,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
-    p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
+    p.add_argument("--budget", type=int, default=2000,
+                   help=f"evaluations, in [1, {MAX_BUDGET:,}] (default %(default)s)")
     p.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="wall seconds the search may take, beside --budget: it stops at "
                    "whichever ends first (the finish and the files come after it)")
@@ -307,7 +308,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "designs (GA, random search): each task carries at least 64 designs")
     p.add_argument("--workers", type=int,
                    help="parallel workers: local processes without --dask, LocalCluster "
-                        "workers with --dask local (default: in-process, batched, already on "
+                        f"workers with --dask local, at most {MAX_WORKERS_PER_CPU} per core "
+                        "(default: in-process, batched, already on "
                         "every core; on one machine workers do not pay, least of all for "
                         "CMA-ES's 9-design populations)")
     p.add_argument("--strain-limit", type=float, default=None,

@@ -11,7 +11,7 @@ import argparse
 from typing import Any
 
 from .optimize import add_jaw_options
-from .options import cli_option
+from .options import cli_option, object_option
 
 __all__ = ["add_policy_parsers"]
 
@@ -48,14 +48,13 @@ def _train_command(args: argparse.Namespace) -> int:
 
 
 def _design_command(args: argparse.Namespace) -> int:
-    from envs.object_file import load_object
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
     from optim import run
     from optim.problem import check_seed
     from optim.rl import load_policy
 
-    obj = load_object(args.object)
+    obj = object_option(args.object)
     # the shipped policies design straight or any jaws: others (asked for here or by the
     # object file) are refused before any work, with the command that designs them
     jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,

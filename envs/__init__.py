@@ -13,6 +13,8 @@ with shaped jaws in the action: a separate id, not a later version of v2) with G
 
 from __future__ import annotations
 
+import warnings
+
 import gymnasium
 
 from ._kernel_cache import kernel_cache
@@ -70,6 +72,12 @@ if ENV_ID not in gymnasium.registry:
         # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
         # would also flag that step as truncated (Gymnasium's checker rejects it)
     )
+
+# v3 is v2 with shaped jaws (a wider action), not a newer v2: Gymnasium's "The environment
+# GripperDesign-v2 is out of date. You should consider upgrading to version `v3`", which it
+# says for any lower version of a registered name, would be wrong advice on every make of v2
+warnings.filterwarnings("ignore", message=r".*The environment GripperDesign-v2 is out of date",
+                        category=DeprecationWarning)
 
 if JAW_ENV_ID not in gymnasium.registry:
     gymnasium.register(

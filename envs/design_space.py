@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import vectorize
 
+from .model.defaults import MAX_TORQUE_UNITS
 from .model.geometry import corner_radius
 from .model.jaw import MAX_DEPTH_OF_WIDTH, MAX_OPENING_RAD, groove_mouth
 from .scene import (
@@ -22,7 +23,7 @@ from .scene import (
     design_from_relative,
     relative_from_design,
 )
-from .validation import check_range
+from .validation import check_range, check_sequence
 
 __all__ = [
     "DesignBounds",
@@ -32,6 +33,7 @@ __all__ = [
     "JAW_BOUNDS",
     "jaw_mouth_half_width",
     "fitting_depth",
+    "RELATIVE_LIMITS",
     "touch_foot_r",
 ]
 
@@ -143,6 +145,20 @@ def _scales(disks, batch: int | None) -> tuple[np.ndarray, np.ndarray]:
             np.array([d.torque_unit_nm for d in disks], dtype=np.float64))
 
 
+# the range each relative column's bounds may take at all: (low, high, low_open, high_open).
+# Lengths up to 100 radii (the default box reaches 8), a finger narrower than the object's
+# diameter, the rest angle in (0, 90 deg) as for a Gripper (in radians: 60 is degrees typed),
+# the torque up to MAX_TORQUE_UNITS (as envs.scene.check_torque), a rest clearance down to
+# an overlap of one radius (a box reaching into overlaps gets the graded invalid penalty)
+RELATIVE_LIMITS: dict[str, tuple[float, float, bool, bool]] = {
+    "finger_length_r": (0.0, 100.0, True, False),
+    "rest_angle_rad": (0.0, math.pi / 2, True, True),
+    "joint_offset_r": (0.0, 100.0, False, False),
+    "finger_width_r": (0.0, 2.0, True, True),
+    "torque_rel": (0.0, MAX_TORQUE_UNITS, False, False),
+    "rest_clearance_r": (-1.0, 100.0, False, False),
+}
+
 # the relative columns the joints-apart option couples (DesignBounds.joints_apart)
 _OFFSET_R = RELATIVE_FIELDS.index("joint_offset_r")
 _WIDTH_R = RELATIVE_FIELDS.index("finger_width_r")
@@ -213,7 +229,10 @@ class DesignBounds:
     Parameters
     ----------
     low, high
-        Lower and upper bound of each of the six relative columns, ``low < high``.
+        Lower and upper bound of each of the six relative columns, ``low < high``, each
+        within :data:`RELATIVE_LIMITS` (lengths up to 100 radii, the finger narrower than the
+        object's diameter, the rest angle in (0, pi/2) radians, the torque up to 10 units, the
+        clearance from -1 to 100 radii).
     joints_apart
         Keep the joints at least half a finger width from the axis (``d_3 >= w / 2``); needs
         ``high`` of ``joint_offset_r`` at least half ``high`` of ``finger_width_r``.
@@ -238,11 +257,12 @@ class DesignBounds:
 
     def __post_init__(self) -> None:
         for name in ("low", "high"):
-            given = tuple(getattr(self, name))
-            if len(given) != N_DESIGN:
-                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(given)}")
+            given = check_sequence(f"DesignBounds.{name}", getattr(self, name), N_DESIGN)
             # checked as given, not after float(): "0.2" and True are not bounds
-            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v)
+            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v,
+                                     *RELATIVE_LIMITS[field_name][:2],
+                                     low_open=RELATIVE_LIMITS[field_name][2],
+                                     high_open=RELATIVE_LIMITS[field_name][3])
                          for field_name, v in zip(RELATIVE_FIELDS, given, strict=True))
             object.__setattr__(self, name, vals)
         for field_name, lo, hi in zip(RELATIVE_FIELDS, self.low, self.high, strict=True):
@@ -276,7 +296,7 @@ class DesignBounds:
             given = getattr(self, name)
             if given is None:
                 given = tuple(JAW_BOUNDS[self.jaw][c][index] for c in columns)
-            given = tuple(given)
+            given = check_sequence(f"DesignBounds.{name}", given)
             if len(given) != len(columns):
                 raise ValueError(f"DesignBounds.{name} needs {len(columns)} values for jaw "
                                  f"{self.jaw!r} ({', '.join(columns)}), got {len(given)}")

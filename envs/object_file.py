@@ -64,16 +64,17 @@ from .model.defaults import (
     OBJECT_DENSITY_KG_M3,
 )
 from .scenarios import RANGE_FIELDS, Scenarios
-from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
+from .scene import Gripper, Scene, SoftDisk, check_torque, joint_spring_nm_per_rad
 from .tolerances import Tolerances, parse_tolerances
-from .validation import check_range, read_text_file, unit_slip
+from .validation import check_plausible, check_range, read_text_file
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["ObjectSpec", "GripperSpec", "load_object", "OBJECT_KEYS", "GRIPPER_KEYS"]
+__all__ = ["ObjectSpec", "GripperSpec", "load_object", "OBJECT_KEYS", "GRIPPER_KEYS",
+           "OBJECT_TABLE_KEYS", "check_value"]
 
 # key -> (low, high, low_open, high_open, required) of the [object] table
 OBJECT_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
@@ -106,6 +107,8 @@ TOLERANCE_RULE = (0.0, math.inf, False, False, False)
 JAW_KEY, JAW_PER_FINGER_KEY = "jaw", "jaw_per_finger"
 # the [gripper] table's manufacturing tolerances (envs.tolerances.TOLERANCE_KEYS)
 TOLERANCES_KEY = "tolerances"
+# every key of the [object] table, in the order the unknown-key message lists them
+OBJECT_TABLE_KEYS = ("name", TOLERANCE_KEY, *OBJECT_KEYS, JAW_KEY, JAW_PER_FINGER_KEY)
 
 
 @dataclass(frozen=True)
@@ -211,20 +214,25 @@ class ObjectSpec:
         return str(self.path) if self.path is not None else self.name
 
 
+def check_value(key: str, value: Any, rule: tuple[float, float, bool, bool, bool]) -> float:
+    """One number of an object's description (a key of :data:`OBJECT_KEYS` or
+    :data:`GRIPPER_KEYS` with its rule), wherever it is read (an object file, a run's result):
+    a number (not a bool or a string: ``True`` is not 1 m), in the key's allowed range and in
+    its plausible range (:func:`envs.validation.check_plausible`); ``ValueError`` naming
+    ``key`` otherwise."""
+    low, high, low_open, high_open, _ = rule
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{key} must be a number, got {value!r}")
+    check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+    return check_plausible(key, value)
+
+
 def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bool, bool]
             ) -> float:
-    low, high, low_open, high_open, _ = rule
-    # TOML has booleans and strings: neither is a number here (True is not 1 m)
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{where}: {key} must be a number, got {value!r}")
     try:
-        value = check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+        return check_value(key, value, rule)
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
-    slip = unit_slip(key, value)
-    if slip is not None:
-        raise ValueError(f"{where}: {slip}")
-    return value
 
 
 def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = (),
@@ -297,6 +305,13 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
                     values["poisson_ratio"], values["thickness_m"],
                     values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
                     density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3))
+    if gripper is not None and gripper.torque_nm is not None:
+        try:  # a torque far beyond what squeezes this object (N·mm typed for N·m)
+            check_torque("torque_nm", data["gripper"]["torque_nm"], disk.torque_unit_nm,
+                         joint_spring_nm_per_rad(disk, None,
+                                                 gripper.torsion_stiffness_nm_per_rad))
+        except ValueError as exc:
+            raise ValueError(f"{where}: [gripper]: {exc}") from None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
                       values.get("friction_coefficient"), gripper, path, scenarios,
                       values.get("payload_factor"), jaw, per_finger, tolerances)
@@ -333,13 +348,25 @@ def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str
                              f"allowed for {allowed})")
         if len(value) != 2:
             raise ValueError(f"{where}: {key} as a range must be [low, high], got {value!r}")
-        low, high = (_number(where, f"{key}[{i}]", v, OBJECT_KEYS[key])
-                     for i, v in enumerate(value))
+        ends = []
+        for end, v in zip(("low", "high"), value, strict=True):
+            try:  # each end like the key's single value, the range quoted as written
+                ends.append(check_value(key, v, OBJECT_KEYS[key]))
+            except ValueError as exc:
+                raise ValueError(f"{where}: {key} = {_written(value)}: its {end} end: {exc}"
+                                 ) from None
+        low, high = ends
         if not low <= high:
             raise ValueError(f"{where}: {key} = {value!r}: low must not exceed high")
         ranges[key] = (low, high)
         table[key] = 0.5 * (low + high)
     return table, ranges
+
+
+def _written(value: list) -> str:
+    """A TOML array as the file writes it (``[10, 15]``)."""
+    return "[" + ", ".join(repr(v) if not isinstance(v, bool) else str(v).lower()
+                           for v in value) + "]"
 
 
 def _tolerance(where: str, value: Any) -> float | tuple[float, float] | None:

@@ -46,6 +46,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .evaluate import METRIC_KEYS, evaluate_designs
+from .model.defaults import PLAUSIBLE_RANGES
 from .model.jaw import DESIGN_WIDTHS
 from .scene import DESIGN_FIELDS, SoftDisk
 from .tolerances import (
@@ -200,9 +201,9 @@ class Scenarios:
                 raise ValueError(f"ranges: unknown field {name!r}; allowed: {allowed}")
             checked[name] = _check_range_pair(name, pair)
         object.__setattr__(self, "ranges", checked)
+        high = PLAUSIBLE_RANGES["placement_tolerance_m"][1]
         for name in ("placement_along_m", "placement_across_m"):
-            object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0,
-                                                       math.inf))
+            object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0, high))
         if self.tolerances is None:
             object.__setattr__(self, "tolerances", Tolerances())
         if not isinstance(self.tolerances, Tolerances):
@@ -210,13 +211,15 @@ class Scenarios:
                              f"{type(self.tolerances).__name__}")
 
     def check_placement(self, radius_m: float) -> None:
-        """A placement tolerance larger than the object's radius ``radius_m`` [m] is refused,
-        with the unit it was most likely typed in (``1.5`` for 1.5 mm)."""
+        """A placement tolerance larger than the object's radius ``radius_m`` [m] is refused;
+        ten radii and more, with the unit it was most likely typed in (``0.5`` for 0.5 mm on
+        a 12 mm object)."""
         for name, value in (("along", self.placement_along_m),
                             ("across", self.placement_across_m)):
             if value > radius_m:
+                # ten radii and more: most likely millimetres typed as metres
                 hint = (f": was it typed in millimetres? {value:g} mm is {value * 1e-3:g} m"
-                        if value * 1e-3 <= radius_m else "")
+                        if value * 1e-3 <= radius_m <= 0.1 * value else "")
                 raise ValueError(f"placement_tolerance_m ({name} the axis) = {value:g} m "
                                  f"exceeds the object's radius {radius_m:g} m{hint}")
 
@@ -229,10 +232,12 @@ class Scenarios:
         along = across = 0.0
         if placement_tolerance_m is not None:
             tol = placement_tolerance_m
+            high = PLAUSIBLE_RANGES["placement_tolerance_m"][1]
             if isinstance(tol, int | float) and not isinstance(tol, bool):
-                along = across = float(tol)
+                along = across = check_range("placement_tolerance_m", tol, 0.0, high)
             elif hasattr(tol, "__len__") and len(tol) == 2 and not isinstance(tol, str):
-                along, across = tol
+                along, across = (check_range(f"placement_tolerance_m[{i}]", v, 0.0, high)
+                                 for i, v in enumerate(tol))
             else:
                 raise ValueError("placement_tolerance_m must be a number or a pair (along, "
                                  f"across) [m], got {tol!r}")

@@ -5,16 +5,20 @@ jaws under scenarios the reward has cliffs (the strain limit, holding the payloa
 (a grasp that slips scores below every grasp that holds), and the basins a run can fall into
 differ several-fold in reward. The portfolio spends its budget so that no single basin decides:
 
-1. **Screen**: a scrambled Sobol sample of the box (:data:`SCREEN_SHARE` of the budget), a
-   quarter of it on straight bars when the jaws are shaped, every design judged as the search
-   judges all (every scenario).
+1. **Screen**: a scrambled Sobol sample of the box, a quarter of it on straight bars when the
+   jaws are shaped, and the shipped design policy's candidates. By default each design is
+   judged on the nominal scenario alone (``screen="nominal"``): with ``K`` scenarios that is
+   ``K`` times as many designs for the same charge (:meth:`~optim.problem.DesignProblem.screen`),
+   and the nominal reward still tells a promising region from a hopeless one where the worst
+   scenario's does not (most designs fail somewhere, and a failing design says little about
+   its neighbours). The best of them, apart from each other, are then judged as the search
+   judges all (every scenario). :data:`SCREEN_SHARE` of the budget goes to the screen.
 2. **Starts**: the best screened designs that lie apart from each other (:data:`START_SPACING`
    in the normalized box), and, with shaped jaws, a start confined to straight bars (from the
    best screened straight bar): the grooved search then never ends below a straight search
-   that had its share.
-   With shaped jaws the search reads the groove's position as an offset from where the
-   object meets the finger (:data:`ALIGN_REACH_R` radii either way), so that a sampled groove
-   lies under the object, not elsewhere on the finger.
+   that had its share. With shaped jaws the search reads the groove's position as an offset
+   from where the object meets the finger (:data:`ALIGN_REACH_R` radii either way), so that a
+   sampled groove lies under the object, not elsewhere on the finger.
 3. **Race**: every live start is a CMA-ES (step :data:`SIGMA0`) asked for a population each
    round; the rounds' populations are evaluated in one batch. At :data:`HALVING_SHARES` of the
    budget the worse half of the live starts (by their best reward) stop, so the budget goes to
@@ -23,7 +27,7 @@ differ several-fold in reward. The portfolio spends its budget so that no single
 
 The result records each start's best (``extra["starts"]``): the finish re-scores every start's
 best with the finer member beside the run's best distinct designs, and a verdict that nothing
-holds (:func:`starts_verdict`) needs the starts to agree.
+holds (:func:`optim.verdict.search_verdict`) needs the starts to agree.
 """
 
 from __future__ import annotations
@@ -55,9 +59,8 @@ SIGMA0 = 0.25
 ALIGN_REACH_R = 1.0
 # starts closer than this in every normalized coordinate to a better one are the same basin
 START_SPACING = 0.3
-# the nominal screen (run_portfolio's screen="nominal"): this many times the robust screen's
-# designs on the nominal scenario alone, then the best few per start judged robustly
-NOMINAL_SCREEN_FACTOR = 3
+# the nominal screen (run_portfolio's screen="nominal"): the best this many designs per start,
+# apart from each other, are judged robustly
 POOL_PER_START = 3
 SCREENS = ("robust", "nominal")
 # shares of the budget left after the screen, after which the worse half of the live starts
@@ -296,7 +299,7 @@ def run_portfolio(
     sigma0: float = SIGMA0,
     popsize: int | None = None,
     policy: bool = True,
-    screen: str = "robust",
+    screen: str = "nominal",
 ) -> OptimResult:
     """Maximize the reward with a portfolio of CMA-ES starts from a screened sample of the box.
 
@@ -319,11 +322,10 @@ def run_portfolio(
         problem's box and observes its object (:func:`optim.rl.policy_starts`; a few
         evaluations): they become starts only when they screen better than the sample.
     screen
-        ``"robust"``: the screen judges each design as the search does (every scenario);
-        ``"nominal"``: on the nominal scenario alone, at a ninth of the cost with 9 scenarios
-        (:meth:`~optim.problem.DesignProblem.screen`), :data:`NOMINAL_SCREEN_FACTOR` times as
-        many designs, of which the best :data:`POOL_PER_START` per start, apart from each
-        other, are then judged robustly.
+        ``"nominal"`` (default): the screen judges its designs on the nominal scenario alone,
+        ``K`` times as many for the charge of the robust screen's, then the best
+        :data:`POOL_PER_START` per start of them robustly; ``"robust"``: it judges each design
+        as the search does (every scenario). Without scenarios both are the same.
 
     Returns
     -------

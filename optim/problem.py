@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.evaluate import (
+    MAX_CHUNK_SIZE,
     METRIC_KEYS,
     DesignBounds,
     RewardWeights,
@@ -53,7 +54,7 @@ from envs.scene import (
     joint_spring_kwargs,
     relative_from_design,
 )
-from envs.validation import check_range
+from envs.validation import check_integer, check_range, real_array
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
 
@@ -82,6 +83,9 @@ SEARCH_PAYLOAD_MARGIN = 1.1
 # process): a round trip to a spawned worker costs about 6 ms, so 9 designs in 2 tasks ran at
 # 600 designs/s against 2600 in process, and 64-row tasks reach 80-90 % of the in-process rate.
 MIN_CHUNK_SIZE = 64
+# the most evaluations a run may be given: about an hour of the default model in process on 2
+# cores (~2,600 designs/s, MIN_CHUNK_SIZE's note); a larger budget is a typo (an extra 000)
+MAX_BUDGET = 10_000_000
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
 DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design box's width
@@ -125,7 +129,7 @@ class BudgetExhaustedError(RuntimeError):
 
 
 def check_budget(budget: Any) -> int:
-    """Validate an evaluation budget: an integer >= 1.
+    """Validate an evaluation budget: an integer in [1, :data:`MAX_BUDGET`].
 
     Raises
     ------
@@ -133,19 +137,26 @@ def check_budget(budget: Any) -> int:
         Naming the value and the allowed range.
     """
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
-        raise ValueError(f"budget must be an integer >= 1 (evaluations), got {budget!r}")
+        raise ValueError(f"budget must be an integer in [1, {MAX_BUDGET:,}] (evaluations), got "
+                         f"{budget!r}")
+    if budget > MAX_BUDGET:
+        raise ValueError(f"budget = {int(budget):,} is outside the allowed range [1, "
+                         f"{MAX_BUDGET:,}] (evaluations: {MAX_BUDGET:.0e} take about an hour at "
+                         "the in-process rate of ~2,600 designs/s on 2 cores; for a longer "
+                         "search give --time SECONDS)")
     return int(budget)
 
 
-def check_time_limit(time_limit_s: Any) -> float:
-    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`].
+def check_time_limit(time_limit_s: Any, name: str = "time_limit_s") -> float:
+    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`] (``name``: the
+    parameter's, for the message).
 
     Raises
     ------
     ValueError
         Naming the value and the allowed range.
     """
-    return check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
+    return check_range(name, time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
 
 
 def check_seed(seed: Any) -> int:
@@ -366,9 +377,8 @@ class DesignProblem:
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")
         self.executor = executor
-        if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
-            raise ValueError(f"chunk_size must be None or an integer >= 1, got {chunk_size!r}")
-        self.chunk_size = None if chunk_size is None else int(chunk_size)
+        self.chunk_size = None if chunk_size is None else check_integer(
+            "chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
         self.progress = progress
         self.name = name
         self.time_limit_s: float | None = None
@@ -473,9 +483,9 @@ class DesignProblem:
 
     def to_physical(self, x: Any) -> np.ndarray:
         """Normalized rows (..., :attr:`n_var`), clipped to [-1, 1], in physical units (SI:
-        6, 10 or 14 columns, :attr:`DesignBounds.design_width
-        <envs.evaluate.DesignBounds.design_width>`)."""
-        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
+        6, 10 or 14 columns,
+        :attr:`~envs.design_space.DesignBounds.design_width`)."""
+        return self.bounds.scale(np.clip(real_array("x", x), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
         """One normalized row as ``{field: value}`` in physical units (the jaw fields of

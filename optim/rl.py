@@ -49,6 +49,7 @@ from envs.evaluate import DesignBounds, RewardWeights
 from envs.model.defaults import DEFAULT_PAYLOAD_FACTOR
 from envs.model.family import resolve_model
 from envs.scene import SoftDisk
+from envs.validation import check_input_file
 
 from .problem import DesignProblem, check_budget, check_seed
 from .result import OptimResult
@@ -73,6 +74,15 @@ RL_METHODS = ("sac", "ppo")
 RL_HINT = "training a policy needs stable-baselines3 and torch: pip install 'psm-grasp[rl]'"
 POLICY_FORMAT = 1
 POLICY_FILES = ("policy.json", "policy.npz")
+ACTIVATIONS = ("relu", "tanh")  # of the hidden layers (DesignPolicy.actions)
+SQUASHES = ("tanh", "clip")  # of the output: SAC's tanh, PPO's clipped mean
+MAX_LAYERS = 64  # a policy's linear layers at most (the shipped ones have 3)
+# the type of each key of a policy's metadata (DesignPolicy.save, train_policy's meta)
+POLICY_META_TYPES: dict[str, type] = {
+    "format": int, "obs_fields": list, "bounds": dict, "name": str, "package_version": str,
+    "reward_weights": dict, "model": dict, "joint_spring": dict, "distribution": dict,
+    "method": str, "training": dict, "activation": str, "squash": str, "n_layers": int}
+_KIND_WORDS = {int: "an integer", list: "a list", dict: "an object ({...})", str: "a string"}
 SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
 # the shipped policy that designs shaped jaws too (the "any" jaw space of GripperJawDesign-v0)
 SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
@@ -448,11 +458,32 @@ def load_policy(path: str | Path | None = None, jaw: str = "straight") -> Design
     meta = _read_meta(folder / "policy.json")
     _check_meta(meta, where)
     layers = _read_layers(folder / "policy.npz", meta["n_layers"])
+    _check_layers(layers, bounds_of_meta(meta["bounds"]).n_var, folder / "policy.npz")
     return DesignPolicy(layers, meta.pop("activation"), meta.pop("squash"), meta)
+
+
+def _check_layers(layers: list[tuple[np.ndarray, np.ndarray]], n_out: int, path: Path) -> None:
+    """The layers of a policy chain from the observation to the action: ``w{k}`` (out, in)
+    with ``in`` the previous layer's ``out`` (the first: the observation's fields), ``b{k}``
+    (out,), the last ``out`` the action's width, every number finite; ``ValueError`` naming
+    the file and the array otherwise."""
+    width = len(OBS_FIELDS)
+    for k, (w, b) in enumerate(layers):
+        out = n_out if k == len(layers) - 1 else (w.shape[0] if w.ndim == 2 else -1)
+        if w.shape != (out, width) or b.shape != (out,):
+            raise ValueError(f"{str(path)!r}: not a policy this package can run (w{k} has "
+                             f"shape {w.shape} and b{k} {b.shape}, layer {k} needs "
+                             f"({out}, {width}) and ({out},))")
+        for name, a in ((f"w{k}", w), (f"b{k}", b)):
+            if not np.isfinite(a).all():
+                raise ValueError(f"{str(path)!r}: {name} holds a value that is not a finite "
+                                 "number (NaN or inf): not a trained policy")
+        width = out
 
 
 def _read_meta(path: Path) -> dict[str, Any]:
     """A policy's ``policy.json``; ``ValueError`` naming the file otherwise."""
+    check_input_file("the policy's metadata", path)
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
@@ -462,12 +493,21 @@ def _read_meta(path: Path) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise ValueError(f"{str(path)!r}: not a policy's metadata (a JSON "
                          f"{type(meta).__name__}, not an object)")
+    for key, kind in POLICY_META_TYPES.items():
+        value = meta.get(key)
+        if key in meta and (not isinstance(value, kind) or isinstance(value, bool)):
+            raise ValueError(f"{str(path)!r}: not a policy's metadata ({key} = {value!r} is "
+                             f"not {_KIND_WORDS[kind]})")
     missing = [k for k in ("n_layers", "activation", "squash") if k not in meta]
     n = meta.get("n_layers")
-    if missing or isinstance(n, bool) or not isinstance(n, int) or n < 1:
+    if missing or isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_LAYERS:
         raise ValueError(f"{str(path)!r}: not a policy's metadata (" + (
-            f"no {missing[0]!r}" if missing else f"n_layers = {n!r}, not an integer >= 1")
-            + ")")
+            f"no {missing[0]!r}" if missing else f"n_layers = {n!r}, not an integer in "
+            f"[1, {MAX_LAYERS}]") + ")")
+    for key, allowed in (("activation", ACTIVATIONS), ("squash", SQUASHES)):
+        if meta[key] not in allowed:
+            raise ValueError(f"{str(path)!r}: not a policy's metadata ({key} = {meta[key]!r} "
+                             f"is not one of {allowed})")
     return meta
 
 
@@ -477,6 +517,7 @@ def _read_layers(path: Path, n_layers: int) -> list[tuple[np.ndarray, np.ndarray
     import zipfile
     import zlib
 
+    check_input_file("the policy's archive", path)
     try:
         with np.load(path, allow_pickle=False) as data:
             names = [name for k in range(n_layers) for name in (f"w{k}", f"b{k}")]

@@ -433,7 +433,7 @@ def run_optimize(
                                       jaw_per_finger=jaw_per_finger, tolerances=tolerances)
     parts = check_parts(parts)
     budget, seed = check_budget(budget), check_seed(seed)
-    time_s = None if time_s is None else check_time_limit(time_s)
+    time_s = None if time_s is None else check_time_limit(time_s, "time_s")
     check_joints_apart(method, joints_apart)
     check_policy_jaw(method, settings)
     if method == "policy":

@@ -66,7 +66,9 @@ def test_simulate_reports_solve_and_kernel_load_apart(capsys):
     (["--triangles", "600", "--element", "spring"], r"beyond N = 500 most solves fail"),
     (["--triangles", "2001"], r"n_triangles = 2001 is outside the allowed range \[4, 2000\]"),
     (["--rings", "1", "--element", "nhquad"], r"n_rings = 1 is outside the allowed range"),
-    (["--budget", "0"], r"--budget: budget must be an integer >= 1 .*got 0"),
+    (["--budget", "0"], r"--budget: budget must be an integer in \[1, 10,000,000\] .*got 0"),
+    (["--budget", "1000000000000"], r"--budget: budget = 1,000,000,000,000 is outside the "
+                                    r"allowed range \[1, 10,000,000\]"),
     (["--strain-limit", "1.5"], r"--strain-limit: strain_limit = 1.5 is outside"),
 ])
 def test_optimize_checks_options_before_any_evaluation(argv, match, tmp_path, capsys,

@@ -81,7 +81,7 @@ def test_the_optimize_command_designs_for_an_object_file(tmp_path, capsys):
     ("[object]\nradius_m = 0.01\nyoungs_modulus_pa = 1e5\npoisson_ratio = 0.4\n"
      "thickness_m = 0.01\ncolor = 1\n", r"unknown key 'color'"),
     ("[object]\nradius_m = -1\nyoungs_modulus_pa = 1e5\npoisson_ratio = 0.4\n"
-     "thickness_m = 0.01\n", r"radius_m = -1.0 is outside"),
+     "thickness_m = 0.01\n", r"radius_m = -1 is outside"),
 ])
 def test_a_bad_object_file_stops_the_command_before_any_work(text, match, tmp_path, capsys,
                                                              monkeypatch):

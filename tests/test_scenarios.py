@@ -52,8 +52,10 @@ def test_bad_scenarios_are_named():
         Scenarios.of({"radius_m": (0.02, 0.01)})
     with pytest.raises(ValueError, match="placement_tolerance_m"):
         Scenarios.of(placement_tolerance_m="1 mm")
-    with pytest.raises(ValueError, match="placement_across_m"):
+    with pytest.raises(ValueError, match=r"placement_tolerance_m\[1\] = -0.001 is outside"):
         Scenarios.of(placement_tolerance_m=(0.001, -0.001))
+    with pytest.raises(ValueError, match="placement_across_m"):
+        Scenarios(placement_across_m=-0.001)
 
 
 def test_no_variation_is_the_plain_evaluation(paper_disk, designs):
@@ -169,7 +171,7 @@ def test_object_file_ranges_and_tolerance():
         parse_object({"object": {**base, "strain_limit": [0.1, 0.2]}}, "tomato.toml")
     with pytest.raises(ValueError, match="low must not exceed high"):
         parse_object({"object": {**base, "radius_m": [0.02, 0.01]}}, "tomato.toml")
-    with pytest.raises(ValueError, match=r"radius_m\[1\]"):
+    with pytest.raises(ValueError, match=r"radius_m = \[0.01, -1\]: its high end: radius_m = -1 "):
         parse_object({"object": {**base, "radius_m": [0.01, -1]}}, "tomato.toml")
     with pytest.raises(ValueError, match="placement_tolerance_m"):
         parse_object({"object": {**base, "placement_tolerance_m": -0.001}}, "tomato.toml")

@@ -106,17 +106,20 @@ def test_the_object_file_and_the_option_give_tolerances():
 
 
 def test_a_placement_tolerance_larger_than_the_object_is_refused_with_a_unit_hint():
-    with pytest.raises(ValueError, match=r"placement_tolerance_m \(along the axis\) = 1.5 m "
+    with pytest.raises(ValueError, match=r"placement_tolerance_m \(along the axis\) = 0.5 m "
                        r"exceeds the object's radius 0.012 m: was it typed in millimetres\? "
-                       r"1.5 mm is 0.0015 m"):
-        parse_object({"object": {**OBJECT, "placement_tolerance_m": 1.5}}, "f")
+                       r"0.5 mm is 0.0005 m"):
+        parse_object({"object": {**OBJECT, "placement_tolerance_m": 0.5}}, "f")
+    # beyond the radius but not ten times it: refused, without a guess at the unit
+    with pytest.raises(ValueError, match=r"= 0.02 m exceeds the object's radius 0.012 m$"):
+        parse_object({"object": {**OBJECT, "placement_tolerance_m": 0.02}}, "f")
     disk = Scene.preset("paper-r070").disk
     with pytest.raises(ValueError, match="exceeds the object's radius"):
         Scenarios.of({}, 0.5).nominal_disk(disk)
     from optim.problem import DesignProblem
 
     with pytest.raises(ValueError, match="typed in millimetres"):
-        DesignProblem(disk, scenarios=Scenarios.of({}, (0.002, 1.5)))
+        DesignProblem(disk, scenarios=Scenarios.of({}, (0.002, 0.9)))
 
 
 @pytest.mark.slow
