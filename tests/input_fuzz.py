@@ -178,6 +178,9 @@ def object_file_cases() -> list[dict[str, Any]]:
                 if table == "gripper" and key == "torque_nm" and expect == "valid":
                     # plausible on this object: at most MAX_TORQUE_UNITS of its torque unit
                     expect = _torque_expect(value, tables)
+                if key == TOLERANCE_KEY and expect == "valid" and isinstance(
+                        value, int | float) and value > GOOD_OBJECT["radius_m"]:
+                    expect = "refused"  # a placement error beyond the object's radius
                 cases.append(_file_case(f"[{table}] {key} = {value!r}", tables, key, expect))
             if key in RANGE_FIELDS and table == "object":
                 cases += _range_cases(key, rule, plausible)

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from envs.validation import check_range
 
 from .resolution import DEFAULT_RESOLUTION, Resolution
 
-__all__ = ["PartOptions"]
+__all__ = ["PartOptions", "MAX_PIN_DIAMETER_M"]
+
+MAX_PIN_DIAMETER_M = 1.0  # a pin of a metre and more: a unit typed wrong
 
 
 @dataclass(frozen=True)
@@ -22,7 +23,7 @@ class PartOptions:
         The manufacturing resolution (:class:`~optim.parts.resolution.Resolution`) the
         reported design is rounded to; ``None``: the design as found, unrounded.
     pin_diameter_m
-        The joint pin's diameter [m], > 0; ``None``: the default rule of
+        The joint pin's diameter [m], in (0, 1]; ``None``: the default rule of
         :func:`optim.parts.joint.default_pin_diameter` (half the finger width, rounded down to
         the resolution).
     """
@@ -36,4 +37,4 @@ class PartOptions:
                              f"Resolution, got {type(self.resolution).__name__}")
         if self.pin_diameter_m is not None:
             object.__setattr__(self, "pin_diameter_m", check_range(
-                "pin_diameter_m", self.pin_diameter_m, 0.0, math.inf, low_open=True))
+                "pin_diameter_m", self.pin_diameter_m, 0.0, MAX_PIN_DIAMETER_M, low_open=True))
