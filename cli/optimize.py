@@ -33,7 +33,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
         check_strain_limit,
         check_time_limit,
     )
-    from optim.verdict import verdict_exit_code
+    from optim.verdict import search_verdict, verdict_exit_code
     from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
@@ -96,7 +96,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
-        return verdict_exit_code(result.extra["verdict"])
+        return verdict_exit_code(result.extra.get("verdict") or search_verdict(result))
     return 0 if report is None else verify_exit_code(report)
 
 
