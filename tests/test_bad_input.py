@@ -393,7 +393,7 @@ def _write_run(folder: Path, grasp_found: bool = True):
                          top_designs=({"design": design,
                                                                 "reward": 0.0466},),
                          extra={"grasp_found": grasp_found})
-    result.to_json(folder / "cmaes_seed0_result.json")
+    result.to_json(folder / "portfolio_seed0_result.json")
     return result
 
 
@@ -489,7 +489,7 @@ def test_a_corrupted_policy_is_one_line_naming_the_file(policy_copy, tmp_path, c
     ("\udcff", "not a text (JSON) file"),
 ], ids=["broken", "list", "partial", "binary"])
 def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what):
-    path = tmp_path / "cmaes_seed0_result.json"
+    path = tmp_path / "portfolio_seed0_result.json"
     path.write_bytes(text.encode("utf-8", "surrogateescape"))
     for argv in (["verify", str(tmp_path)],
                  ["verify", str(tmp_path), "--object",
@@ -514,7 +514,7 @@ def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what
         "radius", "jaw"])
 def test_a_hand_edited_result_is_one_line_naming_what_is_missing(tmp_path, capsys, edit, what):
     pytest.importorskip("skfem")  # (verify refuses to start without it)
-    path = tmp_path / "cmaes_seed0_result.json"
+    path = tmp_path / "portfolio_seed0_result.json"
     _write_run(tmp_path)
     data = json.loads(path.read_text())
     edit(data)

@@ -153,12 +153,12 @@ def test_the_option_ranges_of_cli_md_are_the_checks():
 
 def test_cli_md_lists_every_exit_code_the_commands_return():
     from cli.main import BROKEN_PIPE_EXIT, ERROR_EXIT
-    from optim.run import NO_GRASP_EXIT
+    from optim.run import NO_GRASP_EXIT, UNDECIDED_EXIT
     from optim.verify import NOT_CONFIRMED_EXIT
 
     rows = _table_rows("docs/cli.md", "## Exit codes")
     assert {int(code) for code in rows if code.isdigit()} == {
-        0, 1, ERROR_EXIT, NO_GRASP_EXIT, NOT_CONFIRMED_EXIT, BROKEN_PIPE_EXIT}
+        0, 1, ERROR_EXIT, NO_GRASP_EXIT, NOT_CONFIRMED_EXIT, UNDECIDED_EXIT, BROKEN_PIPE_EXIT}
     assert "10 %" in rows[str(NOT_CONFIRMED_EXIT)][1] and "`1e-4`" in rows["4"][1]
 
 
