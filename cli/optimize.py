@@ -33,7 +33,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
         check_strain_limit,
         check_time_limit,
     )
-    from optim.verdict import verdict_exit_code
+    from optim.verdict import search_verdict, verdict_exit_code
     from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
@@ -43,7 +43,8 @@ def _optimize_command(args: argparse.Namespace) -> int:
     obj = None if args.object is None else object_option(args.object)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
-    cli_option("--budget", check_budget, args.budget)
+    if args.budget is not None:
+        cli_option("--budget", check_budget, args.budget)
     cli_option("--seed", check_seed, args.seed)
     if args.time is not None:
         cli_option("--time", check_time_limit, args.time)
@@ -100,7 +101,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
-        return verdict_exit_code(result.extra["verdict"])
+        return verdict_exit_code(result.extra.get("verdict") or search_verdict(result))
     return 0 if report is None else verify_exit_code(report)
 
 
@@ -273,7 +274,12 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     from envs.scene import PRESETS
     from optim.executors import MAX_WORKERS_PER_CPU
     from optim.optimize import METHODS
-    from optim.problem import DEFAULT_STRAIN_LIMIT, MAX_BUDGET
+    from optim.problem import (
+        DEFAULT_BUDGET_RANGE,
+        DEFAULT_GRASP_BUDGET,
+        DEFAULT_STRAIN_LIMIT,
+        MAX_BUDGET,
+    )
     from optim.verify import MAX_TOP
 
     p = subparsers.add_parser(
@@ -284,7 +290,10 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "drawing) and, for NSGA-II, the Pareto front to --out. The optimum is "
                     "reported by a finer member of the model family (within a few percent of "
                     "the FEM) unless --no-finish.")
-    p.add_argument("--method", default="cmaes", choices=METHODS)
+    p.add_argument("--method", default="portfolio",
+                   help="the search (default portfolio: CMA-ES starts from a screened sample, "
+                   "raced; see the optimizers page); one of " + ", ".join(METHODS)
+                   + ", or ng:NAME / optuna:NAME")
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
@@ -293,8 +302,12 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
-    p.add_argument("--budget", type=int, default=2000,
-                   help=f"evaluations, in [1, {MAX_BUDGET:,}] (default %(default)s)")
+    p.add_argument("--budget", type=int, default=None,
+                   help=f"evaluations (designs, each judged in every scenario), in [1, "
+                   f"{MAX_BUDGET:,}] (default: with --time, as many as it allows; else "
+                   f"{DEFAULT_GRASP_BUDGET:,} grasps over the scenario count, within "
+                   f"{DEFAULT_BUDGET_RANGE[0]:,}-{DEFAULT_BUDGET_RANGE[1]:,}: 6,000 with 9 "
+                   "scenarios)")
     p.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="wall seconds the search may take, beside --budget: it stops at "
                    "whichever ends first (the finish and the files come after it)")

@@ -53,6 +53,7 @@ def _design_command(args: argparse.Namespace) -> int:
     from optim import run
     from optim.problem import check_seed
     from optim.rl import load_policy
+    from optim.verdict import verdict_exit_code
 
     obj = object_option(args.object)
     # the shipped policies design straight or any jaws: others (asked for here or by the
@@ -81,7 +82,8 @@ def _design_command(args: argparse.Namespace) -> int:
     result, _ = run.run_optimize("policy", obj=obj, budget=1 + refine, seed=args.seed,
                                  out=args.out, prefix="design", policy=policy,
                                  progress=not args.no_progress, **jaws)
-    return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
+    # one start (the policy's design, refined) cannot say that nothing holds: exit 5, not 3
+    return 0 if result.extra["grasp_found"] else verdict_exit_code(result.extra["verdict"])
 
 
 def add_policy_parsers(subparsers: Any) -> None:

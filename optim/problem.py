@@ -65,6 +65,7 @@ __all__ = [
     "check_budget",
     "check_seed",
     "check_time_limit",
+    "default_budget",
     "pareto_mask",
     "paper_design",
     "paper_design_for",
@@ -86,6 +87,11 @@ MIN_CHUNK_SIZE = 64
 # the most evaluations a run may be given: about an hour of the default model in process on 2
 # cores (~2,600 designs/s, MIN_CHUNK_SIZE's note); a larger budget is a typo (an extra 000)
 MAX_BUDGET = 10_000_000
+# the default budget of a run (default_budget): as many designs as this many grasps allow (each
+# design solves one grasp per scenario), so that the default run takes about the same time
+# whatever the scenario count (~30 s on 2 cores for the examples' 9 scenarios), within these
+DEFAULT_GRASP_BUDGET = 54_000
+DEFAULT_BUDGET_RANGE = (1_000, 12_000)
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
 DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design box's width
@@ -145,6 +151,14 @@ def check_budget(budget: Any) -> int:
                          "the in-process rate of ~2,600 designs/s on 2 cores; for a longer "
                          "search give --time SECONDS)")
     return int(budget)
+
+
+def default_budget(scenario_count: int) -> int:
+    """The evaluations of a run given neither a budget nor a time: :data:`DEFAULT_GRASP_BUDGET`
+    grasps over the scenario count, within :data:`DEFAULT_BUDGET_RANGE` (6,000 designs with 9
+    scenarios, 2,160 with 25, 12,000 without scenarios)."""
+    low, high = DEFAULT_BUDGET_RANGE
+    return int(min(high, max(low, DEFAULT_GRASP_BUDGET // max(1, int(scenario_count)))))
 
 
 def check_time_limit(time_limit_s: Any, name: str = "time_limit_s") -> float:

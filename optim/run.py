@@ -37,6 +37,7 @@ from envs.scene import PRESETS, Scene
 from .optimize import check_options, get_optimizer
 from .problem import (
     DEFAULT_STRAIN_LIMIT,
+    MAX_BUDGET,
     DesignProblem,
     check_budget,
     check_friction,
@@ -44,6 +45,7 @@ from .problem import (
     check_seed,
     check_strain_limit,
     check_time_limit,
+    default_budget,
     paper_design,
     paper_design_for,
 )
@@ -89,7 +91,7 @@ def paper_reference(problem: DesignProblem, scene: str | None = DEMO_SCENE,
     return float(reward[i]), float(torques_nm[i] * ratio)
 
 
-def _progress_bar(total: int, desc: str, enabled: bool):
+def _progress_bar(total: int | None, desc: str, enabled: bool):
     from tqdm.auto import tqdm
 
     bar = tqdm(total=total, desc=desc, unit="eval", disable=not enabled, leave=False)
@@ -334,7 +336,7 @@ def run_optimize(
     *,
     scene: str | None = None,
     obj: ObjectSpec | None = None,
-    budget: int = 2000,
+    budget: int | None = None,
     seed: int = 0,
     out: str | Path = "out",
     dask: str | None = None,
@@ -394,8 +396,11 @@ def run_optimize(
     the search, the designs before the finish scores them: the sheet states the rounded design,
     the one scored) and the parts' options (pin diameter); default the defaults.
 
-    ``time_s``: the search's wall-time limit [s] beside the budget (whichever ends first; the
-    finish, the charts and the files come after it). ``None``: the budget alone.
+    ``budget``: evaluations (designs judged under every scenario); ``None`` (default): with
+    ``time_s`` as many as the time allows, else :func:`optim.problem.default_budget` of the
+    problem's scenario count (6,000 designs with 9 scenarios). ``time_s``: the search's
+    wall-time limit [s] beside the budget (whichever ends first; the finish, the charts and the
+    files come after it).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -432,7 +437,8 @@ def run_optimize(
                                       payload_factor=payload_factor, jaw=jaw,
                                       jaw_per_finger=jaw_per_finger, tolerances=tolerances)
     parts = check_parts(parts)
-    budget, seed = check_budget(budget), check_seed(seed)
+    budget = None if budget is None else check_budget(budget)
+    seed = check_seed(seed)
     time_s = None if time_s is None else check_time_limit(time_s, "time_s")
     check_joints_apart(method, joints_apart)
     check_policy_jaw(method, settings)
@@ -442,16 +448,20 @@ def run_optimize(
     check_executor_options(dask, workers)
     out_dir = check_output_dir("out", out)
     prefix = prefix or f"{method}_seed{seed}"
-    bar, hook = _progress_bar(budget, method, progress)
     with make_executor(dask, workers) as executor:
-        common = {"executor": executor, "progress": hook, "joints_apart": joints_apart,
-                  **settings, **model.kwargs()}
+        common = {"executor": executor, "joints_apart": joints_apart, **settings,
+                  **model.kwargs()}
         if obj is None:
             problem = DesignProblem.from_scene(target, **common)
         else:
             problem = DesignProblem(target, name=obj.name, **common)
         _apply_resolution(problem, parts)
         problem.time_limit_s = time_s
+        if budget is None:  # a time alone runs until the time is up
+            budget = MAX_BUDGET if time_s is not None else default_budget(
+                problem.scenario_count)
+        bar, hook = _progress_bar(None if budget == MAX_BUDGET else budget, method, progress)
+        problem.progress = hook
         try:
             with warnings.catch_warnings():
                 # said once below, with the files written

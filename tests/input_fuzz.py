@@ -686,7 +686,7 @@ class Fixtures:
         self.run = self.tmp / "run"
         self.run.mkdir(exist_ok=True)
         self.result = good_result()
-        (self.run / "cmaes_seed0_result.json").write_text(json.dumps(self.result))
+        (self.run / "portfolio_seed0_result.json").write_text(json.dumps(self.result))
         self.n = 0
         import envs
 
@@ -868,7 +868,7 @@ def run_case(case: dict[str, Any], fx: Fixtures) -> tuple[str, str]:
         data = json.loads(json.dumps(fx.result))
         if case["path"]:
             _set_path(data, case["path"], case["value"])
-        (folder / "cmaes_seed0_result.json").write_text(json.dumps(data))
+        (folder / "portfolio_seed0_result.json").write_text(json.dumps(data))
         return run_cli(["verify", str(folder)], case["name"])
     if entry == "policy folder":
         from optim.rl import SHIPPED_POLICY, load_policy

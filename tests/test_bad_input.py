@@ -392,18 +392,16 @@ def _write_run(folder: Path, grasp_found: bool = True):
                          object={"name": "puck", **DISK_FIELDS},
                          top_designs=({"design": design,
                                                                 "reward": 0.0466},),
-                         extra={"grasp_found": grasp_found,
-                                # (the search's verdict: its starts agree, for exit 3)
-                                "verdict": {"verdict": "holds" if grasp_found
-                                            else "nothing holds"}})
-    result.to_json(folder / "cmaes_seed0_result.json")
+                         extra={"grasp_found": grasp_found})
+    result.to_json(folder / "portfolio_seed0_result.json")
     return result
 
 
 @pytest.mark.parametrize("command, confirmed, grasp_found, code", [
     ("verify", True, True, 0), ("verify", False, True, 4),
     ("optimize --verify-top", True, True, 0), ("optimize --verify-top", False, True, 4),
-    ("optimize --verify-top", False, False, 3),  # no grasp at all comes first
+    # no grasp at all comes first: one start (CMA-ES) cannot say nothing holds (undecided)
+    ("optimize --verify-top", False, False, 5),
 ])
 def test_verify_exits_4_when_the_fem_does_not_confirm_the_optimum(tmp_path, capsys, monkeypatch,
                                                                  command, confirmed,
@@ -491,7 +489,7 @@ def test_a_corrupted_policy_is_one_line_naming_the_file(policy_copy, tmp_path, c
     ("\udcff", "not a text (JSON) file"),
 ], ids=["broken", "list", "partial", "binary"])
 def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what):
-    path = tmp_path / "cmaes_seed0_result.json"
+    path = tmp_path / "portfolio_seed0_result.json"
     path.write_bytes(text.encode("utf-8", "surrogateescape"))
     for argv in (["verify", str(tmp_path)],
                  ["verify", str(tmp_path), "--object",
@@ -516,7 +514,7 @@ def test_a_broken_result_file_is_one_line_naming_it(tmp_path, capsys, text, what
         "radius", "jaw"])
 def test_a_hand_edited_result_is_one_line_naming_what_is_missing(tmp_path, capsys, edit, what):
     pytest.importorskip("skfem")  # (verify refuses to start without it)
-    path = tmp_path / "cmaes_seed0_result.json"
+    path = tmp_path / "portfolio_seed0_result.json"
     _write_run(tmp_path)
     data = json.loads(path.read_text())
     edit(data)

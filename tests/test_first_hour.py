@@ -111,7 +111,7 @@ def test_a_run_without_a_grasp_warns_and_fails(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert "no design that holds was found in 2 evaluations" in err and "does not touch" in err
     assert "one start" in err
-    data = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    data = json.loads((tmp_path / "portfolio_seed0_result.json").read_text())
     assert data["extra"]["grasp_found"] is False
 
 

@@ -371,13 +371,13 @@ def test_optimize_with_a_cradle_writes_the_jaws_by_name(tmp_path):
     code = main(["optimize", "--scene", "paper-r070", "--jaw", "cradle", "--budget", "40",
                  "--no-progress", "--out", str(tmp_path)])
     assert code in (0, 3)
-    result = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    result = json.loads((tmp_path / "portfolio_seed0_result.json").read_text())
     assert result["extra"]["jaw"] == "cradle" and result["extra"]["jaw_per_finger"] is False
     for design in [result["best_design"], *(p["design"] for p in result["top_designs"])]:
         assert list(design) == list(design_fields(10))
         jaw = JawProfile(*(design[k] for k in JAW_FIELDS))
         assert jaw.opening_angle_rad == 0.0 and jaw.kind in ("cradle", "straight")
-    assert (tmp_path / "cmaes_seed0_best_grasp.png").stat().st_size > 0
+    assert (tmp_path / "portfolio_seed0_best_grasp.png").stat().st_size > 0
 
 
 def test_the_policy_refuses_shaped_jaws_before_any_work(tmp_path, capsys):

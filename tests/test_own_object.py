@@ -49,7 +49,7 @@ def test_the_optimize_command_designs_for_an_object_file(tmp_path, capsys):
     code = main(["optimize", "--object", str(OBJECTS / "cherry_tomato.toml"), "--budget", "300",
                  "--out", str(tmp_path), "--no-progress", "--payload-factor", "0"])
     assert code == 0
-    data = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    data = json.loads((tmp_path / "portfolio_seed0_result.json").read_text())
     assert data["object"]["name"] == "cherry tomato" and data["object"]["radius_m"] == 0.012
     assert data["object"]["strain_limit"] == 0.10 and data["object"]["friction_coefficient"] == 0.5
     assert data["extra"]["grasp_found"] is True and data["best_reward"] > 0.02
@@ -59,15 +59,15 @@ def test_the_optimize_command_designs_for_an_object_file(tmp_path, capsys):
     assert data["extra"]["search_reward"] != data["best_reward"]
     # a design a builder can use, and a drawing that names the object
     for name in ("design.json", "design.csv", "drawing.png", "best_grasp.png"):
-        assert (tmp_path / f"cmaes_seed0_{name}").stat().st_size > 0
-    sheet = json.loads((tmp_path / "cmaes_seed0_design.json").read_text())
+        assert (tmp_path / f"portfolio_seed0_{name}").stat().st_size > 0
+    sheet = json.loads((tmp_path / "portfolio_seed0_design.json").read_text())
     rows = {r["quantity"]: r["value"] for r in sheet["rows"]}
     design = data["best_design"]
     assert rows["finger_length_mm"] == pytest.approx(design["finger_length_m"] * 1e3)
     assert rows["object_diameter_mm"] == pytest.approx(24.0)
     assert rows["torsion_stiffness_nm_per_rad"] == pytest.approx(
         data["object"]["torsion_stiffness_nm_per_rad"])
-    with (tmp_path / "cmaes_seed0_design.csv").open() as f:
+    with (tmp_path / "portfolio_seed0_design.csv").open() as f:
         table = {row["quantity"]: row for row in csv.DictReader(f)}
     assert table["torque_nm"]["unit"] == "N·m"
     assert float(table["rest_angle_deg"]["value"]) == pytest.approx(
