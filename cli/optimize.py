@@ -41,6 +41,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
         raise ValueError("--object and --scene exclude each other: the object is a preset's "
                          "disk or your own")
     obj = None if args.object is None else object_option(args.object)
+    from optim.optimize import get_optimizer
+
+    cli_option("--method", get_optimizer, args.method)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
     if args.budget is not None:
