@@ -315,8 +315,8 @@ def test_the_pages_run_as_written(page, tmp_path, monkeypatch, capsys):
         if "--policy" in args and not Path(args[args.index("--policy") + 1]).exists():
             continue  # (a policy the page trained with more steps than a test takes)
         code = main(args)
-        # a short run need not find a grasp, nor its optimum be confirmed: the exit table
-        assert code in (0, 3, 4), (page, line, code, capsys.readouterr().err[-2000:])
+        # a short run need not find a grasp (3, 5), nor its optimum be confirmed (4)
+        assert code in (0, 3, 4, 5), (page, line, code, capsys.readouterr().err[-2000:])
     for body in _blocks(page, "python"):
         if "stable_baselines3" in body:
             pytest.importorskip("stable_baselines3")

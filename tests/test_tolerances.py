@@ -133,6 +133,7 @@ def test_a_design_optimized_with_tolerances_holds_in_every_corner_as_built(tmp_p
     from cli.main import main
 
     code = main(["optimize", "--object", "examples/objects/strawberry.toml", "--budget", "300",
+                 "--method", "cmaes",
                  "--tolerances", "length=0.1,angle=0.5,spring=10,torque=5", "--no-progress",
                  "--out", str(tmp_path)])
     assert code == 0
