@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["cli_option", "add_load_set_option"]
+__all__ = ["cli_option", "object_option", "add_load_set_option"]
 
 
 def cli_option(option: str, check, *args):
@@ -24,3 +24,14 @@ def add_load_set_option(p, default: str) -> None:
                    "hold it in: top-down (along the gripper's axis, towards the tips and "
                    "back), side (out of the plane, both ways) or any (every in-plane "
                    f"direction and out of the plane) (default: {default})")
+
+
+def object_option(path, option: str = "--object"):
+    """The object file of ``--object`` (:func:`envs.object_file.load_object`); a path that is
+    no readable regular file is refused naming the option (what is in the file names the file,
+    the table and the key)."""
+    from envs.object_file import load_object
+    from envs.validation import check_input_file
+
+    cli_option(option, check_input_file, "the object file", path)
+    return load_object(path)

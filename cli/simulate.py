@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from typing import Any
 
-from .options import add_load_set_option, cli_option
+from .options import add_load_set_option, cli_option, object_option
 
 __all__ = ["add_simulate_parser", "run_simulate"]
 
@@ -86,10 +87,14 @@ def run_simulate(args: argparse.Namespace) -> int:
     spec = cli_option("--triangles/--rings/--element/--calibrated", check_model,
                       args.triangles, args.rings, element, calibrated)
     if args.torque is not None:
-        check_range("--torque", args.torque, 0.0, math.inf)
+        check_range("--torque", args.torque, 0.0, math.inf)  # its ceiling: with the scene
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
     scene, torque, name, friction, factor, load_set = _scene_of(args)
+    if args.torque is not None:  # (a file's torque_nm is checked with the file)
+        cli_option("--torque", scene.check_torque, args.torque)
     args.torque = torque
+    for words in scene.warnings:  # a gripper that cannot reach the object, ...
+        print(f"psm-grasp: warning: {words}", file=sys.stderr)
     model = {"stiffness_rule": args.rule, "payload_factor": factor, "load_set": load_set,
              **spec.kwargs()}
     n_tri = model.pop("n_triangles")
@@ -116,6 +121,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         grasp_figure(scene, res, path=plot)
         if not args.json:
             print(f"  plot           : {plot}")
+    if not res.converged:
+        print(f"psm-grasp: warning: the grasp did not converge ({res.message}): exit code 1",
+              file=sys.stderr)
     return 0 if res.converged else 1
 
 
@@ -123,7 +131,6 @@ def _scene_of(args: argparse.Namespace):
     """The scene, torque [N·m], name, friction coefficient, payload factor and load set of
     the command's options."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
-    from envs.object_file import load_object
     from envs.scene import Design, Scene
     from optim.problem import check_friction, check_payload_factor, paper_design_for
     from optim.run import load_set_of
@@ -141,7 +148,7 @@ def _scene_of(args: argparse.Namespace):
         factor = DEFAULT_PAYLOAD_FACTOR if args.payload_factor is None else args.payload_factor
         load_set = load_set_of(None, args.load_set)
         return Scene.preset(name), torque, name, friction, factor, load_set
-    spec = load_object(args.object)
+    spec = object_option(args.object)
     load_set = load_set_of(spec, args.load_set)
     factor = (args.payload_factor if args.payload_factor is not None else spec.payload_factor
               if spec.payload_factor is not None else DEFAULT_PAYLOAD_FACTOR)

@@ -33,7 +33,7 @@ fields prefixed ``left_``). A depth of 0 is the straight bar.
 from __future__ import annotations
 
 import functools
-import math
+import warnings
 
 import numpy as np
 
@@ -56,6 +56,7 @@ from .batch_inputs import (  # noqa: F401 (re-exported: the layouts of the batch
     _joint_springs,
     _payloads,
     _per_row,
+    nonfinite_rows,
 )
 from .batch_metrics import (  # noqa: F401 (re-exported: the metrics' definitions)
     METRIC_KEYS,
@@ -80,6 +81,7 @@ from .model.defaults import (
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
     MAX_FRICTION_COEFFICIENT,
+    PLAUSIBLE_RANGES,
 )
 from .model.family import resolve_model, triangle_range
 from .model.loads import DEFAULT_LOAD_SET, load_set_code
@@ -89,10 +91,11 @@ from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
     Design,
+    design_fields,
 )
 from .solver.pipeline import solve_columns
-from .solver.status import NOT_SOLVED
-from .validation import check_integer
+from .solver.status import NOT_FINITE, NOT_SOLVED
+from .validation import InputWarning, check_integer
 
 __all__ = [
     "DESIGN_FIELDS",
@@ -109,6 +112,7 @@ __all__ = [
 ]
 
 DEFAULT_CHUNK_SIZE = 256
+MAX_CHUNK_SIZE = 10_000_000  # rows of a chunk at most (MAX_BUDGET's evaluations in one)
 FIDELITIES = ("psm", "fem")
 
 
@@ -133,6 +137,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     out["friction_coefficient"][:] = needs[:, NEED_FRICTION]
     out["payload_n"][:] = needs[:, NEED_PAYLOAD]
     out["status"][:] = NOT_SOLVED
+    out["status"][nonfinite_rows(des)] = NOT_FINITE
     material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
         disk = disk.copy()
@@ -170,6 +175,25 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                        & (out["required_friction"] <= out["friction_coefficient"]))
     add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
+
+
+def _warn_nonfinite(des: np.ndarray) -> None:
+    """One :class:`~envs.validation.InputWarning` naming the rows whose design holds a value
+    that is not a finite number (the first one's column and value): they are flagged
+    (``status`` :data:`~envs.solver.status.NOT_FINITE`, invalid at rest), the others answered."""
+    rows = nonfinite_rows(des)
+    if not rows.size:
+        return
+    first = int(rows[0])
+    col = int(np.flatnonzero(~np.isfinite(des[first]))[0])
+    names = design_fields(des.shape[1])
+    shown = ", ".join(map(str, rows[:5].tolist())) + (", ..." if rows.size > 5 else "")
+    value = float(des[first, col])
+    warnings.warn(
+        f"evaluate_designs: {rows.size} of {des.shape[0]} design rows hold a value that is not a "
+        f"finite number (row {first}: {names[col]} = {value!r}; rows {shown}): they "
+        f"are not solved (status {NOT_FINITE}, valid_at_rest False, the invalid penalty), the "
+        "other rows are answered", InputWarning, stacklevel=3)
 
 
 def _group_leaders(leaders: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
@@ -368,7 +392,9 @@ def evaluate_designs(
           and every output is finite (FEM: Newton converged, no element inverted).
         - ``stable``, ``status``, ``iterations``: solver diagnostics; ``status`` is a public
           code of :mod:`envs.solver.status` (-1: not solved, 0: converged, 8: folded, 11: the
-          independent check failed, 12: the FEM did not converge, ...; message in
+          independent check failed, 12: the FEM did not converge, 13: a design value is not a
+          finite number, NaN or inf: not solved, and an
+          :class:`~envs.validation.InputWarning` names the rows; ...; message in
           ``STATUS_MESSAGES``); FEM: Newton iterations.
         - ``n_triangles``: the model's contour points ``N`` (FEM: its quadratic triangles).
         - ``jaw_angles_rad`` (B, 2): right and left finger angles [rad].
@@ -441,8 +467,9 @@ def evaluate_designs(
     Raises
     ------
     ValueError
-        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets). Physically
-        invalid designs do not raise.
+        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets; designs of
+        strings or booleans, which numpy would turn into numbers). Physically invalid designs
+        do not raise, nor do rows holding NaN or inf (status 13, see above).
     """
     weights = RewardWeights() if weights is None else weights
     if not isinstance(weights, RewardWeights):
@@ -456,10 +483,11 @@ def evaluate_designs(
         if given:
             raise ValueError(f"{', '.join(given)} choose a point-spring member: leave them None "
                              "with fidelity='fem' (its mesh is set by fem_rings)")
-        fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
+    fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
+    _warn_nonfinite(des)
     n_each = np.asarray(n_triangles, dtype=object)
     spec = resolve_model(None if n_each.ndim else n_triangles, n_rings,
                          DEFAULT_ELEMENT if element is None else element, calibrated)
@@ -482,13 +510,12 @@ def evaluate_designs(
     load_set_code(load_set)  # (validated before any work)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if offsets_x_m is not None:
-        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
-                                          math.inf, low_open=False)
+        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch,
+                                          *PLAUSIBLE_RANGES["offset_x_m"], low_open=False)
     leaders = _check_leaders(leaders, batch) if fidelity == "psm" else None
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
-    if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
-        raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    chunk_size = check_integer("chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
     if executor is None:
         return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
                                 fem_rings, leaders, load_set)

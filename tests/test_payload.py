@@ -274,12 +274,13 @@ def test_simulate_reports_the_payload_and_the_grip():
 @pytest.mark.parametrize(("key", "value", "unit"), [
     ("radius_m", 15, "millimetres"), ("thickness_m", 5, "millimetres"),
     ("youngs_modulus_pa", 0.005, "MPa"), ("density_kg_m3", 1.06, "g/cm^3")])
-def test_an_object_file_value_in_another_unit_is_refused_naming_the_unit(key, value, unit):
+def test_a_value_in_another_unit_is_refused_naming_the_unit_by_a_file_and_the_api(key, value, unit):
     table = {"radius_m": 0.01, "youngs_modulus_pa": 5e3, "poisson_ratio": 0.45,
              "thickness_m": 0.005, key: value}
     with pytest.raises(ValueError, match=f"{key}.*{re.escape(unit)}"):
         parse_object({"object": table}, "liver.toml")
-    with pytest.warns(UnitSlipWarning, match=re.escape(unit)):
+    with pytest.raises(ValueError, match=f"^{key} = {value} is outside the plausible range.*"
+                                         f"{re.escape(unit)}"):
         SoftDisk(**{"radius_m": 0.01, "distance_m": 0.0, "youngs_modulus_pa": 5e3,
                     "thickness_m": 0.005, key: value})
 

@@ -43,6 +43,8 @@ WARM_OPENING_RAD = 1e-3
 PROLONG_OPENING_RAD = 1e-6
 NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
 NESTED_FACTOR = 4
+# the baselines' wall-time budget at most (they take seconds; a larger one is a typo)
+MAX_TIME_LIMIT_S = 3600.0
 CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does not help
 # turned rest starts: these fractions of a point spacing about the pin, in turn (the smaller one
 # measured: N = 4, M = 4 on paper-r100 at 5.675 N·m converges from 1/8, not from 1/4)
@@ -260,8 +262,8 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
         raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
     check_choice("method", method, METHODS)
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
-    check_range("phase_rad", phase_rad)
-    check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
+    check_range("phase_rad", phase_rad, -2.0 * math.pi, 2.0 * math.pi)
+    check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
     if element is None:
         # the baselines solve the paper's fan; Newton the default model
         element = DEFAULT_ELEMENT if method == "newton" else "spring"
@@ -303,7 +305,10 @@ def simulate(
     scene
         Gripper and disk.
     torque_nm
-        Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
+        Actuation torque ``T_a`` applied on each finger [N·m], >= 0 and plausible: at most
+        :data:`~envs.model.defaults.MAX_TORQUE_UNITS` of the disk's torque unit ``s E t r^2``
+        beyond the joint springs' moment at full closing (:meth:`envs.scene.Scene.check_torque`;
+        10 units squeeze the paper's disk by 75 %).
     n_triangles, n_rings, element, calibrated
         The member of the model family (:func:`envs.model.family.resolve_model`). The defaults
         are the default model (for the baselines, ``method != "newton"``, the paper's fan):
@@ -325,9 +330,10 @@ def simulate(
     stiffness_rule
         ``"van_gelder"`` (default) or ``"cst_fit"``.
     phase_rad
-        Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
+        Angle of the first contour point [rad], in [-2 pi, 2 pi]; pi/2 (top) is
+        mirror-symmetric for even N.
     time_limit_s
-        Wall-time budget for the baselines [s] (the Newton solver needs none).
+        Wall-time budget for the baselines [s], in (0, 3600] (the Newton solver needs none).
     payload_factor
         ``f`` of the payload ``W = f rho pi r^2 t g`` the required friction includes
         (:meth:`envs.scene.SoftDisk.payload_n`), in [0, 100]: default 2 (the weight plus a
@@ -353,7 +359,7 @@ def simulate(
     spec = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
                          n_rings, element, calibrated)
     n = spec.n_triangles
-    torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
+    torque = scene.check_torque(torque_nm)
     payload = scene.disk.payload_n(payload_factor)
     load_set_code(load_set)
     prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), spec.n_rings,
@@ -413,7 +419,7 @@ def simulate_ramp(
     if torques.size == 0:
         raise ValueError("torques_nm must contain at least one torque")
     for i, t in enumerate(torques.tolist()):
-        check_range(f"torques_nm[{i}]", t, 0.0, math.inf)
+        scene.check_torque(t, f"torques_nm[{i}]")
     if np.any(np.diff(torques) < 0):
         raise ValueError("torques_nm must be non-decreasing (a loading ramp)")
     stop = math.inf if until_peak_strain is None else check_range(
