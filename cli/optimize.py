@@ -91,13 +91,28 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  time_s=args.time)
     report = None
     if args.verify_top is not None:
-        report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
+        from optim.optimize import method_stem
+
+        report = run.verify_outputs(args.out,
+                                    f"{method_stem(args.method)}_seed{args.seed}_result.json",
                                     args.verify_top)
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
         return run.NO_GRASP_EXIT
     return 0 if report is None else verify_exit_code(report)
+
+
+def method_name(text: str) -> str:
+    """``--method``: a method of :data:`optim.optimize.METHODS`, or ``ng:NAME`` (its optional
+    dependency installed)."""
+    from optim.optimize import get_optimizer
+
+    try:
+        get_optimizer(text)
+    except (ValueError, ImportError) as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def placement_tolerance(text: str) -> float | tuple[float, float]:
@@ -243,7 +258,10 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "drawing) and, for NSGA-II, the Pareto front to --out. The optimum is "
                     "reported by a finer member of the model family (within a few percent of "
                     "the FEM) unless --no-finish.")
-    p.add_argument("--method", default="cmaes", choices=METHODS)
+    p.add_argument("--method", default="cmaes", type=method_name, metavar="METHOD",
+                   help=f"the search: one of {', '.join(METHODS)}, or ng:NAME for any "
+                   "optimizer of Nevergrad's registry (the ng: and optuna: methods need the "
+                   "extras ng and optuna; default %(default)s)")
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
