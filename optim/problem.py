@@ -61,6 +61,7 @@ __all__ = [
     "pareto_mask",
     "paper_design",
     "paper_design_for",
+    "top_distinct",
 ]
 
 DEFAULT_CHUNK_SIZE = 256
@@ -195,6 +196,21 @@ def pareto_mask(objectives: np.ndarray) -> np.ndarray:
             mask[i] = True
             best_f1 = f[i, 1]
     return mask
+
+
+def top_distinct(x: np.ndarray, reward: np.ndarray, k: int = TOP_DESIGNS_KEPT) -> list[int]:
+    """Rows of the ``k`` best distinct designs of ``x`` (n, n_var) by ``reward`` (n,), best
+    first (the earlier of equal rewards); rows closer than :data:`DISTINCT_DESIGN` in every
+    coordinate to a better one are the same design, and rows of non-finite reward are left
+    out."""
+    order = np.argsort(-reward, kind="stable")
+    picked: list[int] = []
+    for i in order.tolist():
+        if len(picked) == k or not np.isfinite(reward[i]):
+            break
+        if all(np.max(np.abs(x[i] - x[j])) > DISTINCT_DESIGN for j in picked):
+            picked.append(i)
+    return picked
 
 
 def _describe_executor(executor: Any) -> str:
@@ -590,16 +606,8 @@ class DesignProblem:
         run evaluates hundreds of near copies of its best.
         """
         arc = self.archive()
-        order = np.argsort(-arc["reward"], kind="stable")
-        picked: list[int] = []
-        for i in order.tolist():
-            if len(picked) == k or not np.isfinite(arc["reward"][i]):
-                break
-            x = arc["x"][i]
-            if all(np.max(np.abs(x - arc["x"][j])) > DISTINCT_DESIGN for j in picked):
-                picked.append(i)
         return [{"design": self.design_dict(arc["x"][i]), "reward": float(arc["reward"][i])}
-                for i in picked]
+                for i in top_distinct(arc["x"], arc["reward"], k)]
 
     def pareto_front(self) -> list[dict[str, Any]]:
         """Non-dominated feasible evaluated designs (contact score up, peak compression down),
