@@ -19,7 +19,7 @@ from ..problem import DesignProblem, check_budget, check_seed, check_time_limit
 from ..result import NoGraspWarning, OptimResult
 from .ioh_log import IOHLog
 from .problems import check_instance, make_problem
-from .scoring import FinishedCurve, finished_curve
+from .scoring import CHECKPOINTS, FinishedCurve, finished_curve
 from .targets import REACHED_GAP, Target, load_targets
 
 __all__ = ["BenchScore", "BenchRun", "score_run", "run_method"]
@@ -82,8 +82,8 @@ class BenchScore:
 
 
 def score_run(instance: str, problem: DesignProblem, result: OptimResult, *,
-              targets: dict[str, Target] | None = None, log: IOHLog | None = None
-              ) -> BenchScore:
+              targets: dict[str, Target] | None = None, log: IOHLog | None = None,
+              n_checkpoints: int = CHECKPOINTS) -> BenchScore:
     """Score a finished run on an instance (before the next run on its problem) and log it.
 
     Parameters
@@ -98,8 +98,10 @@ def score_run(instance: str, problem: DesignProblem, result: OptimResult, *,
         The best-known rewards (default :func:`~optim.bench.targets.load_targets`).
     log
         An IOHprofiler logger to log the run to, or ``None``.
+    n_checkpoints
+        Evaluation counts the finish scores (1: the run's end alone).
     """
-    curve = finished_curve(problem, result)
+    curve = finished_curve(problem, result, n_checkpoints=n_checkpoints)
     targets = load_targets() if targets is None else targets
     target = targets.get(instance)
     score = BenchScore(instance=instance, method=result.method, seed=result.seed,
@@ -118,7 +120,7 @@ def score_run(instance: str, problem: DesignProblem, result: OptimResult, *,
 def run_method(instance: str, method: str, *, budget: int, seed: int = 0,
                time_limit_s: float | None = None, problem: DesignProblem | None = None,
                targets: dict[str, Target] | None = None, log: IOHLog | None = None,
-               **options: Any) -> BenchScore:
+               n_checkpoints: int = CHECKPOINTS, **options: Any) -> BenchScore:
     """Run a package method (:data:`optim.METHODS`, ``ng:NAME``) on an instance and score it.
 
     Parameters
@@ -133,7 +135,7 @@ def run_method(instance: str, method: str, *, budget: int, seed: int = 0,
         A wall-time limit beside the budget [s], or ``None``.
     problem
         The instance's problem to reuse (e.g. with an executor; default: a new one).
-    targets, log
+    targets, log, n_checkpoints
         As :func:`score_run`.
     **options
         The method's options.
@@ -149,7 +151,8 @@ def run_method(instance: str, method: str, *, budget: int, seed: int = 0,
                             **options)
     finally:
         problem.time_limit_s = None
-    return score_run(instance, problem, result, targets=targets, log=log)
+    return score_run(instance, problem, result, targets=targets, log=log,
+                     n_checkpoints=n_checkpoints)
 
 
 class BenchRun:

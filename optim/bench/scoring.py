@@ -69,6 +69,8 @@ def checkpoints(batch_ends: Any, n: int = CHECKPOINTS) -> np.ndarray:
     ends = np.asarray(batch_ends, dtype=np.float64)
     if ends.size == 0:
         return np.zeros(0, dtype=np.int64)
+    if n <= 1:
+        return np.array([ends.size - 1])
     grid = np.geomspace(ends[0], ends[-1], max(int(n), 1))
     idx = np.searchsorted(ends, grid * (1 + 1e-12), side="right") - 1
     return np.unique(np.append(idx[idx >= 0], ends.size - 1))
