@@ -7,7 +7,9 @@ normalized box [-1, 1]^n (the first from its centre, as :func:`optim.cmaes.run_c
 population is evaluated in one call (``parallel_objective``); the search stops once the budget or
 the time limit is spent, the candidates past the budget scored as the worst (they are not
 evaluated, counted nor recorded). Settings as :func:`~optim.cmaes.run_cmaes`'s (bounds, step
-size 0.4, the flat-fitness tolerance), so that the two differ by the restart strategy only.
+size 0.4, the flat-fitness tolerance), but for when a run ends (:data:`TOLFUN`,
+:data:`TOLX`): with pycma's defaults no run ends within thousands of evaluations here, and no
+restart strategy would restart.
 
 BIPOP draws its small populations' sizes and step sizes from numpy's global random state:
 the run seeds it with its seed and puts the caller's state back afterwards.
@@ -22,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from envs.validation import check_range
+
 from .ask_tell import NON_FINITE_LOSS, loss_of
 from .cmaes import _import_cma, default_popsize
 from .optimize import Optimizer
@@ -34,6 +38,13 @@ PREFIX = "cma"
 STRATEGIES = ("ipop", "bipop")
 MAX_RESTARTS = 10_000  # the budget ends a run, not a count of restarts
 SIGMA0 = 0.4  # as run_cmaes's default
+# When a run ends, so that restarts happen within budgets of thousands: pycma's defaults
+# (1e-11) never end a run on this problem (CMA-ES on paper-r070 ran 4000 evaluations without
+# one), so neither IPOP nor BIPOP would restart. A run ends when its recent rewards agree within
+# TOLFUN (a tenth of the 1e-3 that tells designs apart) or its steps are below TOLX of the
+# normalized box (0.05 % of its width).
+TOLFUN = 1e-4
+TOLX = 1e-3
 
 
 def check_name(name: Any) -> str:
@@ -67,6 +78,8 @@ def run_cma_restarts(
     budget: int,
     seed: int = 0,
     strategy: str = "bipop",
+    tolfun: float = TOLFUN,
+    tolx: float = TOLX,
 ) -> OptimResult:
     """Maximize the reward with ``cma.fmin2`` and its IPOP or BIPOP restarts.
 
@@ -80,6 +93,10 @@ def run_cma_restarts(
         Seed of the start points, of CMA-ES's samples and of BIPOP's draws.
     strategy
         ``"ipop"`` or ``"bipop"`` (default).
+    tolfun
+        A run ends when its recent rewards agree within this, in (0, 1].
+    tolx
+        A run ends when its steps are below this in the normalized box, in (0, 1].
 
     Returns
     -------
@@ -88,6 +105,8 @@ def run_cma_restarts(
         restarts).
     """
     budget, seed, strategy = check_budget(budget), check_seed(seed), check_name(strategy)
+    tolfun = check_range("tolfun", tolfun, 0.0, 1.0, low_open=True)
+    tolx = check_range("tolx", tolx, 0.0, 1.0, low_open=True)
     cma = _import_cma()
     rng = np.random.default_rng(seed)
     runs = [0]
@@ -112,6 +131,7 @@ def run_cma_restarts(
         "verbose": -9, "verb_log": 0, "verb_disp": 0,
         "eval_final_mean": False,  # every evaluation is the search's
         "tolflatfitness": 10,  # as run_cmaes: invalid designs share one penalty
+        "tolfun": tolfun, "tolfunhist": tolfun, "tolx": tolx,
         "termination_callback": lambda es: problem.remaining <= 0,
     }
     problem.start(budget)
@@ -119,7 +139,8 @@ def run_cma_restarts(
         warnings.simplefilter("ignore")  # pycma's notes on its own settings
         cma.fmin2(None, x0, SIGMA0, options, parallel_objective=objective,
                           restarts=MAX_RESTARTS, bipop=strategy == "bipop")
-    return problem.result(f"{PREFIX}:{strategy}", seed, options={"sigma0": SIGMA0},
+    return problem.result(f"{PREFIX}:{strategy}", seed,
+                          options={"sigma0": SIGMA0, "tolfun": tolfun, "tolx": tolx},
                           extra={"runs": runs[0]})
 
 
@@ -133,8 +154,10 @@ def driver(name: str) -> Optimizer:
     """
     name = check_name(name)
 
-    def run(problem: DesignProblem, *, budget: int, seed: int = 0) -> OptimResult:
-        return run_cma_restarts(problem, budget=budget, seed=seed, strategy=name)
+    def run(problem: DesignProblem, *, budget: int, seed: int = 0, tolfun: float = TOLFUN,
+            tolx: float = TOLX) -> OptimResult:
+        return run_cma_restarts(problem, budget=budget, seed=seed, strategy=name,
+                                tolfun=tolfun, tolx=tolx)
 
     run.__name__ = run.__qualname__ = f"run_cma_{name}"
     run.__doc__ = f"Method ``cma:{name}``: :func:`run_cma_restarts` with {name.upper()}."
