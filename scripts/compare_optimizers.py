@@ -13,8 +13,10 @@ or a stale file, falls back to the best finished reward of this comparison, and 
 A method's *runtime profile* is the share of (run, target) pairs it has reached after a number
 of evaluations, or of seconds, over all instances and seeds, as the COCO platform draws them;
 the targets of an instance are the best known minus :data:`GAPS` (the last, 0.01, is "found the
-optimum"). The script prints a table per instance (the finished reward per method: median,
-quartiles, extremes, runs within 0.01 of the best known, evaluations and seconds) and writes:
+optimum"). A run is read where it would have stopped, not at its best so far: the finish's
+reward can drop as a search moves on to designs its own model overrates. The script prints a
+table per instance (the finished reward per method: median, quartiles, extremes, runs within
+0.01 of the best known, evaluations and seconds) and writes:
 
 - ``out/compare.json``: the configuration, the targets used, the tables, the profiles and every
   run (its finished curve and :class:`optim.OptimResult`);
@@ -57,7 +59,6 @@ from optim.bench import (
 from optim.charts import METHOD_COLOURS
 from optim.executors import make_executor
 from optim.optimize import get_optimizer
-from optim.profiles import curve_hits, runtime_profile
 from optim.result import to_jsonable
 
 METHODS = ("cmaes", "ga", "nsga2", "random", "ng:TwoPointsDE", "ng:NGOpt", "optuna:tpe")
@@ -119,17 +120,33 @@ def instance_target(name: str, scores: dict[str, list[BenchScore]], known: dict
     return here, "this comparison (no current target)"
 
 
+def share_reached(curves: list[tuple[np.ndarray, np.ndarray, np.ndarray]], grid: np.ndarray
+                  ) -> np.ndarray:
+    """The share of (run, target) pairs whose run, stopped at each grid value, reports a
+    reward at or above the target: each curve is ``(xs, rewards, targets)``, its reward at a
+    grid value the one of its last point within it (the finish's reward can drop as a run
+    goes on: it is read where the run stopped, not at its best so far)."""
+    reached = np.zeros(grid.size)
+    pairs = 0
+    for xs, rewards, targets in curves:
+        idx = np.searchsorted(np.asarray(xs, dtype=float), grid, side="right") - 1
+        value = np.where(idx >= 0, np.asarray(rewards, dtype=float)[np.maximum(idx, 0)],
+                         -np.inf)
+        reached += np.count_nonzero(value[:, None] >= np.asarray(targets)[None, :], axis=1)
+        pairs += len(targets)
+    return reached / max(pairs, 1)
+
+
 def profiles(instances: dict[str, dict], grids: dict[str, np.ndarray]) -> dict[str, dict]:
     """The runtime profiles of every method over every instance, seed and target."""
     out: dict[str, dict] = {}
     methods = list(next(iter(instances.values()))["scores"])
-    for axis, field in (("evaluations", "evaluations"), ("seconds", "seconds")):
+    for axis in ("evaluations", "seconds"):
         out[axis] = {"grid": grids[axis]}
         for method in methods:
-            hits = [curve_hits(getattr(s.curve, field), s.curve.reward,
-                               o["target"] - np.array(GAPS))
-                    for o in instances.values() for s in o["scores"][method]]
-            out[axis][method] = runtime_profile(np.array(hits), grids[axis])
+            curves = [(getattr(s.curve, axis), s.curve.reward, o["target"] - np.array(GAPS))
+                      for o in instances.values() for s in o["scores"][method]]
+            out[axis][method] = share_reached(curves, grids[axis])
     return out
 
 

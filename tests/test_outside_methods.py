@@ -104,14 +104,20 @@ def test_cma_restarts_use_the_budget_and_leave_numpy_alone():
     assert ipop.history_best_reward == own.history_best_reward
 
 
-def test_ngopt_metamodel_runs_under_this_numpy():
+def test_ngopt_metamodel_runs_under_this_numpy(monkeypatch):
     """NGOpt picks Nevergrad's metamodel at this budget; Nevergrad 1.0.12 converts its
-    one-element predictions with float(array), which numpy >= 2.4 refuses: the driver mends it
-    for the run and puts Nevergrad's module back."""
+    one-element predictions with float(array), which numpy >= 2.4 refuses (and the process
+    hung at exit): the driver mends it for the run and puts Nevergrad's module back."""
     from nevergrad.optimization import metamodel
 
-    result = optimize("ng:NGOpt", make_problem(), budget=120, seed=0)
-    assert result.n_evaluations == 120 and result.extra["selected"] == "MetaModel"
+    import optim.ng_methods as ng_methods
+
+    calls = []
+    mend = ng_methods._one_element_float
+    monkeypatch.setattr(ng_methods, "_one_element_float", lambda v: calls.append(v) or mend(v))
+    result = optimize("ng:NGOpt", make_problem(), budget=60, seed=0)
+    assert result.n_evaluations == 60 and result.extra["selected"] == "MetaModel"
+    assert calls and all(np.size(v) == 1 for v in calls)  # the metamodel's predictions
     assert "float" not in vars(metamodel)
 
 
