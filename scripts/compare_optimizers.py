@@ -56,6 +56,7 @@ from optim.bench import (
     targets_meta,
     targets_stale,
 )
+from optim.bench.scoring import CHECKPOINTS
 from optim.charts import METHOD_COLOURS
 from optim.executors import make_executor
 from optim.optimize import get_optimizer
@@ -204,7 +205,7 @@ def run_instance(name: str, args, methods: list[str], executor, logs: dict[str, 
         for seed in range(args.seeds):
             score = run_method(name, method, budget=args.budget, seed=seed,
                                time_limit_s=args.time, problem=problem, targets=known,
-                               log=logs[method])
+                               log=logs[method], n_checkpoints=args.checkpoints)
             scores[method].append(score)
             print(f"{name}: {method} seed {seed}: finished {score.reward:.4f} (search "
                   f"{score.search_reward:.4f}), {score.evaluations} evaluations, "
@@ -223,13 +224,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", nargs="+", default=list(METHODS))
     parser.add_argument("--instances", nargs="+", default=list(INSTANCES_RUN),
                         choices=list(INSTANCES))
+    parser.add_argument("--checkpoints", type=int, default=CHECKPOINTS,
+                        help="evaluation counts of each run the finish scores, log-spaced "
+                        "(default %(default)s; each costs up to ten finer evaluations)")
     parser.add_argument("--dask", metavar="ADDRESS|local")
     parser.add_argument("--workers", type=int)
     parser.add_argument("--out", default="out")
     args = parser.parse_args(argv)
     methods = list(dict.fromkeys(args.methods))
-    if args.seeds < 1 or args.budget < 1 or (args.time is not None and args.time <= 0):
-        parser.error("--seeds, --budget and --time must be positive")
+    if (args.seeds < 1 or args.budget < 1 or args.checkpoints < 1
+            or (args.time is not None and args.time <= 0)):
+        parser.error("--seeds, --budget, --checkpoints and --time must be positive")
     for method in methods:
         try:
             get_optimizer(method)
@@ -272,6 +277,7 @@ def main(argv: list[str] | None = None) -> int:
           + ", ".join(f"{m} {k}/{n}" for m, (k, n) in counts.items()))
     payload = {
         "config": {"budget": args.budget, "time_s": args.time, "seeds": args.seeds,
+                   "checkpoints": args.checkpoints,
                    "methods": methods, "instances": list(instances), "gaps": list(GAPS),
                    "executor": all_scores[0].result.executor},
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
