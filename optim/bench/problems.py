@@ -47,12 +47,12 @@ OBJECTS: dict[str, dict[str, Any]] = {
     "tomatoes": {"name": "tomatoes 10-15 mm", "radius_m": [0.010, 0.015],
                  "youngs_modulus_pa": [1e5, 3e5], "poisson_ratio": 0.45, "thickness_m": 0.02,
                  "density_kg_m3": 1000, "strain_limit": 0.10, "friction_coefficient": 0.8},
-    # drawn for the suite (issue 43): the tomatoes on pads of friction 0.5, 24 mm thick
+    # drawn for the suite: the tomatoes on pads of friction 0.5, 24 mm thick
     "tomatoes-mu05": {"name": "tomatoes 10-15 mm, friction 0.5", "radius_m": [0.010, 0.015],
                       "youngs_modulus_pa": [1e5, 3e5], "poisson_ratio": 0.45,
                       "thickness_m": 0.024, "density_kg_m3": 1000, "strain_limit": 0.10,
                       "friction_coefficient": 0.5},
-    # drawn for the suite (issue 43): blueberries of radius 6-9 mm and 0.2-0.6 MPa placed within
+    # drawn for the suite: blueberries of radius 6-9 mm and 0.2-0.6 MPa placed within
     # +-1 mm (25 scenarios); a slice as thick as the middle berry is wide, as dense as water, a
     # tenth of the radius the squeeze they bear, on grippy pads
     "blueberries": {"name": "blueberries 6-9 mm", "radius_m": [0.006, 0.009],

@@ -22,7 +22,7 @@ __all__ = ["TARGETS_FILE", "REACHED_GAP", "Target", "load_targets", "targets_met
 
 TARGETS_FILE = Path(__file__).with_name("targets.json")
 # a run has found the optimum when its finished reward is within this of the best known (the
-# criterion of issue 43: "within 0.01 reward (finer member) of the best-known optimum")
+# bar a default search is held to: within 0.01 reward, by the finer member, of the best known)
 REACHED_GAP = 0.01
 
 
