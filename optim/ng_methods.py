@@ -150,8 +150,10 @@ def run_nevergrad(
             opt.tell(c, y)
 
     with warnings.catch_warnings(), _metamodel_float():
-        # its advice on settings (a budget small for the dimension, ...) is not the user's
+        # its advice on settings (a budget small for the dimension, ...) is not the user's, nor
+        # pycma's notes on how Nevergrad drives it inside (solutions injected into its CMA-ES)
         warnings.simplefilter("ignore", _import_nevergrad().errors.NevergradWarning)
+        warnings.filterwarnings("ignore", module=r"cma\.")
         batches = run_batches(problem, budget, batch_size, ask, tell)
     extra: dict[str, Any] = {"batches": batches}
     chosen = getattr(opt, "optim", None)  # NGOpt's selected optimizer
