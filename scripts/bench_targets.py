@@ -9,13 +9,15 @@ source's digest; :func:`optim.bench.targets_stale` says when it differs).
 
 Every run is appended to ``--runs`` (JSON lines) as it ends, and ``--resume`` skips the runs
 already there (same instance, method, seed, budget and model): a campaign cut off goes on where
-it stopped. The targets are written after every instance.
+it stopped. ``--add-runs out/compare.json`` adds the runs of ``scripts/compare_optimizers.py``
+(their finished designs, same model) to the evidence. The targets are written after every
+instance.
 
 Usage::
 
     python scripts/bench_targets.py [--instances strawberry-any ...] [--seeds 3]
         [--methods cmaes ga nsga2 ng:TwoPointsDE ng:NGOpt cma:bipop]
-        [--budget 6000] [--scenario-budget 3000] [--resume]
+        [--budget 6000] [--scenario-budget 3000] [--resume] [--add-runs out/compare.json]
 """
 
 from __future__ import annotations
@@ -91,6 +93,27 @@ def _search_reward_of(score) -> float:
     return float("nan")
 
 
+def compare_rows(path: Path, digest: str) -> list[dict[str, Any]]:
+    """The runs of a ``scripts/compare_optimizers.py`` output as rows of this campaign (its
+    finished design and reward, the evaluations it made as its budget)."""
+    data = json.loads(Path(path).read_text())
+    if data.get("targets_meta", {}).get("model_digest", digest) != digest:
+        raise SystemExit(f"{path}: its runs were scored by another version of the model")
+    rows = []
+    for name, methods in data["runs"].items():
+        for method, runs in methods.items():
+            for run in runs:
+                design = run["curve"]["best_design"]
+                top = [t for t in run["result"]["top_designs"] if t["design"] == design]
+                rows.append({"instance": name, "method": method, "seed": run["seed"],
+                             "budget": run["evaluations"], "seconds": run["seconds"],
+                             "search_reward": run["search_reward"], "reward": run["reward"],
+                             "design": design,
+                             "design_search_reward": top[0]["reward"] if top else float("nan"),
+                             "model_digest": digest, "source": str(path)})
+    return rows
+
+
 def targets_of(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """The best finished reward of each instance, its design and run, and every run's."""
     out: dict[str, dict[str, Any]] = {}
@@ -99,16 +122,17 @@ def targets_of(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
         best = max(mine, key=lambda r: r["reward"])
         by_method: dict[str, list[float]] = {}
         for r in mine:
-            by_method.setdefault(r["method"], []).append(round(r["reward"], 6))
+            key = r["method"] if "source" not in r else f"{r['method']} ({r['budget']} evals)"
+            by_method.setdefault(key, []).append(round(r["reward"], 6))
         out[name] = {"reward": best["reward"], "search_reward": best["design_search_reward"],
                      "design": best["design"], "method": best["method"], "seed": best["seed"],
                      "budget": best["budget"], "runs": len(mine),
+                     **({"source": best["source"]} if "source" in best else {}),
                      "finished_by_method": by_method}
     return out
 
 
-def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str,
-                  seconds: float) -> None:
+def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str) -> None:
     """The targets file: the targets and how they were obtained."""
     targets = targets_of(rows)
     command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
@@ -128,8 +152,8 @@ def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str,
         "finer_member": RANKING_MEMBER,
         "finish_top": FINISH_TOP,
         "runs": len(rows),
+        # the searches' wall time, summed over the runs (the finishes' re-scoring left out)
         "run_seconds": round(sum(r["seconds"] for r in rows), 1),
-        "campaign_seconds": round(seconds, 1),
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},
     }
     path.write_text(json.dumps(to_jsonable({"meta": meta, "targets": targets}), indent=1)
@@ -138,8 +162,10 @@ def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str,
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--instances", nargs="+", default=list(DEFAULT_INSTANCES),
-                        choices=list(INSTANCES))
+    parser.add_argument("--instances", nargs="*", default=list(DEFAULT_INSTANCES),
+                        choices=list(INSTANCES),
+                        help="the instances to run (none: only write the targets of the runs "
+                        "kept with --resume and --add-runs)")
     parser.add_argument("--methods", nargs="+", default=list(METHODS))
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--budget", type=int, default=BUDGET,
@@ -149,6 +175,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=TARGETS_FILE, help="the targets file")
     parser.add_argument("--runs", type=Path, default=Path("out/bench_targets_runs.jsonl"),
                         help="every run, one JSON line each")
+    parser.add_argument("--add-runs", type=Path, nargs="*", default=[], metavar="COMPARE_JSON",
+                        help="add the runs of scripts/compare_optimizers.py outputs")
     parser.add_argument("--resume", action="store_true",
                         help="skip the runs already in --runs (same model) and keep them (the "
                         "targets are those of every run in it)")
@@ -161,11 +189,15 @@ def main(argv: list[str] | None = None) -> int:
         args.runs.unlink()
     rows = _read_runs(args.runs, digest)
     done = {(r["instance"], r["method"], r["seed"], r["budget"]) for r in rows}
+    for path in args.add_runs:
+        rows += compare_rows(path, digest)
     t0 = time.perf_counter()
     for name in args.instances:
         budget = args.budget if INSTANCES[name].n_scenarios() == 1 else args.scenario_budget
         rows += run_instance(name, args, budget, done, args.runs, digest)
-        write_targets(args.out, rows, args, digest, time.perf_counter() - t0)
+        write_targets(args.out, rows, args, digest)
+    if not args.instances:
+        write_targets(args.out, rows, args, digest)
     for name, t in targets_of(rows).items():
         print(f"{name:24s} {t['reward']:8.4f}  ({t['method']}, seed {t['seed']}, "
               f"{t['budget']} evaluations; {t['runs']} runs)")

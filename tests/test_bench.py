@@ -139,8 +139,9 @@ def test_targets_say_how_they_were_obtained():
     raw = json.loads((Path(__file__).resolve().parent.parent / "optim" / "bench"
                       / "targets.json").read_text())["targets"]
     for name, t in targets.items():
-        assert t.reward == max(max(v) for v in raw[name]["finished_by_method"].values())
-        assert t.method in raw[name]["finished_by_method"]
+        runs = raw[name]["finished_by_method"]
+        assert t.reward == pytest.approx(max(max(v) for v in runs.values()), abs=1e-6)
+        assert any(key.split(" (")[0] == t.method for key in runs)
     if targets_stale() or FAST not in targets:
         pytest.skip("the model changed since the targets were computed")
     # the target's design, scored again by the finer member, gives the target
