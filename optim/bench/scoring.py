@@ -24,6 +24,7 @@ from ..result import OptimResult
 __all__ = ["FinishedCurve", "finished_curve", "checkpoints"]
 
 CHECKPOINTS = 8  # prefixes scored per run, log-spaced over its evaluations
+QUARTERS = (0.25, 0.5, 0.75)  # and at these shares of its evaluations
 
 
 @dataclass(frozen=True)
@@ -71,7 +72,10 @@ def checkpoints(batch_ends: Any, n: int = CHECKPOINTS) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     if n <= 1:
         return np.array([ends.size - 1])
-    grid = np.geomspace(ends[0], ends[-1], max(int(n), 1))
+    # log-spaced from the first batch, and the quarters of the run (a log grid leaves the
+    # second half of a run with one point)
+    grid = np.concatenate([np.geomspace(ends[0], ends[-1], int(n)),
+                           ends[-1] * np.array(QUARTERS)])
     idx = np.searchsorted(ends, grid * (1 + 1e-12), side="right") - 1
     return np.unique(np.append(idx[idx >= 0], ends.size - 1))
 
@@ -93,7 +97,8 @@ def finished_curve(problem: DesignProblem, result: OptimResult, *,
     top
         The designs the finish re-scores.
     n_checkpoints
-        Evaluation counts scored, log-spaced (the run's last always among them).
+        Evaluation counts scored, log-spaced, besides the quarters of the run (1: the run's
+        last alone).
 
     Raises
     ------
