@@ -19,7 +19,8 @@ table per instance (the finished reward per method: median, quartiles, extremes,
 0.01 of the best known, evaluations and seconds) and writes:
 
 - ``out/compare.json``: the configuration, the targets used, the tables, the profiles and every
-  run (its finished curve and :class:`optim.OptimResult`);
+  run (its finished curve and :class:`optim.OptimResult`); ``--replot`` reads them again with the
+  best-known rewards as they are now (after ``scripts/bench_targets.py``);
 - ``out/compare.png``: the runtime profiles against evaluations and against seconds, and each
   instance's median finished reward per method with its quartiles and the best known;
 - ``out/compare_ioh/``: every run in IOHprofiler's format (IOHanalyzer reads it).
@@ -29,7 +30,8 @@ Usage::
     python scripts/compare_optimizers.py [--budget 1000] [--seeds 3] [--time SECONDS]
         [--methods cmaes ga nsga2 random ng:TwoPointsDE ng:NGOpt optuna:tpe]
         [--instances puck-any strawberry-any ...] [--out out] [--dask ADDRESS|local]
-        [--workers K]
+        [--workers K] [--checkpoints 8]
+    python scripts/compare_optimizers.py --replot out/compare.json --out out
 """
 
 from __future__ import annotations
@@ -214,60 +216,26 @@ def run_instance(name: str, args, methods: list[str], executor, logs: dict[str, 
     return {"scores": scores, "target": target, "target_source": source}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--budget", type=int, default=1000,
-                        help="evaluations per run (with --time: the most a run may take)")
-    parser.add_argument("--time", type=float, default=None, metavar="SECONDS",
-                        help="each run's wall time instead: equal time for every method")
-    parser.add_argument("--seeds", type=int, default=3, help="seeds per method and instance")
-    parser.add_argument("--methods", nargs="+", default=list(METHODS))
-    parser.add_argument("--instances", nargs="+", default=list(INSTANCES_RUN),
-                        choices=list(INSTANCES))
-    parser.add_argument("--checkpoints", type=int, default=CHECKPOINTS,
-                        help="evaluation counts of each run the finish scores, log-spaced "
-                        "(default %(default)s; each costs up to ten finer evaluations)")
-    parser.add_argument("--dask", metavar="ADDRESS|local")
-    parser.add_argument("--workers", type=int)
-    parser.add_argument("--out", default="out")
-    args = parser.parse_args(argv)
-    methods = list(dict.fromkeys(args.methods))
-    if (args.seeds < 1 or args.budget < 1 or args.checkpoints < 1
-            or (args.time is not None and args.time <= 0)):
-        parser.error("--seeds, --budget, --checkpoints and --time must be positive")
-    for method in methods:
-        try:
-            get_optimizer(method)
-        except (ValueError, ImportError) as exc:
-            parser.error(str(exc))
-    out = Path(args.out)
-    known = load_targets()
-    t0 = time.perf_counter()
-    instances: dict[str, dict] = {}
-    logs = {m: IOHLog(out / "compare_ioh", m) for m in methods}
-    try:
-        with make_executor(args.dask, args.workers) as executor:
-            for name in args.instances:
-                instances[name] = run_instance(name, args, methods, executor, logs, known)
-    finally:
-        for log in logs.values():
-            log.close()
-    total_s = time.perf_counter() - t0
+def report(instances: dict[str, dict], config: dict[str, Any], out: Path,
+           total_s: float) -> None:
+    """Print the tables and the profiles' ends; write the figure and the JSON."""
     tables = {}
     for name, o in instances.items():
         tables[name] = table_rows(o["scores"], o["target"])
         print()
         print(format_table(name, tables[name], o["target"], o["target_source"]))
+    methods = config["methods"]
     all_scores = [s for o in instances.values() for rs in o["scores"].values() for s in rs]
     grids = {"evaluations": np.unique(np.geomspace(
                  1, max(s.evaluations for s in all_scores), GRID_POINTS).round()),
              "seconds": np.geomspace(1e-2, max(max(s.seconds for s in all_scores), 0.02),
                                      GRID_POINTS)}
     prof = profiles(instances, grids)
-    budget = f"{args.time:g} s" if args.time is not None else f"{args.budget} evaluations"
+    budget = (f"{config['time_s']:g} s" if config["time_s"] is not None
+              else f"{config['budget']} evaluations")
     draw(instances, prof, out / "compare.png",
-         f"{len(instances)} instances of the suite: {args.seeds} seeds x {budget} per method; "
-         "finished rewards (the finer member re-scoring the ten best distinct designs)")
+         f"{len(instances)} instances of the suite: {config['seeds']} seeds x {budget} per "
+         "method; finished rewards (the finer member re-scoring the ten best distinct designs)")
     print("\nshare of (run, target) pairs reached at the end: "
           + ", ".join(f"{m} {prof['evaluations'][m][-1]:.2f}" for m in methods))
     counts = {m: (sum(reached(s, o["target"]) for o in instances.values()
@@ -276,10 +244,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"runs within {REACHED_GAP} of the best known: "
           + ", ".join(f"{m} {k}/{n}" for m, (k, n) in counts.items()))
     payload = {
-        "config": {"budget": args.budget, "time_s": args.time, "seeds": args.seeds,
-                   "checkpoints": args.checkpoints,
-                   "methods": methods, "instances": list(instances), "gaps": list(GAPS),
-                   "executor": all_scores[0].result.executor},
+        "config": config,
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
                     "cpus": os.cpu_count()},
         "targets": {n: {"reward": o["target"], "source": o["target_source"]}
@@ -294,8 +259,73 @@ def main(argv: list[str] | None = None) -> int:
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "compare.json").write_text(json.dumps(to_jsonable(payload), indent=1) + "\n")
-    print(f"\nwrote {out / 'compare.json'}, {out / 'compare.png'} and {out / 'compare_ioh'} "
-          f"({total_s:.0f} s)")
+    print(f"\nwrote {out / 'compare.json'} and {out / 'compare.png'}")
+
+
+def replot(path: Path, out: Path) -> None:
+    """Read the runs of a comparison's JSON again, with the targets as they are now."""
+    data = json.loads(Path(path).read_text())
+    known = load_targets()
+    instances = {}
+    for name, methods in data["runs"].items():
+        scores = {m: [BenchScore.from_dict(r) for r in runs] for m, runs in methods.items()}
+        target, source = instance_target(name, scores, known)
+        instances[name] = {"scores": scores, "target": target, "target_source": source}
+    report(instances, data["config"], out, data.get("total_time_s", 0.0))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--budget", type=int, default=1000,
+                        help="evaluations per run (with --time: the most a run may take)")
+    parser.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                        help="each run's wall time instead: equal time for every method")
+    parser.add_argument("--seeds", type=int, default=3, help="seeds per method and instance")
+    parser.add_argument("--methods", nargs="+", default=list(METHODS))
+    parser.add_argument("--instances", nargs="+", default=list(INSTANCES_RUN),
+                        choices=list(INSTANCES))
+    parser.add_argument("--checkpoints", type=int, default=CHECKPOINTS,
+                        help="evaluation counts of each run the finish scores, log-spaced, "
+                        "besides the quarters (default %(default)s; each costs up to ten "
+                        "finer evaluations)")
+    parser.add_argument("--dask", metavar="ADDRESS|local")
+    parser.add_argument("--workers", type=int)
+    parser.add_argument("--out", default="out")
+    parser.add_argument("--replot", type=Path, metavar="COMPARE_JSON",
+                        help="run nothing: read the runs of a comparison's compare.json again "
+                        "with the best-known rewards as they are now, and write to --out")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    if args.replot is not None:
+        replot(args.replot, out)
+        return 0
+    methods = list(dict.fromkeys(args.methods))
+    if (args.seeds < 1 or args.budget < 1 or args.checkpoints < 1
+            or (args.time is not None and args.time <= 0)):
+        parser.error("--seeds, --budget, --checkpoints and --time must be positive")
+    for method in methods:
+        try:
+            get_optimizer(method)
+        except (ValueError, ImportError) as exc:
+            parser.error(str(exc))
+    known = load_targets()
+    t0 = time.perf_counter()
+    instances: dict[str, dict] = {}
+    logs = {m: IOHLog(out / "compare_ioh", m) for m in methods}
+    try:
+        with make_executor(args.dask, args.workers) as executor:
+            for name in args.instances:
+                instances[name] = run_instance(name, args, methods, executor, logs, known)
+    finally:
+        for log in logs.values():
+            log.close()
+    executor_name = next(iter(next(iter(instances.values()))["scores"].values()))[0]
+    config = {"budget": args.budget, "time_s": args.time, "seeds": args.seeds,
+              "checkpoints": args.checkpoints, "methods": methods,
+              "instances": list(instances), "gaps": list(GAPS),
+              "executor": executor_name.result.executor}
+    report(instances, config, out, time.perf_counter() - t0)
+    print(f"IOHprofiler logs in {out / 'compare_ioh'}")
     return 0
 
 

@@ -167,6 +167,11 @@ def test_the_comparison_script_writes_its_figure_table_and_logs(tmp_path):
     assert rows["random"]["median"] == np.median([r["reward"] for r in runs["random"]])
     shares = out["profiles"]["evaluations"]
     assert all(0.0 <= v <= 1.0 for v in shares["random"]) and shares["random"][-1] > 0
+    # read again from its JSON (as after new targets): the same tables
+    assert compare.main(["--replot", str(tmp_path / "compare.json"), "--out",
+                         str(tmp_path / "again")]) == 0
+    again = json.loads((tmp_path / "again" / "compare.json").read_text())
+    assert again["tables"] == out["tables"] and again["runs"] == out["runs"]
     logged = read_ioh(tmp_path / "compare_ioh")
     assert sorted((r.algorithm, r.attributes["seed"]) for r in logged) == [
         ("ng:TwoPointsDE", 0), ("ng:TwoPointsDE", 1), ("random", 0), ("random", 1)]

@@ -80,6 +80,16 @@ class BenchScore:
                 "target": self.target, "gap": self.gap, "reached": self.reached,
                 "curve": self.curve.to_dict(), "result": self.result.to_dict()}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> BenchScore:
+        """The score of :meth:`to_dict`'s data."""
+        return cls(instance=data["instance"], method=data["method"], seed=int(data["seed"]),
+                   evaluations=int(data["evaluations"]), seconds=float(data["seconds"]),
+                   search_reward=float(data["search_reward"]), reward=float(data["reward"]),
+                   target=None if data["target"] is None else float(data["target"]),
+                   curve=FinishedCurve.from_dict(data["curve"]),
+                   result=OptimResult.from_dict(data["result"]))
+
 
 def score_run(instance: str, problem: DesignProblem, result: OptimResult, *,
               targets: dict[str, Target] | None = None, log: IOHLog | None = None,

@@ -62,6 +62,15 @@ class FinishedCurve:
                 "search_reward": self.search_reward.tolist(), "reward": self.reward.tolist(),
                 "best_design": dict(self.best_design), "rescored": self.rescored}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> FinishedCurve:
+        """The curve of :meth:`to_dict`'s data."""
+        return cls(evaluations=np.asarray(data["evaluations"], dtype=np.int64),
+                   seconds=np.asarray(data["seconds"], dtype=np.float64),
+                   search_reward=np.asarray(data["search_reward"], dtype=np.float64),
+                   reward=np.asarray(data["reward"], dtype=np.float64),
+                   best_design=dict(data["best_design"]), rescored=int(data["rescored"]))
+
 
 def checkpoints(batch_ends: Any, n: int = CHECKPOINTS) -> np.ndarray:
     """Indices into a run's batches (``history_evaluations``) at about ``n`` log-spaced
