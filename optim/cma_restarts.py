@@ -80,6 +80,7 @@ def run_cma_restarts(
     strategy: str = "bipop",
     tolfun: float = TOLFUN,
     tolx: float = TOLX,
+    tolstagnation: int | None = None,
 ) -> OptimResult:
     """Maximize the reward with ``cma.fmin2`` and its IPOP or BIPOP restarts.
 
@@ -97,6 +98,10 @@ def run_cma_restarts(
         A run ends when its recent rewards agree within this, in (0, 1].
     tolx
         A run ends when its steps are below this in the normalized box, in (0, 1].
+    tolstagnation
+        A run ends when the median of its recent rewards has not improved in this many
+        iterations (pycma's ``tolstagnation``), an integer >= 1; ``None``: pycma's own
+        ``100 + 100 n^1.5 / popsize`` (about 4000 evaluations with shaped jaws).
 
     Returns
     -------
@@ -107,6 +112,11 @@ def run_cma_restarts(
     budget, seed, strategy = check_budget(budget), check_seed(seed), check_name(strategy)
     tolfun = check_range("tolfun", tolfun, 0.0, 1.0, low_open=True)
     tolx = check_range("tolx", tolx, 0.0, 1.0, low_open=True)
+    if tolstagnation is not None and (isinstance(tolstagnation, bool)
+                                      or not isinstance(tolstagnation, int | np.integer)
+                                      or tolstagnation < 1):
+        raise ValueError(f"tolstagnation must be None or an integer >= 1 (iterations), got "
+                         f"{tolstagnation!r}")
     cma = _import_cma()
     rng = np.random.default_rng(seed)
     runs = [0]
@@ -132,6 +142,7 @@ def run_cma_restarts(
         "eval_final_mean": False,  # every evaluation is the search's
         "tolflatfitness": 10,  # as run_cmaes: invalid designs share one penalty
         "tolfun": tolfun, "tolfunhist": tolfun, "tolx": tolx,
+        **({} if tolstagnation is None else {"tolstagnation": int(tolstagnation)}),
         "termination_callback": lambda es: problem.remaining <= 0,
     }
     problem.start(budget)
@@ -140,7 +151,8 @@ def run_cma_restarts(
         cma.fmin2(None, x0, SIGMA0, options, parallel_objective=objective,
                           restarts=MAX_RESTARTS, bipop=strategy == "bipop")
     return problem.result(f"{PREFIX}:{strategy}", seed,
-                          options={"sigma0": SIGMA0, "tolfun": tolfun, "tolx": tolx},
+                          options={"sigma0": SIGMA0, "tolfun": tolfun, "tolx": tolx,
+                                   "tolstagnation": tolstagnation},
                           extra={"runs": runs[0]})
 
 
@@ -155,9 +167,9 @@ def driver(name: str) -> Optimizer:
     name = check_name(name)
 
     def run(problem: DesignProblem, *, budget: int, seed: int = 0, tolfun: float = TOLFUN,
-            tolx: float = TOLX) -> OptimResult:
+            tolx: float = TOLX, tolstagnation: int | None = None) -> OptimResult:
         return run_cma_restarts(problem, budget=budget, seed=seed, strategy=name,
-                                tolfun=tolfun, tolx=tolx)
+                                tolfun=tolfun, tolx=tolx, tolstagnation=tolstagnation)
 
     run.__name__ = run.__qualname__ = f"run_cma_{name}"
     run.__doc__ = f"Method ``cma:{name}``: :func:`run_cma_restarts` with {name.upper()}."

@@ -53,7 +53,7 @@ def test_an_unknown_name_says_what_is_allowed(method, match):
 def test_options_of_the_prefixed_methods():
     assert option_names("ng:NGOpt") == ("batch_size",)
     assert option_names("optuna:tpe") == ("batch_size",)
-    assert option_names("cma:bipop") == ("tolfun", "tolx")
+    assert option_names("cma:bipop") == ("tolfun", "tolx", "tolstagnation")
     with pytest.raises(ValueError, match=r"unknown option 'popsize' for method 'ng:NGOpt'; "
                                          r"allowed: batch_size$"):
         check_options("ng:NGOpt", {"popsize": 4})
@@ -102,6 +102,33 @@ def test_cma_restarts_use_the_budget_and_leave_numpy_alone():
     ipop = optimize("cma:ipop", problem, budget=40, seed=5)
     own = optimize("cmaes", problem, budget=40, seed=5)
     assert ipop.history_best_reward == own.history_best_reward
+
+
+class _Captured(Exception):
+    """Raised by a stand-in for ``cma.fmin2`` once it has the options it was given."""
+
+
+@pytest.mark.parametrize("tolstagnation", [None, 7])
+def test_cma_restarts_pass_tolstagnation_to_pycma(monkeypatch, tolstagnation):
+    import cma
+    given: dict = {}
+
+    def fmin2(objective, x0, sigma0, options, **kwargs):
+        given.update(options)
+        raise _Captured
+
+    monkeypatch.setattr(cma, "fmin2", fmin2)
+    with pytest.raises(_Captured):
+        optimize("cma:ipop", make_problem(), budget=40, seed=0, tolstagnation=tolstagnation)
+    # None leaves pycma's own default (its options carry no key); an integer is passed as is
+    assert given.get("tolstagnation") == tolstagnation
+    assert given["tolfun"] == 1e-4 and given["tolx"] == 1e-3
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.5, True, "10", "abc"])
+def test_cma_restarts_refuse_a_bad_tolstagnation(bad):
+    with pytest.raises(ValueError, match=r"tolstagnation must be None or an integer >= 1"):
+        optimize("cma:bipop", make_problem(), budget=40, seed=0, tolstagnation=bad)
 
 
 def test_ngopt_metamodel_runs_under_this_numpy(monkeypatch):
