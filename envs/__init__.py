@@ -1,17 +1,19 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2`` and ``GripperDesign-v3`` (v2 with shaped
-jaws in the action) with Gymnasium::
+Importing the package registers ``GripperDesign-v2`` and ``GripperJawDesign-v0`` (the same task
+with shaped jaws in the action: a separate id, not a later version of v2) with Gymnasium::
 
     import gymnasium as gym
     import envs
 
     env = gym.make("GripperDesign-v2")
     vec = gym.make_vec("GripperDesign-v2", num_envs=64, vectorization_mode="vector_entry_point")
-    jaws = gym.make("GripperDesign-v3", jaw="cradle")
+    jaws = gym.make("GripperJawDesign-v0", jaw="cradle")
 """
 
 from __future__ import annotations
+
+import warnings
 
 import gymnasium
 
@@ -46,7 +48,7 @@ __all__ = [
 ]
 
 ENV_ID = "GripperDesign-v2"
-JAW_ENV_ID = "GripperDesign-v3"  # with shaped jaws (envs.design_env.make_vector_env_v3)
+JAW_ENV_ID = "GripperJawDesign-v0"  # with shaped jaws (envs.design_env.make_vector_env_v3)
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
@@ -70,6 +72,12 @@ if ENV_ID not in gymnasium.registry:
         # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
         # would also flag that step as truncated (Gymnasium's checker rejects it)
     )
+
+# v3 is v2 with shaped jaws (a wider action), not a newer v2: Gymnasium's "The environment
+# GripperDesign-v2 is out of date. You should consider upgrading to version `v3`", which it
+# says for any lower version of a registered name, would be wrong advice on every make of v2
+warnings.filterwarnings("ignore", message=r".*The environment GripperDesign-v2 is out of date",
+                        category=DeprecationWarning)
 
 if JAW_ENV_ID not in gymnasium.registry:
     gymnasium.register(

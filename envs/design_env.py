@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import operator
 import textwrap
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -37,9 +38,16 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from .model.family import ModelSpec, resolve_model
+from .model.loads import DEFAULT_LOAD_SET, load_set_code
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
-from .validation import check_range
+from .validation import (
+    PsmGraspWarning,
+    check_integer,
+    check_range,
+    check_sequence,
+    real_array,
+)
 
 __all__ = [
     "OBS_FIELDS",
@@ -84,11 +92,15 @@ RENDER_FPS = 4
 ROBUST_KEYS = {"reward_nominal": (np.float64, ()), "worst_scenario": (np.int64, ())}
 
 
+MAX_NUM_ENVS = 2**20  # sub-envs of a vector env at most (each step solves one grasp per sub-env)
+
+
 def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
           high_open: bool = False) -> tuple[float, float]:
-    pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=low_open,
-                             high_open=high_open) for v in value)
-    if len(pair) != 2 or pair[0] > pair[1]:
+    pair = tuple(check_range(f"{name}[{i}]", v, low, high, low_open=low_open,
+                             high_open=high_open)
+                 for i, v in enumerate(check_sequence(name, value, 2)))
+    if pair[0] > pair[1]:
         raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
     return pair
 
@@ -345,10 +357,7 @@ def _object_info(disk: SoftDisk, needs: np.ndarray) -> dict[str, float]:
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Validate actions; return them clipped to [-1, 1] (float64) and a per-row clipped flag."""
-    try:
-        a = np.array(actions, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be numeric with shape {shape}: {exc}") from None
+    a = real_array("action", actions, f"numbers of shape {shape}")
     if a.shape != shape:
         raise ValueError(f"action must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):
@@ -678,7 +687,9 @@ class GripperDesignEnv(gym.Env):
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
     `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v2"))`
-    passes. Stepping again without a reset evaluates another design on the same object.
+    passes. Stepping again without a reset evaluates another design on the same object, with a
+    warning once an episode (:class:`~envs.validation.PsmGraspWarning`, as Gymnasium's own
+    environments warn): in a training loop it is a forgotten reset.
 
     Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v2", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
@@ -706,6 +717,9 @@ class GripperDesignEnv(gym.Env):
       disk, 0.0149 per radian: the spring scales with each object like the torque, so an
       action means the same grasp for every object); `torsion_stiffness_nm_per_rad`: an
       absolute spring [N·m/rad] instead. `self.joint_spring` holds the one given.
+    - `load_set`: how the gripper picks, the payload's directions a grasp must hold the
+      object in (`"top-down"`, `"side"` or `"any"`, :mod:`envs.model.loads`; default
+      `"any"`, every direction): a setting of the env, not observed.
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
@@ -716,7 +730,7 @@ class GripperDesignEnv(gym.Env):
 
     * v3: shaped jaws. The action gains the jaw columns of the design space
       (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``): a groove cut into the
-      gripping faces, chosen at make, `gym.make("GripperDesign-v3", jaw="cradle")` (default
+      gripping faces, chosen at make, `gym.make("GripperJawDesign-v0", jaw="cradle")` (default
       `"any"`: depth, bottom radius, opening angle and position, shape 10; `"cradle"` and
       `"vee"` 9; `jaw_per_finger=True` doubles the jaw columns). The observation, the
       objects and the reward are v2's; `bounds` may be given too (its jaw is replaced).
@@ -752,7 +766,9 @@ class GripperDesignEnv(gym.Env):
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
+        load_set_code(load_set)  # (a bad setting at construction, not at the first step)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
@@ -760,8 +776,10 @@ class GripperDesignEnv(gym.Env):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.action_space, self.observation_space = _spaces(self.bounds)
         self._disk: SoftDisk | None = None
+        self._terminated = 0  # steps since the episode ended (it ends with its first)
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
         self._last_design: np.ndarray | None = None
@@ -784,6 +802,7 @@ class GripperDesignEnv(gym.Env):
         self._disk, self._needs, self._obs = _draw_object(
             self.np_random, self.distribution, opts)
         self._last_design = None
+        self._terminated = 0
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), _object_info(self._disk, self._needs)
@@ -791,16 +810,21 @@ class GripperDesignEnv(gym.Env):
     def step(self, action):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
+        if self._terminated == 1:  # said once an episode, as Gymnasium's own envs do
+            warnings.warn("GripperDesignEnv.step() after the episode ended (terminated=True): "
+                          "it evaluates another design on the same object; call reset() for "
+                          "the next episode", PsmGraspWarning, stacklevel=2)
         act, clipped = _check_actions(action, (self.bounds.n_var,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
                                weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
         info["design"] = design
         info.update(_object_info(self._disk, self._needs))
         self._last_design = design
+        self._terminated += 1
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), float(out["reward"][0]), True, False, info
@@ -901,14 +925,16 @@ class GripperDesignVectorEnv(VectorEnv):
         calibrated: bool | None = None,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
-        if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        load_set_code(load_set)
+        num_envs = check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
-        if max_episode_steps is not None and max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps!r}")
+        if max_episode_steps is not None:
+            max_episode_steps = check_integer("max_episode_steps", max_episode_steps, 1,
+                                              2**62)
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
@@ -916,6 +942,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.max_episode_steps = max_episode_steps
         self.single_action_space, self.single_observation_space = _spaces(self.bounds)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -983,7 +1010,7 @@ class GripperDesignVectorEnv(VectorEnv):
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_objects(designs, [self._disks[i] for i in rows.tolist()],
                                self._needs[rows], weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
         for key, (dtype, shape) in {**METRIC_KEYS, **ROBUST_KEYS}.items():
@@ -1080,7 +1107,7 @@ class GripperDesignVectorEnv(VectorEnv):
 
 def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
                bounds: DesignBounds | None = None) -> DesignBounds:
-    """The design space of ``GripperDesign-v3``: ``bounds`` (default the default box) with
+    """The design space of ``GripperJawDesign-v0``: ``bounds`` (default the default box) with
     the jaws ``jaw`` (one of :data:`envs.design_space.JAW_KINDS`, default ``"any"``) and
     ``jaw_per_finger`` (:meth:`~envs.evaluate.DesignBounds.with_jaw`)."""
     if bounds is not None and not isinstance(bounds, DesignBounds):
@@ -1092,7 +1119,7 @@ def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
 def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,
                        bounds: DesignBounds | None = None, **kwargs: Any
                        ) -> GripperDesignVectorEnv:
-    """The vector entry point of ``GripperDesign-v3``: a :class:`GripperDesignVectorEnv`
+    """The vector entry point of ``GripperJawDesign-v0``: a :class:`GripperDesignVectorEnv`
     whose actions carry the jaw columns (:func:`jaw_bounds`); ``kwargs`` as for the class."""
     return GripperDesignVectorEnv(num_envs, bounds=jaw_bounds(jaw, jaw_per_finger, bounds),
                                   **kwargs)

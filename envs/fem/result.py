@@ -90,13 +90,17 @@ class FemResult:
     required_friction
         The smallest Coulomb coefficient with which friction at the contacts (rim nodes on the
         faces, the tip corners) could carry the hub's force and moment instead [-]
-        (:mod:`envs.model.holding`, the point-spring model's definition), including the
-        payload where one is given.
+        (:mod:`envs.model.holding`, the point-spring model's definition): the freed disk's
+        grasp under the hub's reaction and, where one is given, the payload in every direction
+        of :attr:`load_set`, its normal forces moved by the FEM's own compliance
+        (:mod:`envs.fem.loaded`).
     payload_n, grip_force_n, friction_limit, friction_limit_angle_rad
         The payload the required friction includes [N], the sum of the contacts' normal forces
         [N], what sets the required friction (a ``LIMIT_*`` code of :mod:`envs.model.holding`)
         and, for an in-plane payload, the direction of its worst pull [rad] (as in
         :class:`envs.solver.result.GraspResult`).
+    load_set
+        The payload's directions checked (:data:`envs.model.loads.LOAD_SETS`).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -131,6 +135,7 @@ class FemResult:
     grip_force_n: float = math.nan
     friction_limit: int = 0
     friction_limit_angle_rad: float = math.nan
+    load_set: str = "any"
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:

@@ -121,7 +121,7 @@ class IOHLog:
 
     def add(self, name: str, archive_x: np.ndarray, archive_reward: np.ndarray,
             batch_ends: Sequence[int], batch_seconds: Sequence[float], *, seed: int,
-            finished_reward: float) -> None:
+            finished_reward: float, archive_evaluations: Sequence[int] | None = None) -> None:
         """Log one run.
 
         Parameters
@@ -139,6 +139,12 @@ class IOHLog:
         finished_reward
             The reward of the design the run reports, by the finer member of its finish (a run
             attribute).
+        archive_evaluations
+            The evaluation count of each archived design, increasing (the archive's
+            ``evaluations``; default 1, 2, ...). Counts no design has (the budget a screen on
+            the nominal scenario charged, :meth:`~optim.problem.DesignProblem.screen`) are
+            logged as evaluations that score :data:`NOT_SCORED`: the log's evaluations are the
+            run's budget.
 
         Raises
         ------
@@ -149,23 +155,30 @@ class IOHLog:
         x = np.asarray(archive_x, dtype=np.float64)
         reward = np.asarray(archive_reward, dtype=np.float64)
         ends = np.asarray(batch_ends, dtype=np.int64)
-        if x.ndim != 2 or reward.shape != (x.shape[0],) or len(ends) != len(batch_seconds) or (
-                len(ends) and ends[-1] != x.shape[0]):
-            raise ValueError(f"a run's archive ({x.shape}, {reward.shape}) and batches "
-                             f"({len(ends)} ending at {ends[-1] if len(ends) else None}) "
+        evals = (np.arange(1, x.shape[0] + 1) if archive_evaluations is None
+                 else np.asarray(archive_evaluations, dtype=np.int64))
+        total = int(ends[-1]) if len(ends) else 0
+        if x.ndim != 2 or reward.shape != (x.shape[0],) or evals.shape != reward.shape or (
+                len(ends) != len(batch_seconds)) or (evals.size and (
+                    evals[0] < 1 or np.any(np.diff(evals) <= 0) or evals[-1] > total)):
+            raise ValueError(f"a run's archive ({x.shape}, {reward.shape}, evaluations "
+                             f"{evals.shape}) and batches ({len(ends)} ending at {total}) "
                              "disagree")
         problem = _problem(name, x.shape[1])
         self._logger.set_run_attributes({"seed": float(seed),
                                          "finished_reward": _finite(finished_reward)})
+        row_of = dict(zip(evals.tolist(), range(evals.size), strict=True))
+        # the batch each evaluation ended in, for its wall time
+        batch = np.searchsorted(ends, np.arange(1, total + 1), side="left")
+        seconds = np.asarray(batch_seconds, dtype=np.float64)
+        unscored = np.zeros(x.shape[1])
         problem.attach_logger(self._logger)
         try:
-            start = 0
-            for end, seconds in zip(ends.tolist(), batch_seconds, strict=True):
-                self.wall_time_s = float(seconds)
-                for i in range(start, end):
-                    _pending.append(_finite(reward[i]))
-                    problem(x[i])
-                start = end
+            for e in range(1, total + 1):
+                self.wall_time_s = float(seconds[batch[e - 1]])
+                i = row_of.get(e)
+                _pending.append(NOT_SCORED if i is None else _finite(reward[i]))
+                problem(unscored if i is None else x[i])
             problem.reset()
         finally:
             _pending.clear()

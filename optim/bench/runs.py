@@ -123,7 +123,8 @@ def score_run(instance: str, problem: DesignProblem, result: OptimResult, *,
     if log is not None:
         arc = problem.archive()
         log.add(instance, arc["x"], arc["reward"], result.history_evaluations,
-                result.history_wall_time_s, seed=result.seed, finished_reward=score.reward)
+                result.history_wall_time_s, seed=result.seed, finished_reward=score.reward,
+                archive_evaluations=arc["evaluations"])
     return score
 
 

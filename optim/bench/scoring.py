@@ -2,7 +2,8 @@
 run stopped after ``n`` evaluations, at a few ``n``.
 
 The finish re-scores a run's ten best distinct designs with the finer member
-(:data:`optim.finish.RANKING_MEMBER`) and reports the best of them. :func:`finished_curve`
+(:data:`optim.finish.RANKING_MEMBER`), and at the run's end each independent start's best (a
+portfolio's), and reports the best of them. :func:`finished_curve`
 applies it to the prefixes of a finished run's archive (its first ``n`` evaluations): the
 reward the user would have been told, had the run been given ``n`` evaluations (for a method
 that plans by its budget, such as Nevergrad's or pycma's, the prefix of a longer run stands for
@@ -16,6 +17,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from envs.scene import design_row
 
 from ..finish import FINISH_TOP, RANKING_MEMBER
 from ..problem import DesignProblem, top_distinct
@@ -115,8 +118,9 @@ def finished_curve(problem: DesignProblem, result: OptimResult, *,
         When the problem's archive is not the result's run.
     """
     arc = problem.archive()
-    if arc["reward"].size != result.n_evaluations:
-        raise ValueError(f"the problem's archive holds {arc['reward'].size} evaluations, the "
+    if problem.n_evaluations != result.n_evaluations or (
+            arc["evaluations"].size and arc["evaluations"][-1] > result.n_evaluations):
+        raise ValueError(f"the problem has counted {problem.n_evaluations} evaluations, the "
                          f"run {result.n_evaluations}: score a run before the next one")
     member = dict(RANKING_MEMBER if member is None else member)
     ends = np.asarray(result.history_evaluations, dtype=np.int64)
@@ -124,7 +128,9 @@ def finished_curve(problem: DesignProblem, result: OptimResult, *,
     finer: dict[int, float] = {}  # archive row -> the finer member's reward
     rewards, search, best_rows = [], [], []
     for k in picked.tolist():
-        n = int(ends[k])
+        # the designs within the first ends[k] evaluations (a screen's charge counted, its
+        # designs not in the archive)
+        n = int(np.searchsorted(arc["evaluations"], ends[k], side="right"))
         rows = top_distinct(arc["x"][:n], arc["reward"][:n], top)
         new = [i for i in rows if i not in finer]
         if new:
@@ -135,9 +141,18 @@ def finished_curve(problem: DesignProblem, result: OptimResult, *,
         rewards.append(-np.inf if best is None else finer[best])
         search.append(float(np.max(arc["reward"][:n])) if n else -np.inf)
     last = best_rows[-1] if best_rows else None
+    best_design = {} if last is None else problem.design_dict(arc["x"][last])
+    # at the run's end the finish also scores each independent start's best (a portfolio's)
+    scored = [problem.design_dict(arc["x"][i]) for i in rows] if rewards else []
+    starts = [p for p in result.extra.get("start_designs", ()) if p["design"] not in scored]
+    if starts and rewards:
+        out = problem.evaluate_physical(np.array([design_row(p["design"]) for p in starts]),
+                                        member)
+        i = int(np.argmax(out["reward"]))
+        if out["reward"][i] > rewards[-1]:
+            rewards[-1], best_design = float(out["reward"][i]), dict(starts[i]["design"])
     return FinishedCurve(
         evaluations=ends[picked].astype(np.int64),
         seconds=np.asarray(result.history_wall_time_s, dtype=np.float64)[picked],
         search_reward=np.array(search), reward=np.array(rewards),
-        best_design={} if last is None else problem.design_dict(arc["x"][last]),
-        rescored=len(finer))
+        best_design=best_design, rescored=len(finer) + len(starts))
