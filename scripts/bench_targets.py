@@ -137,9 +137,10 @@ def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str) -> 
     targets = targets_of(rows)
     command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
     commands = [command]
-    if args.resume and path.exists():  # the commands whose runs are kept
-        old = json.loads(path.read_text()).get("meta", {}).get("commands", [])
-        commands = [c for c in old if c != command] + commands
+    if args.resume and path.exists():  # the commands whose runs are kept (same model)
+        old = json.loads(path.read_text()).get("meta", {})
+        if old.get("model_digest") == digest:
+            commands = [c for c in old.get("commands", []) if c != command] + commands
     meta = {
         "how": "the best reward the finer member gave any design of the runs: each run's ten "
                "best distinct designs (by the search model) re-scored, as the finish does; "
@@ -152,6 +153,8 @@ def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str) -> 
         "finer_member": RANKING_MEMBER,
         "finish_top": FINISH_TOP,
         "runs": len(rows),
+        "methods": sorted({r["method"] for r in rows}),
+        "instances_without_target": [n for n in INSTANCES if n not in targets],
         # the searches' wall time, summed over the runs (the finishes' re-scoring left out)
         "run_seconds": round(sum(r["seconds"] for r in rows), 1),
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},
