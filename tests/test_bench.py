@@ -79,6 +79,29 @@ def test_finished_curve_ends_at_the_finish():
     assert np.all(np.diff(curve.search_reward) >= 0)
 
 
+def test_the_default_method_is_scored_and_logged_with_its_screen(tmp_path):
+    """The portfolio screens on the nominal scenario (charged a ninth of an evaluation a design,
+    its designs not archived): its curve ends at the package's finish, and its log counts the
+    run's budget, every archived design at its own evaluation count."""
+    from optim.bench import IOHLog, run_method
+
+    problem = make_problem("strawberry-straight")
+    with IOHLog(tmp_path, "portfolio") as log:
+        score = run_method("strawberry-straight", "portfolio", budget=80, seed=0, targets={},
+                           log=log, n_checkpoints=1, problem=problem)
+    assert score.result.n_evaluations == 80 and score.curve.evaluations[-1] == 80
+    arc = problem.archive()
+    assert arc["evaluations"][-1] <= 80 and arc["evaluations"].size < 80  # the screen's charge
+    assert np.all(np.diff(arc["evaluations"]) > 0)
+    assert score.reward == finish_result(problem, score.result).best_reward
+    (logged,) = read_ioh(tmp_path)
+    assert logged.evals == 80 and logged.evaluations[-1] == 80
+    rows = dict(zip(arc["evaluations"].tolist(), arc["reward"].tolist(), strict=True))
+    for e, y in zip(logged.evaluations.tolist(), logged.raw_y.tolist(), strict=True):
+        assert y == pytest.approx(rows.get(e, -1e300), rel=1e-9, abs=1e-9)  # (10 digits)
+    assert logged.best_y == pytest.approx(arc["reward"].max())
+
+
 def test_bench_run_for_an_outside_optimizer_scores_and_logs_it(tmp_path):
     run = BenchRun(FAST, budget=45, seed=7, algorithm="my-random", log_dir=tmp_path)
     assert run.n_var == 6 and run.bounds[0].tolist() == [-1.0] * 6

@@ -168,14 +168,36 @@ def test_optuna_stays_quiet_and_keeps_its_verbosity(caplog):
 
 @pytest.mark.parametrize(("method", "stem"), [("ng:TwoPointsDE", "ng-TwoPointsDE"),
                                               ("optuna:tpe", "optuna-tpe")])
-def test_cli_runs_the_outside_methods(method, stem, tmp_path):
+def test_cli_runs_the_outside_methods_with_the_finish_and_verdict(method, stem, tmp_path):
     from cli.main import main
+    from optim.finish import RANKING_MEMBER
+    from optim.verdict import verdict_exit_code
 
-    assert main(["optimize", "--method", method, "--budget", "25", "--seed", "2", "--out",
-                 str(tmp_path), "--no-progress", "--no-finish"]) == 0
+    code = main(["optimize", "--method", method, "--budget", "25", "--seed", "2", "--out",
+                 str(tmp_path), "--no-progress"])
     result = OptimResult.from_json(tmp_path / f"{stem}_seed2_result.json")
     assert result.method == method and result.n_evaluations == 25
     assert (tmp_path / f"{stem}_seed2_convergence.png").stat().st_size > 0
+    # reported by the finer member, as every method's optimum; exit code from the verdict of
+    # its one start
+    assert result.extra["reward_model"] == RANKING_MEMBER
+    assert result.best_reward == result.top_designs[0]["reward"]
+    assert result.extra["verdict"]["starts"] == 1
+    assert code == verdict_exit_code(result.extra["verdict"])
+
+
+def test_api_outside_methods_get_the_packages_finish_and_verdict(tmp_path):
+    from optim.run import run_optimize
+
+    kwargs = {"scene": SCENE, "budget": 30, "seed": 1, "progress": False, "verbose": False}
+    own, _ = run_optimize("cmaes", out=tmp_path / "own", **kwargs)
+    theirs, files = run_optimize("optuna:tpe", out=tmp_path / "optuna", **kwargs)
+    assert files and all(path.name.startswith("optuna-tpe_seed1") for path in files.values())
+    finished = {"reward_model", "search_model", "search_reward", "finish", "verdict",
+                "grasp_found", "search_grasp_found"}
+    assert finished <= set(own.extra) and finished <= set(theirs.extra)
+    assert theirs.extra["reward_model"] == own.extra["reward_model"]
+    assert theirs.extra["verdict"]["verdict"] in ("holds", "undecided")
 
 
 def test_cli_refuses_an_unknown_outside_method(capsys):
