@@ -16,7 +16,7 @@ instance.
 Usage::
 
     python scripts/bench_targets.py [--instances strawberry-any ...] [--seeds 3]
-        [--methods cmaes ga nsga2 ng:TwoPointsDE ng:NGOpt cma:bipop]
+        [--methods portfolio cmaes ga nsga2 ng:TwoPointsDE ng:NGOpt cma:bipop]
         [--budget 6000] [--scenario-budget 3000] [--resume] [--add-runs out/compare.json]
 """
 
@@ -39,7 +39,7 @@ from optim.bench.targets import TARGETS_FILE, model_digest
 from optim.finish import FINISH_TOP, RANKING_MEMBER
 from optim.result import to_jsonable
 
-METHODS = ("cmaes", "ga", "nsga2", "ng:TwoPointsDE", "ng:NGOpt", "cma:bipop")
+METHODS = ("portfolio", "cmaes", "ga", "nsga2", "ng:TwoPointsDE", "ng:NGOpt", "cma:bipop")
 BUDGET = 6000  # an instance judged on the one exact object
 SCENARIO_BUDGET = 3000  # an instance with scenarios: each evaluation solves 9 or 25 grasps
 

@@ -1,7 +1,7 @@
 """Compare the optimizers on the benchmark suite: equal budgets (or equal time), several seeds,
 the reward a user is told.
 
-Every method (the package's, Nevergrad's and Optuna's) runs ``--seeds`` times on each instance
+Every method (the package's, its default ``portfolio`` first, Nevergrad's and Optuna's) runs ``--seeds`` times on each instance
 of :mod:`optim.bench` (an object, its scenarios and payload, and the jaws designed) with the same
 evaluation budget, or with the same wall time (``--time``). Each run is read as its user reads
 it: the finish's reward, the finer member re-scoring the ten best distinct designs
@@ -28,7 +28,7 @@ table per instance (the finished reward per method: median, quartiles, extremes,
 Usage::
 
     python scripts/compare_optimizers.py [--budget 1000] [--seeds 3] [--time SECONDS]
-        [--methods cmaes ga nsga2 random ng:TwoPointsDE ng:NGOpt optuna:tpe]
+        [--methods portfolio cmaes ga nsga2 random ng:TwoPointsDE ng:NGOpt optuna:tpe]
         [--instances puck-any strawberry-any ...] [--out out] [--dask ADDRESS|local]
         [--workers K] [--checkpoints 8]
     python scripts/compare_optimizers.py --replot out/compare.json --out out
@@ -64,7 +64,9 @@ from optim.executors import make_executor
 from optim.optimize import get_optimizer
 from optim.result import to_jsonable
 
-METHODS = ("cmaes", "ga", "nsga2", "random", "ng:TwoPointsDE", "ng:NGOpt", "optuna:tpe")
+# the package's default search first, then its other methods and those of other libraries
+METHODS = ("portfolio", "cmaes", "ga", "nsga2", "random", "ng:TwoPointsDE", "ng:NGOpt",
+           "optuna:tpe")
 # a mix: three objects judged once, three with scenarios (9, 9 and 25 grasps a design)
 INSTANCES_RUN = ("puck-any", "cherry-tomato-any", "foam-any", "strawberry-any",
                  "tomatoes-mu05-any", "blueberries-any")
