@@ -159,6 +159,8 @@ def test_targets_say_how_they_were_obtained():
     assert set(targets) <= set(INSTANCES)
     assert meta["commands"] and meta["finer_member"] == RANKING_MEMBER
     assert meta["runs"] >= len(targets)
+    # every instance has a target or is listed without one
+    assert sorted([*targets, *meta["instances_without_target"]]) == sorted(INSTANCES)
     raw = json.loads((Path(__file__).resolve().parent.parent / "optim" / "bench"
                       / "targets.json").read_text())["targets"]
     for name, t in targets.items():
