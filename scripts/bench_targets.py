@@ -60,7 +60,7 @@ def _read_runs(path: Path, digest: str) -> list[dict[str, Any]]:
 
 
 def run_instance(name: str, args, budget: int, done: set, runs_path: Path,
-                 digest: str) -> list[dict[str, Any]]:
+                 digest: str, commit: str | None) -> list[dict[str, Any]]:
     """Every method and seed on one instance (those not done yet); the new rows."""
     problem = make_problem(name)
     rows = []
@@ -74,7 +74,7 @@ def run_instance(name: str, args, budget: int, done: set, runs_path: Path,
                    "seconds": score.seconds, "search_reward": score.search_reward,
                    "reward": score.reward, "design": score.curve.best_design,
                    "design_search_reward": _search_reward_of(score),
-                   "model_digest": digest}
+                   "model_digest": digest, "commit": commit}
             rows.append(row)
             with runs_path.open("a") as f:
                 f.write(json.dumps(to_jsonable(row)) + "\n")
@@ -132,7 +132,8 @@ def targets_of(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str) -> None:
+def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str,
+                  commit: str | None) -> None:
     """The targets file: the targets and how they were obtained."""
     targets = targets_of(rows)
     command = "python " + " ".join(shlex.quote(a) for a in sys.argv)
@@ -148,7 +149,9 @@ def write_targets(path: Path, rows: list[dict[str, Any]], args, digest: str) -> 
                "their budget",
         "commands": commands,
         "date": datetime.date.today().isoformat(),
-        "commit": _commit(),
+        "commit": commit,
+        # the code each kept run ran (a campaign resumed after commits spans several)
+        "run_commits": sorted({r["commit"] for r in rows if r.get("commit")}),
         "model_digest": digest,
         "finer_member": RANKING_MEMBER,
         "finish_top": FINISH_TOP,
@@ -186,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.seeds < 1 or args.budget < 1 or args.scenario_budget < 1:
         parser.error("--seeds and the budgets must be >= 1")
-    digest = model_digest()
+    digest, commit = model_digest(), _commit()
     args.runs.parent.mkdir(parents=True, exist_ok=True)
     if not args.resume and args.runs.exists():
         args.runs.unlink()
@@ -197,10 +200,10 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     for name in args.instances:
         budget = args.budget if INSTANCES[name].n_scenarios() == 1 else args.scenario_budget
-        rows += run_instance(name, args, budget, done, args.runs, digest)
-        write_targets(args.out, rows, args, digest)
+        rows += run_instance(name, args, budget, done, args.runs, digest, commit)
+        write_targets(args.out, rows, args, digest, commit)
     if not args.instances:
-        write_targets(args.out, rows, args, digest)
+        write_targets(args.out, rows, args, digest, commit)
     for name, t in targets_of(rows).items():
         print(f"{name:24s} {t['reward']:8.4f}  ({t['method']}, seed {t['seed']}, "
               f"{t['budget']} evaluations; {t['runs']} runs)")

@@ -1,11 +1,11 @@
 """Compare the optimizers on the benchmark suite: equal budgets (or equal time), several seeds,
 the reward a user is told.
 
-Every method (the package's, its default ``portfolio`` first, Nevergrad's and Optuna's) runs ``--seeds`` times on each instance
-of :mod:`optim.bench` (an object, its scenarios and payload, and the jaws designed) with the same
-evaluation budget, or with the same wall time (``--time``). Each run is read as its user reads
-it: the finish's reward, the finer member re-scoring the ten best distinct designs
-(:func:`optim.finish.finish_result`), at a few log-spaced prefixes of the run
+Every method (the package's, its default ``portfolio`` first, Nevergrad's and Optuna's) runs
+``--seeds`` times on each instance of :mod:`optim.bench` (an object, its scenarios and payload, and
+the jaws designed) with the same evaluation budget, or with the same wall time (``--time``). Each
+run is read as its user reads it: the finish's reward, the finer member re-scoring the ten best
+distinct designs (:func:`optim.finish.finish_result`), at a few log-spaced prefixes of the run
 (:func:`optim.bench.finished_curve`), and its gap to the instance's best-known reward
 (``optim/bench/targets.json``, from ``python scripts/bench_targets.py``; an instance without one,
 or a stale file, falls back to the best finished reward of this comparison, and says so).
