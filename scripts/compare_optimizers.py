@@ -112,12 +112,18 @@ def format_table(label: str, rows: list[dict[str, Any]], target: float, source: 
     return "\n".join(lines)
 
 
+def current_targets() -> dict:
+    """The best-known rewards of targets.json, none when they were computed with another
+    version of the model (read once: a campaign may rewrite the file during a comparison)."""
+    return {} if targets_stale() else load_targets()
+
+
 def instance_target(name: str, scores: dict[str, list[BenchScore]], known: dict
                     ) -> tuple[float, str]:
     """The best-known reward of an instance and where it comes from; the best finished reward
     of this comparison where no current target is known (or a run beat it)."""
     here = max(s.reward for runs in scores.values() for s in runs)
-    if name in known and not targets_stale():
+    if name in known:
         target = known[name].reward
         if here > target:
             return here, f"this comparison, above targets.json's {target:.4f}"
@@ -267,7 +273,7 @@ def report(instances: dict[str, dict], config: dict[str, Any], out: Path,
 def replot(path: Path, out: Path) -> None:
     """Read the runs of a comparison's JSON again, with the targets as they are now."""
     data = json.loads(Path(path).read_text())
-    known = load_targets()
+    known = current_targets()
     instances = {}
     for name, methods in data["runs"].items():
         scores = {m: [BenchScore.from_dict(r) for r in runs] for m, runs in methods.items()}
@@ -310,7 +316,7 @@ def main(argv: list[str] | None = None) -> int:
             get_optimizer(method)
         except (ValueError, ImportError) as exc:
             parser.error(str(exc))
-    known = load_targets()
+    known = current_targets()
     t0 = time.perf_counter()
     instances: dict[str, dict] = {}
     logs = {m: IOHLog(out / "compare_ioh", m) for m in methods}
