@@ -84,10 +84,10 @@ def run_instance(name: str, args, budget: int, done: set, runs_path: Path,
 
 
 def _search_reward_of(score) -> float:
-    """The search model's reward of the finished design (the best of the run's top ten by
-    the finer member)."""
+    """The search model's reward of the finished design (the best of the run's top ten and,
+    for a portfolio, its starts' bests, by the finer member)."""
     design = score.curve.best_design
-    for top in score.result.top_designs:
+    for top in (*score.result.top_designs, *score.result.extra.get("start_designs", ())):
         if top["design"] == design:
             return float(top["reward"])
     return float("nan")

@@ -13,6 +13,7 @@ rerun the script).
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,7 +38,7 @@ class Target:
     reward
         The finer member's reward of the best design known.
     search_reward
-        The search model's reward of that design.
+        The search model's reward of that design (NaN where the file does not say).
     design
         The design (``{field: value}``, SI).
     method, seed, budget
@@ -71,11 +72,16 @@ def _read(path: Path | None) -> dict[str, Any]:
     return json.loads(path.read_text())
 
 
+def _number(value: Any) -> float:
+    """A number of the file; ``null`` (not known: JSON has no NaN) as NaN."""
+    return math.nan if value is None else float(value)
+
+
 def load_targets(path: str | Path | None = None) -> dict[str, Target]:
     """The best-known rewards, by instance (empty when the file is missing)."""
     data = _read(None if path is None else Path(path))
     return {name: Target(instance=name, reward=float(t["reward"]),
-                         search_reward=float(t["search_reward"]), design=dict(t["design"]),
+                         search_reward=_number(t["search_reward"]), design=dict(t["design"]),
                          method=str(t["method"]), seed=int(t["seed"]), budget=int(t["budget"]))
             for name, t in data.get("targets", {}).items()}
 
