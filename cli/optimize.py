@@ -41,9 +41,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
         raise ValueError("--object and --scene exclude each other: the object is a preset's "
                          "disk or your own")
     obj = None if args.object is None else object_option(args.object)
-    from optim.optimize import get_optimizer
-
-    cli_option("--method", get_optimizer, args.method)
+    cli_option("--method", method_name, args.method)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
     if args.budget is not None:
@@ -101,13 +99,29 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  tolerances=tolerances, parts=parts, time_s=args.time)
     report = None
     if args.verify_top is not None:
-        report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
+        from optim.optimize import method_stem
+
+        report = run.verify_outputs(args.out,
+                                    f"{method_stem(args.method)}_seed{args.seed}_result.json",
                                     args.verify_top)
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
         return verdict_exit_code(result.extra.get("verdict") or search_verdict(result))
     return 0 if report is None else verify_exit_code(report)
+
+
+def method_name(text: str) -> str:
+    """``--method``: a method of :data:`optim.optimize.METHODS`, or ``PREFIX:NAME`` of another
+    library's family; a missing optional dependency is refused as bad input (with its install
+    hint), not as a crash."""
+    from optim.optimize import get_optimizer
+
+    try:
+        get_optimizer(text)
+    except ImportError as exc:
+        raise ValueError(str(exc)) from None
+    return text
 
 
 # --tolerances' short keys and the object file's keys they stand for (envs.tolerances)
@@ -302,10 +316,11 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "drawing) and, for NSGA-II, the Pareto front to --out. The optimum is "
                     "reported by a finer member of the model family (within a few percent of "
                     "the FEM) unless --no-finish.")
-    p.add_argument("--method", default="portfolio",
+    p.add_argument("--method", default="portfolio", metavar="METHOD",
                    help="the search (default portfolio: CMA-ES starts from a screened sample, "
                    "raced; see the optimizers page); one of " + ", ".join(METHODS)
-                   + ", or ng:NAME / optuna:NAME")
+                   + ", or ng:NAME for any optimizer of Nevergrad's registry (the ng: and "
+                   "optuna: methods need the extras ng and optuna)")
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "

@@ -10,8 +10,11 @@ Every method shares one interface and one result type::
 
 Methods (:data:`METHODS`): ``cmaes`` (pycma), ``ga`` and ``nsga2`` (pymoo), ``random`` and
 ``policy`` (the shipped design policy's design, then CMA-ES refining it; the policy is trained
-with stable-baselines3 by :func:`optim.rl.train_policy`). Their heavy dependencies are
-imported only when used. With a scene preset or an object file, :func:`optim.run.run_optimize`
+with stable-baselines3 by :func:`optim.rl.train_policy`), and other libraries' methods on the
+same problem: ``ng:NAME`` (Nevergrad), ``optuna:tpe`` / ``random`` / ``qmc`` (Optuna),
+``cma:ipop`` / ``bipop`` (pycma's restarts). Their heavy dependencies are imported only when
+used. :mod:`optim.bench` is a benchmark suite of named instances built on them. With a scene
+preset or an object file, :func:`optim.run.run_optimize`
 also writes the files of ``psm-grasp optimize``.
 Populations are evaluated in-process by default, or through an executor of
 :mod:`optim.executors` (local processes, Dask).

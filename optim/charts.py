@@ -32,8 +32,11 @@ __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure
            "scenario_figure"]
 
 SCENARIO_LABELS_MAX = 30  # scenarios whose labels a scenario chart writes under its bars
-METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
-                  "random": "tab:gray", "policy": "tab:purple"}
+METHOD_COLOURS = {"portfolio": "black", "cmaes": "tab:blue", "ga": "tab:green",
+                  "nsga2": "tab:olive", "random": "tab:gray", "policy": "tab:purple",
+                  "ng:TwoPointsDE": "tab:orange", "ng:NGOpt": "tab:red",
+                  "optuna:tpe": "tab:brown", "optuna:random": "silver", "optuna:qmc": "tab:pink",
+                  "cma:ipop": "tab:cyan", "cma:bipop": "navy"}
 
 
 def _save(fig: Figure, path: str | Path | None) -> Figure:

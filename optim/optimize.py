@@ -5,6 +5,11 @@ A driver is a function ``run_x(problem, *, budget, seed, **options) -> OptimResu
 spent (truncating its last population so that exactly ``budget`` evaluations are made) and
 returns ``problem.result(...)``. Drivers are imported lazily, so that ``cma``, ``pymoo`` and
 ``torch`` load only when used.
+
+Besides the package's own methods, ``PREFIX:NAME`` runs a variant of another library's method
+family on the same problem: ``ng:NAME`` any optimizer of Nevergrad's registry
+(:mod:`optim.ng_methods`), ``optuna:NAME`` an Optuna sampler (:mod:`optim.optuna_methods`),
+``cma:NAME`` one of pycma's own restart strategies (:mod:`optim.cma_restarts`).
 """
 
 from __future__ import annotations
@@ -16,8 +21,8 @@ from typing import Any, Protocol
 from .problem import DesignProblem, check_budget, check_seed
 from .result import OptimResult
 
-__all__ = ["METHODS", "Optimizer", "get_optimizer", "option_names", "check_options",
-           "optimize"]
+__all__ = ["METHODS", "FAMILY_METHODS", "Optimizer", "get_optimizer", "option_names",
+           "check_options", "method_stem", "optimize"]
 
 # method -> (module, function, pip extra holding its dependency)
 _DRIVERS: dict[str, tuple[str, str, str]] = {
@@ -28,7 +33,17 @@ _DRIVERS: dict[str, tuple[str, str, str]] = {
     "random": ("optim.random_search", "run_random_search", "optim"),
     "policy": ("optim.rl", "run_policy", "optim"),
 }
-METHODS: tuple[str, ...] = tuple(_DRIVERS)
+# method families "PREFIX:NAME": prefix -> (module, pip extra holding its dependency); the
+# module has ``driver(name) -> Optimizer``, which refuses a name it does not know
+_FAMILIES: dict[str, tuple[str, str]] = {
+    "ng": ("optim.ng_methods", "ng"),
+    "optuna": ("optim.optuna_methods", "optuna"),
+    "cma": ("optim.cma_restarts", "optim"),
+}
+# the family members listed among the methods (ng: runs any name of Nevergrad's registry)
+FAMILY_METHODS: tuple[str, ...] = ("ng:NGOpt", "ng:TwoPointsDE", "optuna:tpe", "optuna:random",
+                                   "optuna:qmc", "cma:ipop", "cma:bipop")
+METHODS: tuple[str, ...] = (*_DRIVERS, *FAMILY_METHODS)
 # every driver's own arguments, not options
 _COMMON = ("problem", "budget", "seed")
 
@@ -42,26 +57,42 @@ class Optimizer(Protocol):
         ...
 
 
-def get_optimizer(method: str) -> Optimizer:
-    """The driver of a method name from :data:`METHODS`.
-
-    Raises
-    ------
-    ValueError
-        For an unknown method (the message lists the allowed ones).
-    ImportError
-        When the method's optional dependency is missing (with the install hint).
-    """
-    if method not in _DRIVERS:
-        raise ValueError(f"unknown method {method!r}; allowed: {', '.join(METHODS)}")
-    module_name, func_name, extra = _DRIVERS[method]
+def _import_driver_module(method: str, module_name: str, extra: str):
     try:
-        module = importlib.import_module(module_name)
+        return importlib.import_module(module_name)
     except ImportError as exc:
         raise ImportError(
             f"method {method!r} needs {exc.name!r}: pip install 'psm-grasp[{extra}]'"
         ) from exc
-    return getattr(module, func_name)
+
+
+def get_optimizer(method: str) -> Optimizer:
+    """The driver of a method name from :data:`METHODS`, or of any ``ng:NAME`` of Nevergrad's
+    registry.
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, or an unknown name in a family (the message lists the allowed
+        ones).
+    ImportError
+        When the method's optional dependency is missing (with the install hint).
+    """
+    prefix, colon, name = method.partition(":") if isinstance(method, str) else ("", "", "")
+    if colon and prefix in _FAMILIES:
+        module_name, extra = _FAMILIES[prefix]
+        return _import_driver_module(method, module_name, extra).driver(name)
+    if method not in _DRIVERS:
+        raise ValueError(f"unknown method {method!r}; allowed: {', '.join(METHODS)}, or "
+                         "ng:NAME for any optimizer of Nevergrad's registry")
+    module_name, func_name, extra = _DRIVERS[method]
+    return getattr(_import_driver_module(method, module_name, extra), func_name)
+
+
+def method_stem(method: str) -> str:
+    """A method's name as it starts a file name: ``ng:NGOpt`` -> ``ng-NGOpt`` (no colon, which
+    some file systems refuse)."""
+    return method.replace(":", "-")
 
 
 def option_names(method: str) -> tuple[str, ...]:

@@ -70,6 +70,7 @@ __all__ = [
     "pareto_mask",
     "paper_design",
     "paper_design_for",
+    "top_distinct",
 ]
 
 DEFAULT_CHUNK_SIZE = 256
@@ -241,6 +242,21 @@ def pareto_mask(objectives: np.ndarray) -> np.ndarray:
             mask[i] = True
             best_f1 = f[i, 1]
     return mask
+
+
+def top_distinct(x: np.ndarray, reward: np.ndarray, k: int = TOP_DESIGNS_KEPT) -> list[int]:
+    """Rows of the ``k`` best distinct designs of ``x`` (n, n_var) by ``reward`` (n,), best
+    first (the earlier of equal rewards); rows closer than :data:`DISTINCT_DESIGN` in every
+    coordinate to a better one are the same design, and rows of non-finite reward are left
+    out."""
+    order = np.argsort(-reward, kind="stable")
+    picked: list[int] = []
+    for i in order.tolist():
+        if len(picked) == k or not np.isfinite(reward[i]):
+            break
+        if all(np.max(np.abs(x[i] - x[j])) > DISTINCT_DESIGN for j in picked):
+            picked.append(i)
+    return picked
 
 
 def _describe_executor(executor: Any) -> str:
@@ -654,12 +670,14 @@ class DesignProblem:
             self.best_reward = float(reward[i])
             self.best_x = x[i].copy()
             self.best_metrics = metrics_row(out, i)
+        first = self.n_evaluations + 1
         self.n_evaluations += x.shape[0]
         self.history_evaluations.append(self.n_evaluations)
         self.history_best_reward.append(self.best_reward)
         self.history_wall_time_s.append(self.elapsed_s)
         contact, compression = front_columns(out)
         self._archive.append({
+            "evaluations": np.arange(first, self.n_evaluations + 1, dtype=np.int64),
             "x": x.copy(),
             "reward": reward.copy(),
             "contact_score": contact.copy(),
@@ -679,10 +697,14 @@ class DesignProblem:
 
     def archive(self) -> dict[str, np.ndarray]:
         """Every evaluated point: ``x`` (n, :attr:`n_var`), ``reward``, ``contact_score``,
-        ``peak_compression``, ``feasible`` (n,), in evaluation order."""
-        keys = ("x", "reward", "contact_score", "peak_compression", "feasible")
+        ``peak_compression``, ``feasible`` (n,), in evaluation order, and ``evaluations`` (n,):
+        the run's evaluation count that each is (the budget :meth:`screen` charged counted, its
+        designs not among the points)."""
+        keys = ("evaluations", "x", "reward", "contact_score", "peak_compression", "feasible")
         if not self._archive:
-            return {k: np.zeros((0, self.n_var) if k == "x" else (0,)) for k in keys}
+            return {k: np.zeros((0, self.n_var) if k == "x" else (0,),
+                                dtype=np.int64 if k == "evaluations" else np.float64)
+                    for k in keys}
         return {k: np.concatenate([a[k] for a in self._archive]) for k in keys}
 
     def top_designs(self, k: int = TOP_DESIGNS_KEPT) -> list[dict[str, Any]]:
@@ -694,16 +716,8 @@ class DesignProblem:
         run evaluates hundreds of near copies of its best.
         """
         arc = self.archive()
-        order = np.argsort(-arc["reward"], kind="stable")
-        picked: list[int] = []
-        for i in order.tolist():
-            if len(picked) == k or not np.isfinite(arc["reward"][i]):
-                break
-            x = arc["x"][i]
-            if all(np.max(np.abs(x - arc["x"][j])) > DISTINCT_DESIGN for j in picked):
-                picked.append(i)
         return [{"design": self.design_dict(arc["x"][i]), "reward": float(arc["reward"][i])}
-                for i in picked]
+                for i in top_distinct(arc["x"], arc["reward"], k)]
 
     def pareto_front(self) -> list[dict[str, Any]]:
         """Non-dominated feasible evaluated designs (contact score up, peak compression down),

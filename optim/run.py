@@ -3,7 +3,8 @@
 
 :func:`run_optimize` runs one method on one object and writes, to its output folder:
 
-- ``{method}_seed{S}_result.json``: the :class:`~optim.result.OptimResult`;
+- ``{method}_seed{S}_result.json``: the :class:`~optim.result.OptimResult` (a method
+  ``ng:NAME`` is written ``ng-NAME``: :func:`~optim.optimize.method_stem`);
 - ``{method}_seed{S}_convergence.png``: best reward so far against evaluations;
 - ``{method}_seed{S}_best_grasp.png``: the best design's grasp, re-solved and drawn;
 - ``{method}_seed{S}_design.json``, ``..._design.csv`` and ``..._drawing.png``: the best design
@@ -34,7 +35,7 @@ from envs.object_file import ObjectSpec
 from envs.scenarios import ROBUST_MEASURES, Scenarios
 from envs.scene import PRESETS, Scene
 
-from .optimize import check_options, get_optimizer
+from .optimize import check_options, get_optimizer, method_stem
 from .problem import (
     DEFAULT_STRAIN_LIMIT,
     MAX_BUDGET,
@@ -468,7 +469,7 @@ def run_optimize(
     model = resolve_model(n_triangles, n_rings, element or DEFAULT_ELEMENT)
     check_executor_options(dask, workers)
     out_dir = check_output_dir("out", out)
-    prefix = prefix or f"{method}_seed{seed}"
+    prefix = prefix or f"{method_stem(method)}_seed{seed}"
     with make_executor(dask, workers) as executor:
         common = {"executor": executor, "joints_apart": joints_apart, **settings,
                   **model.kwargs()}

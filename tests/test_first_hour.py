@@ -184,21 +184,6 @@ def test_grasp_drawing_has_a_legend_and_a_labelled_strain_scale():
     assert faces and all(face not in ("tab:red", "red") for face in faces)
 
 
-def test_best_so_far_bands_never_go_down():
-    compare = _script("compare_optimizers")
-    from optim.result import OptimResult
-
-    def run(evals, best):
-        return OptimResult("ppo", 0, 100, {}, best[-1], {}, evals, best, evals, 100, 1.0)
-
-    # a weak run whose first probe comes late would pull a median over started runs down
-    runs = [run((10, 100), (0.22, 0.23)), run((10, 100), (0.21, 0.22)),
-            run((60, 100), (0.10, 0.11))]
-    b = compare.band(runs, np.linspace(1, 100, 100), "evaluations")
-    med = b["median"][np.isfinite(b["median"])]
-    assert med.size > 10 and np.all(np.diff(med) >= 0)
-
-
 def test_convergence_chart_curves_are_monotone():
     from optim.charts import convergence_figure
     from optim.result import OptimResult
