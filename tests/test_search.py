@@ -254,3 +254,32 @@ def test_portfolio_with_a_nominal_screen_spends_its_budget():
     assert result.n_evaluations == 120
     assert result.extra["screen"] == "nominal"
     assert result.extra["screened"] <= 3 * 7
+
+
+def test_the_screen_holds_straight_bars_and_cradles_that_conform_to_the_object():
+    """With shaped jaws a quarter of the screen are straight bars and a quarter cradles of
+    bottom radius 0.95-1.4 object radii centred within 0.3 radii of where the object meets the
+    finger, in every prefix of it; V-grooves get no cradles."""
+    from envs.design_space import touch_foot_r
+    from optim import portfolio
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, jaw="any")
+    y = portfolio._screen(problem, 64, seed=3)
+    box = problem.bounds.aligned(y, portfolio.ALIGN_REACH_R)
+    si = problem.to_physical(box)
+    r = problem.disk.radius_m
+    fields = problem.bounds.fields
+    depth, radius = si[:, 6] / r, si[:, 7] / r  # (JAW_FIELDS: depth, bottom radius, ...)
+    straight = np.arange(64) % 4 == 0
+    cradle = np.arange(64) % 4 == 2
+    assert np.all(depth[straight] == 0.0) and np.all(depth[~straight] > 0.0)
+    assert np.all((radius[cradle] >= 0.95 - 1e-9) & (radius[cradle] <= 1.4 + 1e-9))
+    offset = np.abs(si[:, 9] / r - touch_foot_r(problem.bounds.relative(box)))
+    k = fields.index("jaw_position")
+    free = cradle & (np.abs(box[:, k]) < 1.0)  # (a span too short clips the centre)
+    assert free.sum() >= 8 and np.all(offset[free] <= portfolio.CRADLE_OFFSET + 1e-9)
+    # the other draws of the box are left alone: most of them are no conforming cradle
+    other = ~straight & ~cradle
+    assert np.mean((radius[other] >= 0.95) & (radius[other] <= 1.4)) < 0.5
+    vee = DesignProblem.from_scene(SCENE, 0.15, jaw="vee")
+    assert portfolio._cradle_columns(vee) == {}
