@@ -39,6 +39,7 @@ from .model.jaw import (
     jaw_row,
     jaws_of_row,
 )
+from .model.layout import N_OUTLINE, SHAPE_DISK, SHAPE_OUTLINE
 from .model.problem import (
     REST_MESSAGES,
     REST_OFFSET,
@@ -49,6 +50,7 @@ from .model.problem import (
     _clearance,
     rest_codes,
 )
+from .objects.shapes import Outline
 from .validation import UnitSlipWarning, check_range, check_real, unit_slip
 
 __all__ = [
@@ -264,6 +266,19 @@ class SoftDisk:
         plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
         most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
         naming the likely unit.
+    outline
+        The object's shape when it is not a disk (:mod:`envs.objects`: an
+        :class:`~envs.objects.Ellipse`, a :class:`~envs.objects.RoundedRectangle`, a
+        :class:`~envs.objects.MeasuredOutline`, ...), dimensionless, star-shaped about its
+        centroid; ``radius_m`` is then its area-equivalent radius ``r_eq = sqrt(A / pi)`` (the
+        scale of every relative quantity: the design box, the torque unit, the mass
+        ``rho A t``), ``distance_m`` the distance from the joints' line to its lowest point
+        and the centroid the fixed centre. Default ``None``: the disk of radius ``radius_m``
+        (its own code paths and answers). Build one with :func:`envs.objects.soft_object`.
+    orientation_rad
+        The outline's orientation ``psi`` [rad], any finite number: the angle from the +x
+        axis (across the jaws) to its first axis (an ellipse's long axis), counter-clockwise;
+        0 puts the long axis across the jaws. Ignored for a disk. Default 0.
     """
 
     radius_m: float
@@ -276,6 +291,8 @@ class SoftDisk:
     area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
     offset_x_m: float = 0.0
     density_kg_m3: float = DEFAULT_DENSITY_KG_M3
+    outline: Outline | None = None
+    orientation_rad: float = 0.0
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -290,8 +307,14 @@ class SoftDisk:
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         check_range("offset_x_m", self.offset_x_m)
         check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
+        check_range("orientation_rad", self.orientation_rad)
+        if self.outline is not None and not isinstance(self.outline, Outline):
+            raise ValueError(f"outline must be an envs.objects outline (Ellipse, "
+                             f"RoundedRectangle, ...) or None for a disk, got "
+                             f"{type(self.outline).__name__}")
         for f in fields(self):
-            object.__setattr__(self, f.name, float(getattr(self, f.name)))
+            if f.name != "outline":
+                object.__setattr__(self, f.name, float(getattr(self, f.name)))
         for name in ("radius_m", "thickness_m", "youngs_modulus_pa", "density_kg_m3"):
             slip = unit_slip(name, getattr(self, name))
             if slip is not None:
@@ -330,8 +353,39 @@ class SoftDisk:
 
     @property
     def center_m(self) -> np.ndarray:
-        """Position of the pinned centre ``(x_c, d_1 + r)`` [m]."""
-        return np.array([self.offset_x_m, self.distance_m + self.radius_m])
+        """Position of the pinned centre ``(x_c, d_1 + r)`` [m] (an outline's centroid:
+        ``d_1`` plus how far its lowest point lies below it, :attr:`lift_m`)."""
+        return np.array([self.offset_x_m, self.distance_m + self.lift_m])
+
+    @property
+    def lift_m(self) -> float:
+        """Height of the centre above the object's lowest point [m]: ``r`` for a disk, for
+        an outline at its orientation its own."""
+        if self.outline is None:
+            return self.radius_m
+        return self.radius_m * self.outline.lowest(self.orientation_rad)
+
+    @property
+    def shape(self) -> str:
+        """The object's shape: ``"disk"``, or its outline's kind (``"ellipse"``, ...)."""
+        return "disk" if self.outline is None else self.outline.kind
+
+    def outline_columns(self) -> tuple[float, float, np.ndarray]:
+        """The scene row's shape code, orientation and outline coefficients (layout
+        ``S_SHAPE``.. of :mod:`envs.model.layout`; zeros for a disk)."""
+        if self.outline is None:
+            return SHAPE_DISK, 0.0, np.zeros(N_OUTLINE)
+        return SHAPE_OUTLINE, self.orientation_rad, self.outline.coefficients()
+
+    def contour_m(self, n: int = 256) -> np.ndarray:
+        """``n`` points of the undeformed outline in the gripper frame [m], counter-
+        clockwise from the top, spaced evenly by arc length (a disk's by angle), (n, 2)."""
+        if self.outline is None:
+            ang = math.pi / 2 + 2 * math.pi * np.arange(n) / n
+            unit = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        else:
+            unit = self.outline.contour(n, self.orientation_rad)
+        return self.center_m + self.radius_m * unit
 
 
 @dataclass(frozen=True)
@@ -385,10 +439,12 @@ class Scene:
         reach = max(float(np.min(distance_to_finger_bar(g, side, angles, d.center_m, jaw,
                                                         rounding)))
                     for side, jaw in zip((0, 1), g.jaws, strict=True))
-        if reach > d.radius_m:
+        # an outline: its farthest point from the centroid
+        farthest = d.radius_m if d.outline is None else d.radius_m * d.outline.radius_range()[1]
+        if reach > farthest:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "
-                f"{reach - d.radius_m:.3g} m): no grasp is possible",
+                f"{reach - farthest:.3g} m): no grasp is possible",
             )
         return ()
 
@@ -400,12 +456,14 @@ class Scene:
         """This scene at an actuation torque [N·m] as a (1, N_SCENE) scene matrix (layout
         ``S_*`` of :mod:`envs.model.layout`)."""
         g, d = self.gripper, self.disk
+        shape, orientation, outline = d.outline_columns()
         return np.array([[g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                           d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
                           float(torque_nm), d.offset_x_m,
-                          *(v for jaw in g.jaws for v in jaw_row(jaw))]])
+                          *(v for jaw in g.jaws for v in jaw_row(jaw)), shape, orientation,
+                          *outline]])
 
     @property
     def reachable(self) -> bool:

@@ -97,6 +97,10 @@ class FemResult:
         [N], what sets the required friction (a ``LIMIT_*`` code of :mod:`envs.model.holding`)
         and, for an in-plane payload, the direction of its worst pull [rad] (as in
         :class:`envs.solver.result.GraspResult`).
+    peak_compression
+        An outline's largest shortening of a rim node's distance from the centroid over its
+        rest distance, ``max (r_i - |p_i - C|) / r_i`` [-] (the point-spring model's measure);
+        NaN for a disk (:func:`envs.fem.designs.fem_metrics` measures it from ``contour_m``).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -131,6 +135,7 @@ class FemResult:
     grip_force_n: float = math.nan
     friction_limit: int = 0
     friction_limit_angle_rad: float = math.nan
+    peak_compression: float = math.nan
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:

@@ -26,7 +26,6 @@ from ..model.holding import NO_PATCH, hertz_half_width, holding_of_contacts
 from ..model.layout import (
     N_BAR_CORNERS,
     N_CORNERS,
-    S_DISTANCE,
     S_OFFSET_X,
     S_POISSON,
     S_RADIUS,
@@ -34,7 +33,7 @@ from ..model.layout import (
     S_THICKNESS,
     S_YOUNG,
 )
-from ..model.problem import stiffness_unit
+from ..model.problem import scene_centre_y_m, stiffness_unit
 from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
 
 __all__ = ["max_contacts", "holding_one"]
@@ -104,7 +103,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
     """
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
-    xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
+    xc, yc = s[S_OFFSET_X], scene_centre_y_m(s)
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
     # np.int64, not a literal 0 (see holding_of_contacts: one compilation of it, not two)
