@@ -1,7 +1,8 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2`` and ``GripperDesign-v3`` (v2 with shaped
-jaws in the action) with Gymnasium::
+Importing the package registers ``GripperDesign-v2``, ``GripperDesign-v3`` (v2 with shaped
+jaws in the action) and ``GripperDesign-v4`` (v2 with objects that are not disks: ellipses at
+any orientation, their shape observed) with Gymnasium::
 
     import gymnasium as gym
     import envs
@@ -42,11 +43,13 @@ __all__ = [
     "GripperDesignVectorEnv",
     "ENV_ID",
     "JAW_ENV_ID",
+    "SHAPE_ENV_ID",
     "sb3_vec_env",
 ]
 
 ENV_ID = "GripperDesign-v2"
 JAW_ENV_ID = "GripperDesign-v3"  # with shaped jaws (envs.design_env.make_vector_env_v3)
+SHAPE_ENV_ID = "GripperDesign-v4"  # ellipses at any orientation, their shape observed
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
@@ -79,4 +82,13 @@ if JAW_ENV_ID not in gymnasium.registry:
         entry_point="envs.reset_check:make_env_v3",
         disable_env_checker=True,
         vector_entry_point="envs.design_env:make_vector_env_v3",
+    )
+
+if SHAPE_ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        id=SHAPE_ENV_ID,
+        # as v2; every object an ellipse at some orientation, its shape observed
+        entry_point="envs.reset_check:make_env_v4",
+        disable_env_checker=True,
+        vector_entry_point="envs.design_env:make_vector_env_v4",
     )

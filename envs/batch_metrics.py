@@ -39,7 +39,7 @@ from .model.jaw import JAW_FIELDS, pack_groove
 from .model.layout import G_DEPTH, N_GROOVE, S_OFFSET_X, SHAPE_DISK
 from .model.outline import outline_contact_geometry
 from .model.problem import SceneColumns, _clearance, outline_bar_distance_m
-from .objects.shapes import SplineOutline
+from .objects import SplineOutline, as_object
 from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
 from .solver.pipeline import BatchSolution
@@ -297,9 +297,9 @@ def _soft_disk(row: np.ndarray) -> SoftDisk:
     radius, young, nu, thick, scale, ratio, area, offset = row[:DISK_SHAPE].tolist()
     if row[DISK_SHAPE] == SHAPE_DISK:
         return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
-    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset,
-                    outline=SplineOutline(tuple(row[DISK_OUTLINE:].tolist())),
-                    orientation_rad=float(row[DISK_ORIENT]))
+    return as_object(SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area,
+                              offset_x_m=offset),
+                     SplineOutline(tuple(row[DISK_OUTLINE:].tolist())), float(row[DISK_ORIENT]))
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,

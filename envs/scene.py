@@ -50,7 +50,6 @@ from .model.problem import (
     _clearance,
     rest_codes,
 )
-from .objects.shapes import Outline
 from .validation import UnitSlipWarning, check_range, check_real, unit_slip
 
 __all__ = [
@@ -67,6 +66,7 @@ __all__ = [
     "PRESETS",
     "design_from_relative",
     "relative_from_design",
+    "placement_support",
     "joint_spring",
     "joint_spring_kwargs",
     "joint_spring_nm_per_rad",
@@ -266,19 +266,10 @@ class SoftDisk:
         plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
         most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
         naming the likely unit.
-    outline
-        The object's shape when it is not a disk (:mod:`envs.objects`: an
-        :class:`~envs.objects.Ellipse`, a :class:`~envs.objects.RoundedRectangle`, a
-        :class:`~envs.objects.MeasuredOutline`, ...), dimensionless, star-shaped about its
-        centroid; ``radius_m`` is then its area-equivalent radius ``r_eq = sqrt(A / pi)`` (the
-        scale of every relative quantity: the design box, the torque unit, the mass
-        ``rho A t``), ``distance_m`` the distance from the joints' line to its lowest point
-        and the centroid the fixed centre. Default ``None``: the disk of radius ``radius_m``
-        (its own code paths and answers). Build one with :func:`envs.objects.soft_object`.
-    orientation_rad
-        The outline's orientation ``psi`` [rad], any finite number: the angle from the +x
-        axis (across the jaws) to its first axis (an ellipse's long axis), counter-clockwise;
-        0 puts the long axis across the jaws. Ignored for a disk. Default 0.
+
+    An object that is not a disk is an :class:`envs.objects.SoftObject`, this class with an
+    ``outline`` and an ``orientation_rad`` (built by :func:`envs.objects.soft_object`); a
+    disk's ``outline`` is ``None``.
     """
 
     radius_m: float
@@ -291,8 +282,9 @@ class SoftDisk:
     area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
     offset_x_m: float = 0.0
     density_kg_m3: float = DEFAULT_DENSITY_KG_M3
-    outline: Outline | None = None
-    orientation_rad: float = 0.0
+    # a disk has no outline (not fields: envs.objects.SoftObject adds them as its own)
+    outline = None
+    orientation_rad = 0.0
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -307,14 +299,8 @@ class SoftDisk:
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         check_range("offset_x_m", self.offset_x_m)
         check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
-        check_range("orientation_rad", self.orientation_rad)
-        if self.outline is not None and not isinstance(self.outline, Outline):
-            raise ValueError(f"outline must be an envs.objects outline (Ellipse, "
-                             f"RoundedRectangle, ...) or None for a disk, got "
-                             f"{type(self.outline).__name__}")
-        for f in fields(self):
-            if f.name != "outline":
-                object.__setattr__(self, f.name, float(getattr(self, f.name)))
+        for f in fields(SoftDisk):  # (a SoftObject's outline is not a number)
+            object.__setattr__(self, f.name, float(getattr(self, f.name)))
         for name in ("radius_m", "thickness_m", "youngs_modulus_pa", "density_kg_m3"):
             slip = unit_slip(name, getattr(self, name))
             if slip is not None:
@@ -490,7 +476,7 @@ class Scene:
     def with_changes(self, **changes) -> Scene:
         """Return a copy with gripper or disk fields replaced by name."""
         gk = {k: v for k, v in changes.items() if k in Gripper.__dataclass_fields__}
-        dk = {k: v for k, v in changes.items() if k in SoftDisk.__dataclass_fields__}
+        dk = {k: v for k, v in changes.items() if k in type(self.disk).__dataclass_fields__}
         unknown = set(changes) - set(gk) - set(dk)
         if unknown:
             raise ValueError(f"unknown scene fields {sorted(unknown)}")
@@ -651,7 +637,37 @@ def joint_spring_nm_per_rad(disk: SoftDisk, torsion_stiffness_rel=None,
     return absolute if rel is None else rel * disk.torque_unit_nm
 
 
-def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:
+def placement_support(disks):
+    """How objects that are not disks sit before the faces, for :func:`design_from_relative`:
+    ``None`` when every object is a disk, else a function of the rows' rest angles [rad]
+    returning ``(h, lift)`` in each object's radii: how far it reaches towards either
+    gripping face (:meth:`envs.objects.Outline.face_support`; 1 for a disk) and how far its
+    centre lies above its lowest point (:attr:`SoftDisk.lift_m` over r; 1 for a disk).
+
+    ``disks``: one :class:`SoftDisk` (any row shape) or a sequence of one per row.
+    """
+    one = isinstance(disks, SoftDisk)
+    objects = [disks] if one else list(disks)
+    if all(d.outline is None for d in objects):
+        return None
+
+    def support(angle):
+        angle = np.asarray(angle, dtype=np.float64)
+        if one:
+            d = objects[0]
+            return (d.outline.face_support(angle, d.orientation_rad),
+                    np.full(angle.shape, d.lift_m / d.radius_m))
+        h, lift = np.ones(angle.shape), np.ones(angle.shape)
+        for i, d in enumerate(objects):
+            if d.outline is not None:
+                h[i] = d.outline.face_support(angle[i], d.orientation_rad)
+                lift[i] = d.lift_m / d.radius_m
+        return h, lift
+
+    return support
+
+
+def design_from_relative(relative, radius_m, torque_unit_nm, support=None) -> np.ndarray:
     """SI designs of relative ones (columns of :data:`RELATIVE_FIELDS`), shape (..., 6).
 
     The placement is chosen so that the gripping faces clear the disk at rest by the relative
@@ -669,28 +685,44 @@ def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:
     torque_unit_nm
         The disk's torque unit ``s E t r^2`` [N·m] (:attr:`SoftDisk.torque_unit_nm`), same shape
         rules.
+    support
+        For objects that are not disks, :func:`placement_support` of them: the faces then
+        clear the outline (its reach ``h r`` towards them) by ``g r`` and ``d_1`` is measured
+        to its lowest point, ``d_1 = (r (g + h) + w / 2 - d_3 cos theta_a0) / sin theta_a0 -
+        lift r``; ``None``: disks.
     """
     rel = np.asarray(relative, dtype=np.float64)
     r = np.asarray(radius_m, dtype=np.float64)
     length, angle, offset, width = rel[..., 0] * r, rel[..., 1], rel[..., 2] * r, rel[..., 3] * r
     torque = rel[..., 4] * np.asarray(torque_unit_nm, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        distance = (r * (1.0 + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
-            angle) - r
+        if support is None:
+            distance = (r * (1.0 + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
+                angle) - r
+        else:
+            reach, lift = support(angle)
+            distance = (r * (reach + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
+                angle) - r * lift
     return np.stack([length, angle, offset, width, torque, np.maximum(distance, 0.0)], axis=-1)
 
 
-def relative_from_design(designs, radius_m, torque_unit_nm) -> np.ndarray:
+def relative_from_design(designs, radius_m, torque_unit_nm, support=None) -> np.ndarray:
     """Relative designs (columns of :data:`RELATIVE_FIELDS`) of SI ones, shape (..., 6).
 
     The inverse of :func:`design_from_relative` where its placement was not raised to 0; the
     clearance is that of the gripping-face line, ``(d_3 cos theta_a0 + (d_1 + r) sin theta_a0
-    - w / 2) / r - 1``.
+    - w / 2) / r - 1`` (objects that are not disks: ``support`` as there, ``lift r`` in place
+    of the second ``r`` and ``h`` of the ``1``).
     """
     des = np.asarray(designs, dtype=np.float64)
     r = np.asarray(radius_m, dtype=np.float64)
     length, angle, offset, width, torque, distance = np.moveaxis(des, -1, 0)
-    clearance = (offset * np.cos(angle) + (distance + r) * np.sin(angle) - width / 2) / r - 1.0
+    if support is None:
+        clearance = (offset * np.cos(angle) + (distance + r) * np.sin(angle) - width / 2) / r - 1.0
+    else:
+        reach, lift = support(angle)
+        clearance = (offset * np.cos(angle) + (distance + r * lift) * np.sin(angle)
+                     - width / 2) / r - reach
     return np.stack([length / r, angle, offset / r, width / r,
                      torque / np.asarray(torque_unit_nm, dtype=np.float64), clearance], axis=-1)
 

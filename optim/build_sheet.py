@@ -48,6 +48,7 @@ __all__ = ["build_sheet", "write_build_sheet", "drawing_figure", "assembly_of", 
            "ASSEMBLY_STACKED", "ASSEMBLY_SIDE_BY_SIDE", "FIXED_CENTRE_NOTE"]
 
 MM = 1e3
+OUTLINE_POINTS = 128  # points of an object's outline on the sheet and in the DXF
 # layers of the DXF: each finger's outline, the joint centres, the object (for reference)
 DXF_LAYERS = {"right": "FINGER_RIGHT", "left": "FINGER_LEFT", "joints": "JOINT_CENTRES",
               "object": "OBJECT_REFERENCE"}
@@ -336,12 +337,14 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         raise ValueError("obj needs radius_m and torsion_stiffness_nm_per_rad")
     ln, th0, d3, w, torque, d1 = (float(design[k]) for k in DESIGN_FIELDS)
     r, kf = float(obj["radius_m"]), float(obj["torsion_stiffness_nm_per_rad"])
+    outline = _object_outline(obj, d1)  # an object that is not a disk, or None
+    lift = r if outline is None else outline["lift_m"]
     metrics = dict(metrics or {})
     values = {
         "finger_length_mm": ln * MM, "finger_width_mm": w * MM,
         "rest_angle_deg": math.degrees(th0), "joint_offset_mm": d3 * MM,
         "joint_spacing_mm": 2 * d3 * MM, "joint_end_overlap_mm": (w - 2 * d3) * MM,
-        "object_distance_mm": d1 * MM, "object_centre_y_mm": (d1 + r) * MM,
+        "object_distance_mm": d1 * MM, "object_centre_y_mm": (d1 + lift) * MM,
         "object_diameter_mm": 2 * r * MM, "torque_nm": torque,
         "torsion_stiffness_nm_per_rad": kf,
         "torsion_stiffness_nmm_per_deg": kf * MM * math.pi / 180.0,
@@ -371,12 +374,19 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         "frame": "origin midway between the joints, x to the right, y up the symmetry axis "
                  "towards the object; fingers at rest; millimetres",
         "joints_mm": [[d3 * MM, 0.0], [-d3 * MM, 0.0]],
-        "object_centre_mm": [0.0, (d1 + r) * MM],
+        "object_centre_mm": [0.0, (d1 + lift) * MM],
         "finger_outline_mm": {name: [[round(float(v), 4) for v in vertex[[V_X, V_Y]]]
                                      for vertex in outline]
                               for name, outline in outlines.items()},
         "jaws": _jaws(jaws, ln, th0, d3, w, r),
     }
+    if outline is not None:
+        # the object's outline at its orientation, as placed (its area-equivalent radius r)
+        sheet["object_outline_mm"] = outline["points_mm"]
+        sheet["object_shape"] = outline["shape"]
+        turn = (obj.get("scenarios") or {}).get("orientation_tolerance_rad")
+        if turn:
+            sheet["tolerances"]["orientation_deg"] = math.degrees(float(turn))
     if any(jaw.depth_m > 0.0 for jaw in jaws):
         # (+ 0.0: a straight segment's bulge is 0, never -0)
         sheet["finger_outline_bulge"] = {name: [float(b) + 0.0 for b in outline[:, V_BULGE]]
@@ -391,6 +401,25 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
                 grasp[key] = metrics[key]
         sheet["grasp"] = grasp
     return sheet
+
+
+def _object_outline(obj: dict[str, Any], distance_m: float) -> dict[str, Any] | None:
+    """An object's outline as the sheet states it (``None`` for a disk): its shape and
+    dimensions, its centre's height above its lowest point [m] and its points at rest in the
+    drawing's frame [mm], as placed ``distance_m`` above the joints' line."""
+    if obj.get("outline_coefficients") is None:
+        return None
+    from envs.objects import as_object, outline_fields
+    from envs.scene import SoftDisk
+
+    disk = as_object(SoftDisk(float(obj["radius_m"]), distance_m), **outline_fields(obj))
+    shape = {k: v for k, v in obj.items()
+             if k in ("shape", "semi_axes_m", "sides_m", "corner_radius_m", "exponent",
+                      "size_m")}
+    shape["orientation_deg"] = math.degrees(float(obj.get("orientation_rad", 0.0)))
+    points = disk.contour_m(OUTLINE_POINTS) * MM
+    return {"shape": shape, "lift_m": disk.lift_m,
+            "points_mm": [[round(float(x), 4), round(float(y), 4)] for x, y in points]}
 
 
 def _dimension(ax, p: np.ndarray, q: np.ndarray, offset: np.ndarray, text: str,
@@ -492,9 +521,31 @@ def _condition_lines(sheet: dict[str, Any]) -> list[str]:
         f"object); strain limit {number('strain_limit', '.3g')}",
         payload_line,
         placement + (f"; object ranges: {ranges}" if ranges else ""),
+        *_shape_lines(sheet),
         f"fixed centre (+ in the drawing): {sheet['fixed_centre']}",
         tol["dimensions"],
     ]
+
+
+def _shape_lines(sheet: dict[str, Any]) -> list[str]:
+    """The object's outline (not a disk), a line for the drawing's notes (none for a disk)."""
+    shape = sheet.get("object_shape")
+    if not shape:
+        return []
+    dims = ", ".join(f"{k.replace('_m', '')} {_lengths_mm(v)}" for k, v in shape.items()
+                     if k.endswith("_m"))
+    turn = sheet["tolerances"].get("orientation_deg")
+    return [f"object: {shape.get('shape', 'outline')}" + (f" ({dims} mm)" if dims else "")
+            + f", orientation {shape['orientation_deg']:.1f}° (first axis from x, ccw), drawn "
+            "as placed" + (f"; orientation tolerance +-{turn:.3g}°" if turn else "")
+            + "; r is its area-equivalent radius sqrt(A / pi)"]
+
+
+def _lengths_mm(value: Any) -> str:
+    """A length or a list of lengths [m] in mm, for a note."""
+    if isinstance(value, list | tuple):
+        return " x ".join(f"{float(v) * MM:.3g}" for v in value)
+    return f"{float(value) * MM:.3g}"
 
 
 def _scenario_cells(sheet: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
@@ -673,7 +724,11 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
                     strict=False))
     ax = fig.add_subplot(grid["drawing"])
     _draw_fingers(ax, sheet, w)
-    ax.add_patch(Circle(centre, r, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    if sheet.get("object_outline_mm"):
+        ax.add_patch(Polygon(np.asarray(sheet["object_outline_mm"]), closed=True,
+                             facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    else:
+        ax.add_patch(Circle(centre, r, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
     ax.plot([centre[0]], [centre[1]], "+", color="k", ms=8)
     for x, _ in sheet["joints_mm"]:
         ax.plot([x], [0.0], "o", color="k", ms=4, zorder=4)
@@ -687,11 +742,13 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     _dimension(ax, tip - (w / 2) * outward, tip + (w / 2) * outward, 0.6 * gap * axis,
                f"w = {w:.2f}")
     _dimension(ax, np.zeros(2), joint, np.array([0.0, -1.5 * gap]), f"d3 = {d3:.2f}")
-    bottom = centre - np.array([0.0, r])
+    bottom = (centre - np.array([0.0, r]) if not sheet.get("object_outline_mm")
+              else np.array([centre[0], rows["object_distance_mm"]]))
     _dimension(ax, np.array([0.0, 0.0]), bottom, np.array([-1.3 * gap - r, 0.0]),
                f"d1 = {rows['object_distance_mm']:.2f}")
     _dimension(ax, centre - np.array([r, 0.0]), centre + np.array([r, 0.0]),
-               np.array([0.0, r + gap]), f"2r = {2 * r:.2f}")
+               np.array([0.0, r + gap]), f"2r = {2 * r:.2f}" if not sheet.get(
+                   "object_outline_mm") else f"2r_eq = {2 * r:.2f}")
     _dimension_grooves(ax, sheet, 2.2 * gap)
     arc_r = 0.35 * ln
     ax.plot([d3, d3], [0.0, arc_r * 1.1], color="0.45", lw=0.6, ls="--")
@@ -820,8 +877,12 @@ def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
         space.add_point((x, y), dxfattribs=attribs)
         space.add_line((x - mark, y), (x + mark, y), dxfattribs=attribs)
         space.add_line((x, y - mark), (x, y + mark), dxfattribs=attribs)
-    space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
-                     dxfattribs={"layer": DXF_LAYERS["object"]})
+    if sheet.get("object_outline_mm"):
+        space.add_lwpolyline(sheet["object_outline_mm"], format="xy", close=True,
+                             dxfattribs={"layer": DXF_LAYERS["object"]})
+    else:
+        space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
+                         dxfattribs={"layer": DXF_LAYERS["object"]})
     doc.saveas(Path(path))
     return Path(path)
 

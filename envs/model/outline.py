@@ -54,7 +54,7 @@ __all__ = [
 ]
 
 #: Sub-steps of the arc-length quadrature per knot interval (Simpson's rule on each): the
-#: contour's spacing is even to ~1e-9 of the perimeter for the shapes of the package.
+#: contour's spacing is even to ~1e-6 of a spacing (measured 5e-7 on a 2.5:1 ellipse).
 ARC_STEPS_PER_KNOT = 4
 
 

@@ -1,10 +1,11 @@
 """The object as one concept: its outline (a disk, an ellipse, a rounded box, a measured
 outline), its size, material, mass, placement and orientation.
 
-The object of every layer is an :class:`envs.scene.SoftDisk`: a disk unless it carries an
-``outline`` (:mod:`envs.objects.shapes`), in which case ``radius_m`` is its area-equivalent
-radius ``r_eq`` and ``orientation_rad`` turns it between the jaws (docs/model.md, object
-outlines). :func:`soft_object` builds one from the shape's own dimensions::
+The object of every layer is an :class:`envs.scene.SoftDisk`: a disk, or a
+:class:`SoftObject` (a ``SoftDisk`` with an ``outline``, :mod:`envs.objects.shapes`, whose
+``radius_m`` is its area-equivalent radius ``r_eq`` and whose ``orientation_rad`` turns it
+between the jaws; docs/model.md, objects that are not disks). :func:`soft_object` builds one
+from the shape's own dimensions::
 
     from envs.objects import soft_object
 
@@ -29,8 +30,11 @@ from .shapes import (
     SplineOutline,
     Superellipse,
 )
+from .soft_object import SoftObject, as_object
 
 __all__ = [
+    "SoftObject",
+    "as_object",
     "Outline",
     "Ellipse",
     "RoundedRectangle",
@@ -42,6 +46,10 @@ __all__ = [
     "MAX_ASPECT_RATIO",
     "soft_object",
     "outline_of",
+    "with_semi_axes",
+    "OUTLINE_INFO_KEYS",
+    "outline_info",
+    "outline_fields",
 ]
 
 #: The shapes an object may have (``"disk"`` is the disk itself, no outline).
@@ -116,6 +124,11 @@ def soft_object(shape: str = "disk", *, distance_m: float = 0.0,
     **material
         The other fields of :class:`envs.scene.SoftDisk` (``youngs_modulus_pa``,
         ``poisson_ratio``, ``thickness_m``, ``density_kg_m3``, ``offset_x_m``, ...).
+
+    Returns
+    -------
+    SoftDisk
+        A :class:`SoftObject`, or for ``shape="disk"`` the :class:`~envs.scene.SoftDisk`.
     """
     if orientation_deg is not None and orientation_rad is not None:
         raise ValueError("give the orientation once: orientation_deg or orientation_rad")
@@ -125,6 +138,53 @@ def soft_object(shape: str = "disk", *, distance_m: float = 0.0,
     outline, r_eq = outline_of(shape, radius_m=radius_m, semi_axes_m=semi_axes_m,
                                sides_m=sides_m, corner_radius_m=corner_radius_m,
                                exponent=exponent, points_m=points_m, name=name)
-    from ..scene import SoftDisk  # (the scene imports the shapes: no cycle at import)
+    from ..scene import SoftDisk
 
-    return SoftDisk(r_eq, distance_m, outline=outline, orientation_rad=psi, **material)
+    disk = SoftDisk(r_eq, distance_m, **material)
+    return disk if outline is None else as_object(disk, outline, psi)
+
+
+def with_semi_axes(disk, a_m: float | None = None, b_m: float | None = None):
+    """``disk`` (an :class:`envs.scene.SoftDisk` with an :class:`Ellipse` or
+    :class:`Superellipse` outline) with its semi-axes along (``a_m``) and across (``b_m``) its
+    first axis set [m] (``None``: kept), its equivalent radius following: what a scenario's
+    semi-axis ranges vary (:mod:`envs.scenarios`)."""
+    from dataclasses import replace
+
+    shape = disk.outline
+    if not isinstance(shape, Ellipse | Superellipse):
+        raise ValueError(f"semi-axis ranges need an ellipse or a superellipse, the object is "
+                         f"a {disk.shape}")
+    a0, b0 = shape.semi_axes_m(disk.radius_m)
+    a = a0 if a_m is None else float(a_m)
+    b = b0 if b_m is None else float(b_m)
+    if isinstance(shape, Ellipse):
+        new, r_eq = Ellipse.of_semi_axes(a, b)
+    else:
+        new, r_eq = outline_of("superellipse", semi_axes_m=(a, b), exponent=shape.exponent)
+    return replace(disk, radius_m=r_eq, outline=new)
+
+
+#: The keys of an object's plain data (a result JSON's ``object``) that carry its outline.
+OUTLINE_INFO_KEYS = ("shape", "orientation_rad", "outline_coefficients")
+
+
+def outline_info(disk) -> dict:
+    """An object's outline as plain data: nothing for a disk; else its shape and own
+    dimensions (:meth:`Outline.describe`), ``orientation_rad`` and the model's
+    ``outline_coefficients`` (what :func:`outline_fields` rebuilds it from, exactly)."""
+    if disk.outline is None:
+        return {}
+    return {**disk.outline.describe(disk.radius_m), "orientation_rad": disk.orientation_rad,
+            "outline_coefficients": disk.outline.coefficients().tolist()}
+
+
+def outline_fields(obj) -> dict:
+    """The :func:`as_object` keyword arguments of an object's plain data
+    (:func:`outline_info`): ``{}`` for a disk, else its ``outline`` (the model's spline,
+    :class:`SplineOutline`, named by its shape) and ``orientation_rad``."""
+    coefficients = obj.get("outline_coefficients")
+    if coefficients is None:
+        return {}
+    return {"outline": SplineOutline(tuple(coefficients), name=str(obj.get("shape", "outline"))),
+            "orientation_rad": float(obj.get("orientation_rad", 0.0))}

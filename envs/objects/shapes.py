@@ -18,9 +18,10 @@ Shapes (docs/model.md, object outlines):
 * :class:`SplineOutline`, the model's own representation (the coefficients a scene row
   carries), which every shape turns into (:meth:`Outline.coefficients`).
 
-A disk is not an outline: ``SoftDisk(outline=None)`` keeps the disk's own code paths and
-answers. Each shape's ``r(phi)`` is sampled at the model's :data:`~envs.model.layout.N_OUTLINE`
-knots and interpolated by a periodic cubic B-spline (:mod:`envs.model.outline`), then scaled to
+A disk is not an outline: a :class:`~envs.scene.SoftDisk` (``outline`` ``None``) keeps the
+disk's own code paths and answers; an outline makes a :class:`~envs.objects.SoftObject`.
+Each shape's ``r(phi)`` is sampled at the model's :data:`~envs.model.layout.N_OUTLINE` knots
+and interpolated by a periodic cubic B-spline (:mod:`envs.model.outline`), then scaled to
 area ``pi`` and (for a measured outline) re-centred on the spline's own centroid.
 """
 
@@ -35,6 +36,7 @@ import numpy as np
 
 from ..model.layout import N_OUTLINE
 from ..model.outline import (
+    ARC_STEPS_PER_KNOT,
     outline_area_centroid,
     outline_body_angles,
     outline_contour,
@@ -111,6 +113,23 @@ class Outline:
         a result JSON and a sheet show)."""
         return {"shape": self.kind}
 
+    def scan(self, orientation_rad: float = 0.0) -> np.ndarray:
+        """The outline's dense scan, turned by ``orientation_rad`` [r_eq], (P, 2): the points
+        at the body angles the rest check scans (:func:`envs.model.problem.
+        outline_clearance_m`), read-only."""
+        return _scan(self, float(orientation_rad))
+
+    def face_support(self, rest_angle_rad, orientation_rad: float = 0.0) -> np.ndarray:
+        """How far the outline reaches towards either finger's gripping face at rest angle
+        ``rest_angle_rad`` (an array) [r_eq]: the larger of its support functions along the
+        faces' outward directions ``(cos, -sin)`` (right) and ``(-cos, -sin)`` (left) (1 for
+        the unit circle)."""
+        u = self.scan(orientation_rad)
+        c, s = np.cos(rest_angle_rad), np.sin(rest_angle_rad)
+        right = np.max(np.multiply.outer(c, u[:, 0]) - np.multiply.outer(s, u[:, 1]), axis=-1)
+        left = np.max(np.multiply.outer(-c, u[:, 0]) - np.multiply.outer(s, u[:, 1]), axis=-1)
+        return np.maximum(right, left)
+
 
 @functools.lru_cache(maxsize=512)
 def _coefficients(outline: Outline) -> np.ndarray:
@@ -120,6 +139,17 @@ def _coefficients(outline: Outline) -> np.ndarray:
     c = c * math.sqrt(math.pi / area)
     c.flags.writeable = False
     return c
+
+
+@functools.lru_cache(maxsize=512)
+def _scan(outline: Outline, orientation_rad: float) -> np.ndarray:
+    steps = N_OUTLINE * ARC_STEPS_PER_KNOT
+    phi = 2.0 * np.pi * np.arange(steps) / steps
+    r, _, _ = outline_curve(outline.coefficients(), phi)
+    out = np.stack([r * np.cos(phi + orientation_rad), r * np.sin(phi + orientation_rad)],
+                   axis=1)
+    out.flags.writeable = False
+    return out
 
 
 def _check_aspect(name: str, value) -> float:

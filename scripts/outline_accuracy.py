@@ -1,0 +1,253 @@
+"""How accurate the point-spring model is on objects that are not disks: PSM against FEM.
+
+Nothing here was fitted to an outline: the default model (nh-quad, N = 40, M = 2, its scale
+fitted on the paper disks) is compared with the finite-element reference (the disk mesh mapped
+onto the outline, :mod:`envs.fem`) on held-out outlines:
+
+1. **Closing angle** (``--angles``): ellipses 1.5:1, 2:1 and 3:1, a rounded rectangle
+   (5:3, corners half the short side) and the two measured outlines of ``examples/objects``
+   (a rounded package and an irregular slice), each at orientations 0, 45 and 90 degrees, at
+   the paper disks' equivalent radius 70 mm and material (E 100 kPa, nu 0.45, t 10 mm), on the
+   paper's gripper placed with the paper disk's rest clearance, over the calibration torques
+   0.05-0.5 N.m. The error is the calibration's: the relative error of the closing angle
+   ``theta_a0 - theta`` (mean of the two fingers), RMS and largest over the torques.
+2. **Reward ranking** (``--ranking``): ``--designs`` random designs of the default design box
+   on three objects (the issue's ellipse 2:1, 20 x 10 mm, 0.2 MPa, t 20 mm, across and along the
+   jaws, and the irregular slice), scored by :func:`envs.evaluate.evaluate_designs` at both
+   fidelities: the Spearman rank correlation of the rewards (valid designs converged at both),
+   the best design's FEM rank and the reward error.
+
+Writes ``out/outline_accuracy.json`` and ``out/outline_accuracy.png``.
+
+Usage::
+
+    python scripts/outline_accuracy.py [--angles] [--ranking] [--designs 40] [--workers 2]
+                                       [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+from fidelity import rank_agreement  # noqa: E402
+
+from envs.accuracy.paper import PAPER_TORQUES_NM  # noqa: E402
+from envs.accuracy.reference import fem_reference  # noqa: E402
+from envs.evaluate import DesignBounds, evaluate_designs  # noqa: E402
+from envs.object_file import load_object  # noqa: E402
+from envs.objects import Ellipse, RoundedRectangle, as_object  # noqa: E402
+from envs.scene import (  # noqa: E402
+    Scene,
+    design_from_relative,
+    placement_support,
+    relative_from_design,
+)
+from envs.solver import simulate_ramp  # noqa: E402
+
+EXAMPLES = ROOT / "examples" / "objects"
+ORIENTATIONS_DEG = (0.0, 45.0, 90.0)
+
+
+def outlines() -> dict:
+    """The held-out outlines of part 1, dimensionless (scaled to the paper disk's r_eq)."""
+    return {
+        "ellipse 1.5:1": Ellipse(1.5),
+        "ellipse 2:1": Ellipse(2.0),
+        "ellipse 3:1": Ellipse(3.0),
+        "rounded rectangle 5:3": RoundedRectangle(5.0 / 3.0, 0.5),
+        "measured package": load_object(EXAMPLES / "soft_package.toml").disk.outline,
+        "measured slice": load_object(EXAMPLES / "pebble_slice.toml").disk.outline,
+    }
+
+
+def paper_scene(outline, orientation_deg: float) -> Scene:
+    """The paper gripper with an outline of the paper disk's area and material, placed with
+    the paper disk's rest clearance (its faces clear the outline as they clear the disk)."""
+    paper = Scene.preset("paper-r070")
+    g, d = paper.gripper, paper.disk
+    row = np.array([g.finger_length_m, g.rest_angle_rad, g.joint_offset_m, g.finger_width_m,
+                    0.0, d.distance_m])
+    rel = relative_from_design(row, d.radius_m, d.torque_unit_nm)
+    obj = as_object(d, outline, math.radians(orientation_deg))
+    placed = design_from_relative(rel, obj.radius_m, obj.torque_unit_nm,
+                                  placement_support(obj))
+    return Scene(g, replace(obj, distance_m=float(placed[5])))
+
+
+def closing_case(scene: Scene) -> dict:
+    """The default model's closing angles against the FEM's over the calibration torques."""
+    t0 = time.perf_counter()
+    ref = fem_reference(scene, PAPER_TORQUES_NM)
+    fem_s = time.perf_counter() - t0
+    torques = np.array(ref.torques_nm)
+    ramp = simulate_ramp(scene, torques)
+    th0 = scene.gripper.rest_angle_rad
+    fem = th0 - np.array(ref.jaw_angles_rad)
+    psm = np.array([th0 - np.mean(r.jaw_angles_rad) if r.converged else math.nan
+                    for r in ramp])
+    rel = psm / fem - 1.0
+    ok = np.isfinite(rel)
+    return {"torques_nm": torques.tolist(), "fem_closing_rad": fem.tolist(),
+            "psm_closing_rad": psm.tolist(), "relative_errors": rel.tolist(),
+            "rms": float(np.sqrt(np.mean(rel[ok] ** 2))) if ok.any() else math.nan,
+            "max": float(np.max(np.abs(rel[ok]))) if ok.any() else math.nan,
+            "psm_failed": int((~ok).sum()), "fem_dropped": list(ref.dropped_torques_nm),
+            "fem_s": fem_s}
+
+
+def run_angles(quick: bool) -> dict:
+    cases = {}
+    shapes = outlines()
+    if quick:
+        shapes = {k: shapes[k] for k in ("ellipse 2:1", "measured slice")}
+    for name, shape in shapes.items():
+        for deg in (ORIENTATIONS_DEG[::2] if quick else ORIENTATIONS_DEG):
+            label = f"{name}, {deg:g} deg"
+            entry = closing_case(paper_scene(shape, deg))
+            cases[label] = entry
+            print(f"{label}: closing angle RMS {100 * entry['rms']:.2f} %, max "
+                  f"{100 * entry['max']:.2f} % ({entry['psm_failed']} PSM failures, FEM "
+                  f"{entry['fem_s']:.0f} s)", flush=True)
+    rel = np.concatenate([np.asarray(c["relative_errors"]) for c in cases.values()])
+    rel = rel[np.isfinite(rel)]
+    by_family: dict[str, list[float]] = {}
+    for label, c in cases.items():
+        family = label.split(",")[0].rsplit(" ", 1)[0] if label.startswith("ellipse") else \
+            label.split(",")[0]
+        by_family.setdefault(family, []).extend(v for v in c["relative_errors"]
+                                                if math.isfinite(v))
+    summary = {"rms_all": float(np.sqrt(np.mean(rel**2))), "max_all": float(np.abs(rel).max()),
+               "worst_case_rms": max(c["rms"] for c in cases.values()),
+               "by_family_rms": {k: float(np.sqrt(np.mean(np.square(v))))
+                                 for k, v in by_family.items()}}
+    print(f"all outlines: closing angle RMS {100 * summary['rms_all']:.2f} %, max "
+          f"{100 * summary['max_all']:.2f} %, worst case RMS "
+          f"{100 * summary['worst_case_rms']:.2f} %")
+    return {"cases": cases, "summary": summary}
+
+
+def ranking_objects() -> dict:
+    """The objects of part 2 (the issue's ellipse across and along the jaws, the slice)."""
+    return {"ellipse 2:1 across": load_object(EXAMPLES / "grape_across.toml").disk,
+            "ellipse 2:1 along": load_object(EXAMPLES / "grape_along.toml").disk,
+            "measured slice": load_object(EXAMPLES / "pebble_slice.toml").disk}
+
+
+def run_ranking(n: int, seed: int, executor) -> dict:
+    out = {}
+    for name, obj in ranking_objects().items():
+        designs = DesignBounds().sample(np.random.default_rng(seed), n, obj)
+        t0 = time.perf_counter()
+        fem = evaluate_designs(designs, obj, fidelity="fem", executor=executor,
+                               strain_limits=0.08, friction_coefficients=0.6)
+        fem_s = time.perf_counter() - t0
+        psm = evaluate_designs(designs, obj, strain_limits=0.08, friction_coefficients=0.6)
+        rows = np.flatnonzero(fem["valid_at_rest"] & fem["converged"] & psm["converged"])
+        entry = {**rank_agreement(psm, fem, rows), "fem_s": fem_s,
+                 "valid_at_rest": int(fem["valid_at_rest"].sum()),
+                 "fem_converged": int((fem["converged"] & fem["valid_at_rest"]).sum()),
+                 "rows": rows.tolist(), "psm_reward": psm["reward"].tolist(),
+                 "fem_reward": fem["reward"].tolist()}
+        out[name] = entry
+        rho = entry.get("spearman_reward")
+        print(f"{name}: {rows.size} designs, Spearman reward "
+              f"{'n/a' if rho is None else f'{rho:.3f}'}, FEM rank of the PSM's best "
+              f"{entry.get('fem_rank_of_psm_best')}, reward error mean "
+              f"{entry.get('reward_error_mean', math.nan):.4f} (FEM {fem_s:.0f} s)", flush=True)
+    return out
+
+
+def chart(result: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = (1 if "angles" in result else 0) + len(result.get("ranking", {}))
+    fig, axes = plt.subplots(1, max(panels, 1), figsize=(4.6 * max(panels, 1), 4.2),
+                             squeeze=False)
+    k = 0
+    if "angles" in result:
+        ax = axes[0][k]
+        k += 1
+        cases = result["angles"]["cases"]
+        labels = list(cases)
+        ax.barh(range(len(labels)), [100 * cases[c]["rms"] for c in labels], color="C0",
+                label="RMS")
+        ax.plot([100 * cases[c]["max"] for c in labels], range(len(labels)), "k|", ms=10,
+                label="max")
+        ax.axvline(3.0, color="C3", lw=0.8, ls="--", label="3 %")
+        ax.set_yticks(range(len(labels)), labels, fontsize=6)
+        ax.invert_yaxis()
+        ax.set_xlabel("closing-angle error vs FEM [%]")
+        ax.set_title("default model on held-out outlines", fontsize=9)
+        ax.legend(fontsize=7)
+    for name, entry in result.get("ranking", {}).items():
+        ax = axes[0][k]
+        k += 1
+        rows = np.asarray(entry["rows"], dtype=int)
+        fem, psm = np.asarray(entry["fem_reward"])[rows], np.asarray(entry["psm_reward"])[rows]
+        ax.scatter(fem, psm, s=14)
+        if rows.size:
+            lo, hi = min(fem.min(), psm.min()), max(fem.max(), psm.max())
+            ax.plot([lo, hi], [lo, hi], color="0.6", lw=0.8)
+        rho = entry.get("spearman_reward")
+        ax.set_title(f"{name}: Spearman {rho:.3f}" if rho is not None else name, fontsize=9)
+        ax.set_xlabel("FEM reward")
+        ax.set_ylabel("PSM reward")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--angles", action="store_true", help="part 1 only (closing angles)")
+    ap.add_argument("--ranking", action="store_true", help="part 2 only (reward ranking)")
+    ap.add_argument("--designs", type=int, default=40)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=None,
+                    help="FEM of part 2 in this many processes (default: in process)")
+    ap.add_argument("--quick", action="store_true",
+                    help="two outlines at two orientations, 8 designs")
+    ap.add_argument("--out", default="out")
+    args = ap.parse_args(argv)
+    both = not (args.angles or args.ranking)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    result: dict = {"command": "python scripts/outline_accuracy.py " + " ".join(
+        argv if argv is not None else sys.argv[1:])}
+    if both or args.angles:
+        result["angles"] = run_angles(args.quick)
+    if both or args.ranking:
+        executor = None
+        if args.workers:
+            from optim.executors import ProcessExecutor
+
+            executor = ProcessExecutor(args.workers)
+        try:
+            result["ranking"] = run_ranking(8 if args.quick else args.designs, args.seed,
+                                            executor)
+        finally:
+            if executor is not None:
+                executor.close()
+    (out / "outline_accuracy.json").write_text(json.dumps(result, indent=1) + "\n")
+    chart(result, out / "outline_accuracy.png")
+    print(f"wrote {out / 'outline_accuracy.json'} and {out / 'outline_accuracy.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
