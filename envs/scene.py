@@ -447,9 +447,8 @@ class Scene:
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                           d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
-                          float(torque_nm), d.offset_x_m,
-                          *(v for jaw in g.jaws for v in jaw_row(jaw)), shape, orientation,
-                          *outline]])
+                          float(torque_nm), d.offset_x_m, shape, orientation, *outline,
+                          *(v for jaw in g.jaws for v in jaw_row(jaw))]])
 
     @property
     def reachable(self) -> bool:

@@ -159,7 +159,8 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     obj = result.object
     d, m = result.best_design, result.best_metrics
     name = obj.get("name") or "the object"
-    title = (f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
+    size = "r" if obj.get("outline_coefficients") is None else f"{obj.get('shape')}, r_eq"
+    title = (f"{name}, {size} = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
              f"contact {m.get('contact_score', math.nan):.2f}, "
              f"compression {m.get('peak_compression', math.nan):.3f}; fingers "

@@ -86,20 +86,21 @@ GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
  S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_AREA_SCALE, S_TORQUE) = range(14)
 S_OFFSET_X = 14
-# the jaw profile of each finger (envs.model.jaw.JawProfile), SI: J_* slots from S_JAW0 (right
-# finger) and S_JAW1 (left finger); depth 0 is the straight bar
-J_DEPTH, J_BOTTOM_RADIUS, J_OPENING, J_POSITION = range(4)
-N_JAW = 4
-S_JAW0 = 15
-S_JAW1 = S_JAW0 + N_JAW
 # the object's shape (SHAPE_*), an outline's orientation psi [rad] (counter-clockwise from +x,
 # across the jaws, to its first axis) and its N_OUTLINE B-spline coefficients of r(phi) / r_eq
 # (envs.model.outline); S_RADIUS is then r_eq = sqrt(A / pi) and S_DISTANCE the distance from
 # the joints' line to the outline's lowest point. A disk: SHAPE_DISK and zeros.
-S_SHAPE = S_JAW1 + N_JAW
+N_SCENE_SCALARS = S_OFFSET_X + 1  # the scalar columns of a scene row come first
+S_SHAPE = N_SCENE_SCALARS
 S_ORIENT = S_SHAPE + 1
 S_OUTLINE = S_SHAPE + 2
-N_SCENE = S_OUTLINE + N_OUTLINE
+# the jaw profile of each finger (envs.model.jaw.JawProfile), SI: J_* slots from S_JAW0 (right
+# finger) and S_JAW1 (left finger); depth 0 is the straight bar
+J_DEPTH, J_BOTTOM_RADIUS, J_OPENING, J_POSITION = range(4)
+N_JAW = 4
+S_JAW0 = S_OUTLINE + N_OUTLINE
+S_JAW1 = S_JAW0 + N_JAW
+N_SCENE = S_JAW1 + N_JAW
 
 # solver options
 O_TOL, O_MAXIT, O_MAXROUND, O_MU0, O_POLISH, O_GAUGE, O_POLISH_STEPS = range(7)

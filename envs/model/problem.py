@@ -32,6 +32,7 @@ from .layout import (
     N_OUTLINE,
     N_PARAMS,
     N_SCENE,
+    N_SCENE_SCALARS,
     P_A0,
     P_C0X,
     P_C0Y,
@@ -183,9 +184,9 @@ class SceneColumns(NamedTuple):
     def rows(self) -> np.ndarray:
         """The scenes as a (B, N_SCENE) float64 matrix (layout ``S_*``)."""
         out = np.zeros((self.size, N_SCENE))
-        for k, column in enumerate(self[:S_JAW0]):
+        for k, column in enumerate(self[:N_SCENE_SCALARS]):
             out[:, k] = column
-        for k, column in enumerate(self[S_JAW0 : S_JAW0 + N_JAW]):
+        for k, column in enumerate(self[N_SCENE_SCALARS : N_SCENE_SCALARS + N_JAW]):
             if column is not None:
                 out[:, S_JAW0 + k] = column[:, 0]
                 out[:, S_JAW1 + k] = column[:, 1]
@@ -201,7 +202,7 @@ class SceneColumns(NamedTuple):
         table = np.asarray(rows, dtype=np.float64)
         jaws = (np.stack([table[:, S_JAW0 + k], table[:, S_JAW1 + k]], axis=1)
                 for k in range(N_JAW))
-        return cls(*table[:, :S_JAW0].T, *jaws, table[:, S_SHAPE], table[:, S_ORIENT],
+        return cls(*table[:, :N_SCENE_SCALARS].T, *jaws, table[:, S_SHAPE], table[:, S_ORIENT],
                    table[:, S_OUTLINE : S_OUTLINE + N_OUTLINE])
 
 
