@@ -226,6 +226,10 @@ class Gripper:
 class SoftDisk:
     """Soft 2-D disk (extruded by a thickness) whose centre is pinned where it was placed.
 
+    An object that is not a disk is an :class:`envs.objects.SoftObject`, this class with an
+    ``outline`` and an ``orientation_rad`` (built by :func:`envs.objects.soft_object`); a
+    disk's ``outline`` is ``None``.
+
     Parameters
     ----------
     radius_m
@@ -266,10 +270,6 @@ class SoftDisk:
         plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
         most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
         naming the likely unit.
-
-    An object that is not a disk is an :class:`envs.objects.SoftObject`, this class with an
-    ``outline`` and an ``orientation_rad`` (built by :func:`envs.objects.soft_object`); a
-    disk's ``outline`` is ``None``.
     """
 
     radius_m: float
