@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import re
 import sys
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
 
 from .optimize import add_demo_parser, add_optimize_parser, add_verify_parser
 from .policy import add_policy_parsers
@@ -16,11 +21,21 @@ ERROR_EXIT = 2  # a refused input (as argparse's own errors)
 # the reader of stdout went away (``| head -1``): the status of a program that SIGPIPE ended,
 # as the shell reports it; Python ignores SIGPIPE and raises BrokenPipeError instead
 BROKEN_PIPE_EXIT = 128 + 13
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")  # terminal colours (Gymnasium colours its warnings)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, its errors one line like every refused input (argparse prints the
+    usage first: the error, which names the option, scrolls out of sight)."""
+
+    def error(self, message: str):
+        self.exit(ERROR_EXIT, f"psm-grasp: error: {message} ({self.prog} --help lists the "
+                              "options)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``psm-grasp`` parser: one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="psm-grasp", description=__doc__)
+    parser = _Parser(prog="psm-grasp", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     add_simulate_parser(sub)
     add_demo_parser(sub)
@@ -33,10 +48,40 @@ def build_parser() -> argparse.ArgumentParser:
 def _run(argv: list[str] | None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return int(args.func(args))
+        with _user_warnings():
+            return int(args.func(args))
     except ValueError as exc:
         print(f"psm-grasp: error: {exc}", file=sys.stderr)
         return ERROR_EXIT
+
+
+@contextlib.contextmanager
+def _user_warnings() -> Iterator[None]:
+    """Warnings as a command-line user should see them: one line ``psm-grasp: warning: ...``
+    each (a library's own with its name: ``warning (numpy): ...``), without the source file and
+    line a Python programmer needs, and each message once per command (a warning raised in a
+    loop, or from several places, is the same news)."""
+    shown: set[tuple[type, str]] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        text = _ANSI.sub("", str(message)).strip()
+        if text.startswith("psm-grasp: "):
+            text = text[len("psm-grasp: "):]
+        if (category, text) in shown:
+            return
+        shown.add((category, text))
+        parts = Path(str(filename)).parts
+        library = (parts[parts.index("site-packages") + 1].split(".")[0]
+                   if "site-packages" in parts[:-1] else "")
+        prefix = f"warning ({library})" if library else "warning"
+        try:
+            print(f"psm-grasp: {prefix}: {text}", file=sys.stderr if file is None else file)
+        except OSError:  # a closed stderr: nothing to tell the user with
+            pass
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
 
 
 def _silence_stdout() -> None:

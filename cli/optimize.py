@@ -13,7 +13,7 @@ from typing import Any
 
 from optim import run
 
-from .options import cli_option
+from .options import add_load_set_option, cli_option, object_option
 
 __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 
@@ -21,7 +21,6 @@ __all__ = ["add_optimize_parser", "add_verify_parser", "add_demo_parser"]
 def _optimize_command(args: argparse.Namespace) -> int:
     from envs.model.defaults import DEFAULT_ELEMENT
     from envs.model.family import resolve_model
-    from envs.object_file import load_object
     from envs.scene import joint_spring
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
@@ -32,18 +31,26 @@ def _optimize_command(args: argparse.Namespace) -> int:
         check_payload_factor,
         check_seed,
         check_strain_limit,
+        check_time_limit,
     )
+    from optim.verdict import search_verdict, verdict_exit_code
     from optim.verify import MAX_TOP, verify_exit_code
 
     # the options a user typed, named as typed (run_optimize checks them all again)
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other: the object is a preset's "
                          "disk or your own")
-    obj = None if args.object is None else load_object(args.object)
+    obj = None if args.object is None else object_option(args.object)
+    from optim.optimize import get_optimizer
+
+    cli_option("--method", get_optimizer, args.method)
     cli_option("--triangles/--rings/--element", resolve_model, args.triangles, args.rings,
                args.element or DEFAULT_ELEMENT)
-    cli_option("--budget", check_budget, args.budget)
+    if args.budget is not None:
+        cli_option("--budget", check_budget, args.budget)
     cli_option("--seed", check_seed, args.seed)
+    if args.time is not None:
+        cli_option("--time", check_time_limit, args.time)
     if args.strain_limit is not None:
         cli_option("--strain-limit", check_strain_limit, args.strain_limit)
     if args.friction is not None:
@@ -52,6 +59,10 @@ def _optimize_command(args: argparse.Namespace) -> int:
         cli_option("--payload-factor", check_payload_factor, args.payload_factor)
     cli_option("--joint-spring/--joint-spring-nm-per-rad", joint_spring, args.joint_spring,
                args.joint_spring_nm_per_rad)
+    tolerances = (None if args.tolerances is None
+                  else cli_option("--tolerances", tolerances_option, args.tolerances))
+    parts = cli_option("--resolution/--pin-diameter", parts_option, args.resolution,
+                       args.pin_diameter)
     cli_option("--workers", check_executor_options, None, args.workers)
     cli_option("--dask", check_executor_options, args.dask, None)
     check_output_dir("--out", args.out)
@@ -61,6 +72,7 @@ def _optimize_command(args: argparse.Namespace) -> int:
     jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
                       args.jaw_per_finger)
     cli_option("--jaw", run.check_policy_jaw, args.method, jaws)
+    cli_option("--load-set", run.load_set_of, obj, args.load_set)
     if args.method == "policy":  # an object the policy cannot observe, before any work
         target, kwargs = run.problem_kwargs(args.scene or (None if obj else run.DEMO_SCENE),
                                             obj, args.strain_limit, args.friction,
@@ -84,7 +96,9 @@ def _optimize_command(args: argparse.Namespace) -> int:
                                  finish=not args.no_finish,
                                  placement_tolerance_m=args.placement_tolerance,
                                  robust=args.robust, joints_apart=args.joints_apart,
-                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger)
+                                 jaw=args.jaw, jaw_per_finger=args.jaw_per_finger,
+                                 load_set=args.load_set,
+                                 tolerances=tolerances, parts=parts, time_s=args.time)
     report = None
     if args.verify_top is not None:
         report = run.verify_outputs(args.out, f"{args.method}_seed{args.seed}_result.json",
@@ -92,8 +106,44 @@ def _optimize_command(args: argparse.Namespace) -> int:
     # a run that found no grasp is not a success, whatever files it wrote; nor one whose
     # optimum the FEM does not confirm
     if not result.extra["grasp_found"]:
-        return run.NO_GRASP_EXIT
+        return verdict_exit_code(result.extra.get("verdict") or search_verdict(result))
     return 0 if report is None else verify_exit_code(report)
+
+
+# --tolerances' short keys and the object file's keys they stand for (envs.tolerances)
+TOLERANCE_OPTION_KEYS = {"length": "length_mm", "angle": "angle_deg", "spring": "spring_percent",
+                         "torque": "torque_percent"}
+
+
+def tolerances_option(text: str):
+    """``--tolerances length=MM,angle=DEG,spring=PCT,torque=PCT`` (any of them; the object
+    file's key names are accepted too): :class:`envs.tolerances.Tolerances`."""
+    from envs.tolerances import parse_tolerances
+
+    values = {}
+    for item in str(text).split(","):
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep:
+            raise ValueError(f"must be KEY=VALUE pairs (length=MM, angle=DEG, spring=PCT, "
+                             f"torque=PCT), got {item!r}")
+        try:
+            values[TOLERANCE_OPTION_KEYS.get(key, key)] = float(value)
+        except ValueError:
+            raise ValueError(f"{key} must be a number, got {value!r}") from None
+    return parse_tolerances(values, "tolerances")
+
+
+def parts_option(resolution: str | None, pin_diameter_mm: float | None):
+    """``--resolution MM[,DEG[,DIGITS]]`` (or ``none``: the design as found, unrounded) and
+    ``--pin-diameter MM``: :class:`optim.parts.options.PartOptions`."""
+    from optim.parts.options import PartOptions
+    from optim.parts.resolution import DEFAULT_RESOLUTION, parse_resolution
+
+    res = (DEFAULT_RESOLUTION if resolution is None else None if resolution.strip() == "none"
+           else parse_resolution(resolution))
+    pin = None if pin_diameter_mm is None else pin_diameter_mm * 1e-3
+    return PartOptions(res, pin)
 
 
 def placement_tolerance(text: str) -> float | tuple[float, float]:
@@ -117,11 +167,12 @@ def placement_tolerance(text: str) -> float | tuple[float, float]:
 
 
 def _verify_command(args: argparse.Namespace) -> int:
-    from envs.validation import check_output_dir
+    from envs.validation import check_integer, check_output_dir
     from optim.result import OptimResult
-    from optim.verify import find_result, verify_exit_code
+    from optim.verify import MAX_TOP, find_result, verify_exit_code
 
     # a bad folder or file, or a folder verify.json cannot be written to, before any work
+    check_integer("--top", args.top, 1, MAX_TOP)
     path = find_result(args.out_dir, args.result)
     check_output_dir("OUT_DIR", args.out_dir)
     recorded = OptimResult.from_json(path)
@@ -129,15 +180,20 @@ def _verify_command(args: argparse.Namespace) -> int:
         _check_same_object(args.object, recorded.object, path)
     if args.jaw is not None or args.jaw_per_finger is not None:
         _check_same_jaws(args.jaw, args.jaw_per_finger, recorded.extra, path)
+    if args.load_set is not None:
+        # (a run recorded before the load sets checked every direction)
+        ran = recorded.object.get("load_set", "any")
+        if ran != args.load_set:
+            raise ValueError(f"--load-set: the run in {str(path)!r} checked the load set "
+                             f"{ran!r}, not {args.load_set!r}")
     report = run.verify_outputs(args.out_dir, args.result, args.top)
     return verify_exit_code(report)
 
 
 def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
     """``verify --object FILE``: the run in OUT_DIR must be a run for that object."""
-    from envs.object_file import load_object
 
-    spec = load_object(object_file)
+    spec = object_option(object_file)
     fields = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
               "stiffness_scale")
     differ = [k for k in fields
@@ -217,6 +273,7 @@ def add_verify_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="check that the run was for this object file's object")
     add_jaw_options(p, "check that the run designed these", "no check; the FEM always "
                     "solves each design with its own jaws")
+    add_load_set_option(p, "no check; the FEM always checks the run's own load set")
     p.set_defaults(func=_verify_command)
     return p
 
@@ -231,8 +288,14 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
     from envs.model.family import ELEMENTS
     from envs.scenarios import ROBUST_MEASURES
     from envs.scene import PRESETS
+    from optim.executors import MAX_WORKERS_PER_CPU
     from optim.optimize import METHODS
-    from optim.problem import DEFAULT_STRAIN_LIMIT
+    from optim.problem import (
+        DEFAULT_BUDGET_RANGE,
+        DEFAULT_GRASP_BUDGET,
+        DEFAULT_STRAIN_LIMIT,
+        MAX_BUDGET,
+    )
     from optim.verify import MAX_TOP
 
     p = subparsers.add_parser(
@@ -243,16 +306,27 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                     "drawing) and, for NSGA-II, the Pareto front to --out. The optimum is "
                     "reported by a finer member of the model family (within a few percent of "
                     "the FEM) unless --no-finish.")
-    p.add_argument("--method", default="cmaes", choices=METHODS)
+    p.add_argument("--method", default="portfolio",
+                   help="the search (default portfolio: CMA-ES starts from a screened sample, "
+                   "raced; see the optimizers page); one of " + ", ".join(METHODS)
+                   + ", or ng:NAME / optuna:NAME")
     p.add_argument("--object", metavar="FILE.toml", default=None,
                    help="your object: a TOML file with an [object] table (radius_m, "
                    "youngs_modulus_pa, poisson_ratio, thickness_m; optional name, "
                    "stiffness_scale, strain_limit, friction_coefficient, density_kg_m3, "
-                   "payload_factor, jaw, jaw_per_finger); see examples/objects")
+                   "payload_factor, load_set, jaw, jaw_per_finger); see examples/objects")
     p.add_argument("--scene", default=None, choices=sorted(PRESETS),
                    help=f"or the disk of this preset, with its gripper's own joint spring "
                    f"(default without --object: {run.DEMO_SCENE})")
-    p.add_argument("--budget", type=int, default=2000, help="evaluations (default %(default)s)")
+    p.add_argument("--budget", type=int, default=None,
+                   help=f"evaluations (designs, each judged in every scenario), in [1, "
+                   f"{MAX_BUDGET:,}] (default: with --time, as many as it allows; else "
+                   f"{DEFAULT_GRASP_BUDGET:,} grasps over the scenario count, within "
+                   f"{DEFAULT_BUDGET_RANGE[0]:,}-{DEFAULT_BUDGET_RANGE[1]:,}: 6,000 with 9 "
+                   "scenarios)")
+    p.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                   help="wall seconds the search may take, beside --budget: it stops at "
+                   "whichever ends first (the finish and the files come after it)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default="out",
                    help="output folder, created if its parent exists (default %(default)s)")
@@ -263,7 +337,8 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                         "designs (GA, random search): each task carries at least 64 designs")
     p.add_argument("--workers", type=int,
                    help="parallel workers: local processes without --dask, LocalCluster "
-                        "workers with --dask local (default: in-process, batched, already on "
+                        f"workers with --dask local, at most {MAX_WORKERS_PER_CPU} per core "
+                        "(default: in-process, batched, already on "
                         "every core; on one machine workers do not pay, least of all for "
                         "CMA-ES's 9-design populations)")
     p.add_argument("--strain-limit", type=float, default=None,
@@ -275,7 +350,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    f"else {DEFAULT_FRICTION_COEFFICIENT}, a rubber or silicone pad)")
     p.add_argument("--payload-factor", type=float, default=None, metavar="F",
                    help="the grasp must lift the payload F m g (m: the object's mass) by "
-                   "friction, out of the plane and in every in-plane direction; in [0, 100] "
+                   "friction in every direction of --load-set; in [0, 100] "
                    "(default: the object file's, else 2: the weight plus a lift at 1 g; 0: no "
                    "payload)")
     p.add_argument("--joint-spring", type=float, default=None, metavar="REL",
@@ -301,6 +376,18 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help="placement error the design must survive, +- metres: one number for "
                    "both ways, or ALONG,ACROSS the gripper's axis (default: the object file's "
                    "placement_tolerance_m, else none)")
+    p.add_argument("--tolerances", default=None, metavar="length=MM,angle=DEG,...",
+                   help="manufacturing tolerances the design must survive, +-: length=MM "
+                   "(finger length, width, joint offset), angle=DEG (rest angle), spring=PCT "
+                   "and torque=PCT, each a scenario dimension beside the object's (default: "
+                   "the object file's [gripper.tolerances], else none)")
+    p.add_argument("--resolution", default=None, metavar="MM[,DEG[,DIGITS]]",
+                   help="manufacturing resolution the reported design is rounded to before "
+                   "it is scored: lengths, angles, significant figures of torque and spring "
+                   "(default 0.1,0.1,3; 'none': unrounded)")
+    p.add_argument("--pin-diameter", type=float, default=None, metavar="MM",
+                   help="the joint pin's diameter (default: half the finger width, rounded "
+                   "down to the resolution)")
     p.add_argument("--robust", default=None, choices=ROBUST_MEASURES,
                    help="with scenarios (ranges in the object file, a placement tolerance): "
                    "the reward over them, the worst scenario's (default), the mean or the "
@@ -311,6 +398,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    "forceps jaws (default: any d3 in the box; the build sheet says when the "
                    "fingers must be stacked)")
     add_jaw_options(p, "design", "the object file's jaw, else straight")
+    add_load_set_option(p, "the object file's load_set, else any")
     p.add_argument("--verify-top", type=int, default=None, metavar="K",
                    help=f"then re-score the K best distinct designs with the FEM (as psm-grasp "
                    f"verify; K in [1, {MAX_TOP}])")

@@ -11,7 +11,7 @@ import argparse
 from typing import Any
 
 from .optimize import add_jaw_options
-from .options import cli_option
+from .options import cli_option, object_option
 
 __all__ = ["add_policy_parsers"]
 
@@ -48,14 +48,14 @@ def _train_command(args: argparse.Namespace) -> int:
 
 
 def _design_command(args: argparse.Namespace) -> int:
-    from envs.object_file import load_object
     from envs.solver.warmup import announce_compile
     from envs.validation import check_integer, check_output_dir
     from optim import run
     from optim.problem import check_seed
     from optim.rl import load_policy
+    from optim.verdict import verdict_exit_code
 
-    obj = load_object(args.object)
+    obj = object_option(args.object)
     # the shipped policies design straight or any jaws: others (asked for here or by the
     # object file) are refused before any work, with the command that designs them
     jaws = cli_option("--jaw/--jaw-per-finger", run.jaw_settings, obj, args.jaw,
@@ -82,7 +82,8 @@ def _design_command(args: argparse.Namespace) -> int:
     result, _ = run.run_optimize("policy", obj=obj, budget=1 + refine, seed=args.seed,
                                  out=args.out, prefix="design", policy=policy,
                                  progress=not args.no_progress, **jaws)
-    return 0 if result.extra["grasp_found"] else run.NO_GRASP_EXIT
+    # one start (the policy's design, refined) cannot say that nothing holds: exit 5, not 3
+    return 0 if result.extra["grasp_found"] else verdict_exit_code(result.extra["verdict"])
 
 
 def add_policy_parsers(subparsers: Any) -> None:
@@ -104,7 +105,7 @@ def add_policy_parsers(subparsers: Any) -> None:
                        "cores)")
     train.add_argument("--seed", type=int, default=0)
     add_jaw_options(train, "design", "straight: GripperDesign-v2's six actions; shaped jaws "
-                    "train in GripperDesign-v3's action space")
+                    "train in GripperJawDesign-v0's action space")
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     train.add_argument("--out", required=True, help="output folder, created if its parent "
                        "exists")

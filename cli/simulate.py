@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from typing import Any
 
-from .options import cli_option
+from .options import add_load_set_option, cli_option, object_option
 
 __all__ = ["add_simulate_parser", "run_simulate"]
 
@@ -39,6 +40,7 @@ def add_simulate_parser(subparsers: Any) -> argparse.ArgumentParser:
                      help="the friction needed includes lifting F m g (m: the object's mass), "
                      "in [0, 100] (default: the object file's, else 2: the weight plus a lift "
                      "at 1 g; 0: the fixed centre's reaction alone)")
+    add_load_set_option(sim, "the object file's load_set, else any")
     sim.add_argument("--element", default=None, choices=ELEMENTS,
                      help="nhquad (default: the default model, 40 points, 2 rings, within 2 %% "
                      "RMS of the FEM); spring: springs and the area energy (the paper's fan: "
@@ -85,11 +87,16 @@ def run_simulate(args: argparse.Namespace) -> int:
     spec = cli_option("--triangles/--rings/--element/--calibrated", check_model,
                       args.triangles, args.rings, element, calibrated)
     if args.torque is not None:
-        check_range("--torque", args.torque, 0.0, math.inf)
+        check_range("--torque", args.torque, 0.0, math.inf)  # its ceiling: with the scene
     plot = None if args.plot is None else check_output_file("--plot", args.plot, (".png",))
-    scene, torque, name, friction, factor = _scene_of(args)
+    scene, torque, name, friction, factor, load_set = _scene_of(args)
+    if args.torque is not None:  # (a file's torque_nm is checked with the file)
+        cli_option("--torque", scene.check_torque, args.torque)
     args.torque = torque
-    model = {"stiffness_rule": args.rule, "payload_factor": factor, **spec.kwargs()}
+    for words in scene.warnings:  # a gripper that cannot reach the object, ...
+        print(f"psm-grasp: warning: {words}", file=sys.stderr)
+    model = {"stiffness_rule": args.rule, "payload_factor": factor, "load_set": load_set,
+             **spec.kwargs()}
     n_tri = model.pop("n_triangles")
     # the first solve in a process loads (or compiles) the numba kernels: time it apart, then
     # report the solve of the answer shown, as a user's next call would see it
@@ -114,16 +121,19 @@ def run_simulate(args: argparse.Namespace) -> int:
         grasp_figure(scene, res, path=plot)
         if not args.json:
             print(f"  plot           : {plot}")
+    if not res.converged:
+        print(f"psm-grasp: warning: the grasp did not converge ({res.message}): exit code 1",
+              file=sys.stderr)
     return 0 if res.converged else 1
 
 
 def _scene_of(args: argparse.Namespace):
-    """The scene, torque [N·m], name, friction coefficient and payload factor of the
-    command's options."""
+    """The scene, torque [N·m], name, friction coefficient, payload factor and load set of
+    the command's options."""
     from envs.model.defaults import DEFAULT_FRICTION_COEFFICIENT, DEFAULT_PAYLOAD_FACTOR
-    from envs.object_file import load_object
     from envs.scene import Design, Scene
     from optim.problem import check_friction, check_payload_factor, paper_design_for
+    from optim.run import load_set_of
 
     if args.object is not None and args.scene is not None:
         raise ValueError("--object and --scene exclude each other")
@@ -136,8 +146,10 @@ def _scene_of(args: argparse.Namespace):
         torque = 0.2 if args.torque is None else args.torque
         friction = DEFAULT_FRICTION_COEFFICIENT if args.friction is None else args.friction
         factor = DEFAULT_PAYLOAD_FACTOR if args.payload_factor is None else args.payload_factor
-        return Scene.preset(name), torque, name, friction, factor
-    spec = load_object(args.object)
+        load_set = load_set_of(None, args.load_set)
+        return Scene.preset(name), torque, name, friction, factor, load_set
+    spec = object_option(args.object)
+    load_set = load_set_of(spec, args.load_set)
     factor = (args.payload_factor if args.payload_factor is not None else spec.payload_factor
               if spec.payload_factor is not None else DEFAULT_PAYLOAD_FACTOR)
     friction = (args.friction if args.friction is not None else spec.friction_coefficient
@@ -150,12 +162,12 @@ def _scene_of(args: argparse.Namespace):
         scene = spec.scene()
         torque = (args.torque if args.torque is not None else spec.gripper.torque_nm
                   if spec.gripper.torque_nm is not None else squeeze)
-        return scene, torque, spec.name, friction, factor
+        return scene, torque, spec.name, friction, factor, load_set
     # no [gripper] table: the paper's gripper, scaled to the object like a relative design
     design = Design.from_array(paper_design_for(spec.disk, 0.2)[0])
     torque = design.torque_nm if args.torque is None else args.torque
     return (design.to_scene(spec.disk), torque, f"{spec.name} (the paper's gripper)", friction,
-            factor)
+            factor, load_set)
 
 
 def _limit_words(res) -> str:
@@ -186,8 +198,9 @@ def _print_text(args: argparse.Namespace, spec, res, load_s: float, name: str,
     verdict = ("holds" if res.holds(friction) else "would slip"
                if all(res.touching) and res.converged
                else "no grasp: a finger does not touch the object")
-    print(f"  payload        : {res.payload_n:.4g} N to lift (grip {res.grip_force_n:.4g} N; "
-          f"at most {friction * res.grip_force_n:.4g} N by friction {friction:g})")
+    print(f"  payload        : {res.payload_n:.4g} N to lift, load set {res.load_set} (grip "
+          f"{res.grip_force_n:.4g} N; at most {friction * res.grip_force_n:.4g} N by friction "
+          f"{friction:g})")
     task = "hold and lift it" if res.payload_n > 0.0 else "hold it"
     print(f"  friction needed: {res.required_friction:.4g} to {task} without the pin "
           f"({_limit_words(res)}); with {friction:g}: {verdict}")

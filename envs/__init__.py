@@ -1,18 +1,21 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2``, ``GripperDesign-v3`` (v2 with shaped
-jaws in the action) and ``GripperDesign-v4`` (v2 with objects that are not disks: ellipses at
-any orientation, their shape observed) with Gymnasium::
+Importing the package registers ``GripperDesign-v2``, ``GripperJawDesign-v0`` (the same task
+with shaped jaws in the action: a separate id, not a later version of v2) and
+``GripperShapeDesign-v0`` (v2's task with objects that are not disks: ellipses at any
+orientation, their shape observed; a separate id too) with Gymnasium::
 
     import gymnasium as gym
     import envs
 
     env = gym.make("GripperDesign-v2")
     vec = gym.make_vec("GripperDesign-v2", num_envs=64, vectorization_mode="vector_entry_point")
-    jaws = gym.make("GripperDesign-v3", jaw="cradle")
+    jaws = gym.make("GripperJawDesign-v0", jaw="cradle")
 """
 
 from __future__ import annotations
+
+import warnings
 
 import gymnasium
 
@@ -48,8 +51,8 @@ __all__ = [
 ]
 
 ENV_ID = "GripperDesign-v2"
-JAW_ENV_ID = "GripperDesign-v3"  # with shaped jaws (envs.design_env.make_vector_env_v3)
-SHAPE_ENV_ID = "GripperDesign-v4"  # ellipses at any orientation, their shape observed
+JAW_ENV_ID = "GripperJawDesign-v0"  # with shaped jaws (envs.design_env.make_vector_env_v3)
+SHAPE_ENV_ID = "GripperShapeDesign-v0"  # ellipses at any orientation, their shape observed
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
@@ -73,6 +76,12 @@ if ENV_ID not in gymnasium.registry:
         # no TimeLimit: the env terminates after its one step by itself, and a TimeLimit of 1
         # would also flag that step as truncated (Gymnasium's checker rejects it)
     )
+
+# v3 is v2 with shaped jaws (a wider action), not a newer v2: Gymnasium's "The environment
+# GripperDesign-v2 is out of date. You should consider upgrading to version `v3`", which it
+# says for any lower version of a registered name, would be wrong advice on every make of v2
+warnings.filterwarnings("ignore", message=r".*The environment GripperDesign-v2 is out of date",
+                        category=DeprecationWarning)
 
 if JAW_ENV_ID not in gymnasium.registry:
     gymnasium.register(

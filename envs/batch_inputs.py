@@ -5,14 +5,15 @@ and the joint springs. One bad row is named by its index.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
+    MAX_SPRING_REL,
     PAPER_TORSION_STIFFNESS_REL,
+    PLAUSIBLE_RANGES,
 )
 from .model.jaw import DESIGN_WIDTHS, JAW_FIELDS, LEFT_JAW_FIELDS
 from .model.layout import N_OUTLINE
@@ -23,7 +24,7 @@ from .scene import (
     Design,
     SoftDisk,
 )
-from .validation import check_integer, check_range
+from .validation import check_integer, check_range, real_array
 
 # ---------------------------------------------------------------------------------------------
 # input normalization
@@ -40,10 +41,7 @@ def _design_table(designs) -> np.ndarray:
             raise ValueError("designs mixes Design objects and other values")
         width = max(d.width for d in designs)
         return np.stack([d.to_array(width) for d in designs])
-    try:
-        arr = np.array(designs, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"designs must be a (B, {N_DESIGN}) array of numbers: {exc}") from None
+    arr = real_array("designs", designs, f"numbers of shape (B, {N_DESIGN})")
     if arr.ndim != 2 or arr.shape[1] not in DESIGN_WIDTHS:
         raise ValueError(
             f"designs must have shape (B, {N_DESIGN}) with columns {DESIGN_FIELDS}, or (B, 10) "
@@ -52,6 +50,11 @@ def _design_table(designs) -> np.ndarray:
             "designs[None] for a single row)"
         )
     return arr
+
+
+def nonfinite_rows(des: np.ndarray) -> np.ndarray:
+    """Indices of the design rows holding a value that is not a finite number (NaN, inf)."""
+    return np.flatnonzero(~np.isfinite(des).all(axis=1))
 
 
 # columns of :func:`_disk_table`; then the object's shape (SHAPE_* of envs.model.layout),
@@ -129,10 +132,10 @@ def _joint_springs(rel, absolute, disk: np.ndarray, batch: int) -> np.ndarray:
     if absolute is not None:
         if rel is not None:
             raise ValueError(SPRING_TWICE)
-        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0, math.inf,
-                        low_open=True)
+        return _per_row("torsion_stiffness_nm_per_rad", absolute, batch, 0.0,
+                        PLAUSIBLE_RANGES["torsion_stiffness_nm_per_rad"][1], low_open=True)
     rel = _per_row("torsion_stiffness_rel", PAPER_TORSION_STIFFNESS_REL if rel is None else rel,
-                   batch, 0.0, math.inf, low_open=True)
+                   batch, 0.0, MAX_SPRING_REL, low_open=True)
     unit = (disk[:, DISK_SCALE] * disk[:, DISK_YOUNG] * disk[:, DISK_THICKNESS]
             * disk[:, DISK_RADIUS] ** 2)
     return rel * unit

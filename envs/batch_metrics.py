@@ -303,8 +303,8 @@ def _soft_disk(row: np.ndarray) -> SoftDisk:
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,
-              kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray
-              ) -> None:
+              kf: np.ndarray, cols: SceneColumns, fem_rings: int, payload_n: np.ndarray,
+              load_set: str = "any") -> None:
     """Solve the rows with the finite-element reference and write the same metrics as
     :func:`_fill_group` does for the point-spring model (same definitions, see
     :func:`evaluate_designs`)."""
@@ -314,7 +314,7 @@ def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, dis
     scenes = [Design.from_array(des[i]).to_scene(_soft_disk(disk[i]), float(kf[i]))
               for i in rows.tolist()]
     fem = fem_metrics(fem_design_grasps(scenes, des[rows, TORQUE_COLUMN], fem_rings,
-                                        payloads_n=payload_n),
+                                        payloads_n=payload_n, load_set=load_set),
                       disk[rows, DISK_RADIUS], des[rows, DISTANCE_COLUMN] + disk[rows, DISK_RADIUS],
                       disk[rows, DISK_OFFSET_X])
     n_contacts = np.nan_to_num(fem["n_contacts"]).astype(np.int64)

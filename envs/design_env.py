@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import operator
 import textwrap
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -39,10 +40,17 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from .model.family import ModelSpec, resolve_model
+from .model.loads import DEFAULT_LOAD_SET, load_set_code
 from .objects import Ellipse, SoftObject
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
-from .validation import check_range
+from .validation import (
+    PsmGraspWarning,
+    check_integer,
+    check_range,
+    check_sequence,
+    real_array,
+)
 
 __all__ = [
     "OBS_FIELDS",
@@ -72,7 +80,7 @@ OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
     ("payload_ratio", "log10", -8.0, 1.0),
     ("placement_tolerance_rel", "linear", 0.0, 0.5),
 )
-# GripperDesign-v4 observes the object's shape after these: an ellipse's aspect ratio and its
+# GripperShapeDesign-v0 observes the object's shape after these: an ellipse's aspect ratio and its
 # orientation as cos(2 psi) (the grasp of an ellipse repeats when it turns by pi, and mirrors
 # when psi changes sign: -psi is the mirror image of psi across the gripper's axis)
 SHAPE_OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
@@ -97,11 +105,15 @@ RENDER_FPS = 4
 ROBUST_KEYS = {"reward_nominal": (np.float64, ()), "worst_scenario": (np.int64, ())}
 
 
+MAX_NUM_ENVS = 2**20  # sub-envs of a vector env at most (each step solves one grasp per sub-env)
+
+
 def _pair(name: str, value, low: float, high: float, *, low_open: bool = True,
           high_open: bool = False) -> tuple[float, float]:
-    pair = tuple(check_range(f"{name}[i]", v, low, high, low_open=low_open,
-                             high_open=high_open) for v in value)
-    if len(pair) != 2 or pair[0] > pair[1]:
+    pair = tuple(check_range(f"{name}[{i}]", v, low, high, low_open=low_open,
+                             high_open=high_open)
+                 for i, v in enumerate(check_sequence(name, value, 2)))
+    if pair[0] > pair[1]:
         raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
     return pair
 
@@ -141,7 +153,7 @@ class ObjectDistribution:
         object's centre may lie anywhere within ``+-`` it along and across the gripper's axis.
     aspect_ratio_range
         An ellipse's aspect ratio ``a / b`` [-], inside [1, 4] (the observable range of
-        ``GripperDesign-v4``): with either range below not a single point, every object is an
+        ``GripperShapeDesign-v0``): with either range below not a single point, every object is an
         ellipse (:class:`envs.objects.Ellipse`) of the drawn radius as its area-equivalent
         radius. Default ``(1, 1)`` with ``orientation_range_rad`` ``(0, 0)``: disks, drawn as
         before (the same random stream).
@@ -347,14 +359,14 @@ def _object_table(disks: list[SoftDisk]) -> np.ndarray:
 
 
 def shape_observation(disks: list[SoftDisk]) -> np.ndarray:
-    """The shape part of ``GripperDesign-v4``'s observation, float32 (B, 2) in [-1, 1]
+    """The shape part of ``GripperShapeDesign-v0``'s observation, float32 (B, 2) in [-1, 1]
     (:data:`SHAPE_OBS_FIELDS`): an ellipse's aspect ratio and ``cos(2 psi)`` (a disk: aspect
     1, ``cos 0``); ``ValueError`` for an outline that is not an ellipse or an aspect ratio
     outside [1, 4]."""
     obs = np.empty((len(disks), len(SHAPE_OBS_FIELDS)), dtype=np.float32)
     for i, d in enumerate(disks):
         if d.outline is not None and not isinstance(d.outline, Ellipse):
-            raise ValueError(f"GripperDesign-v4 observes ellipses and disks, got a "
+            raise ValueError(f"GripperShapeDesign-v0 observes ellipses and disks, got a "
                              f"{d.shape} (row {i})")
         aspect = 1.0 if d.outline is None else d.outline.aspect_ratio
         low, high = _SHAPE_OBS_RANGE["aspect_ratio"]
@@ -409,10 +421,7 @@ def _object_info(disk: SoftDisk, needs: np.ndarray) -> dict[str, float]:
 
 def _check_actions(actions, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Validate actions; return them clipped to [-1, 1] (float64) and a per-row clipped flag."""
-    try:
-        a = np.array(actions, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be numeric with shape {shape}: {exc}") from None
+    a = real_array("action", actions, f"numbers of shape {shape}")
     if a.shape != shape:
         raise ValueError(f"action must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):
@@ -599,7 +608,7 @@ def _n_obs(shapes: bool) -> int:
     return len(OBS_FIELDS) + (len(SHAPE_OBS_FIELDS) if shapes else 0)
 
 
-#: The default objects of ``GripperDesign-v4``: v2's, each an ellipse of aspect ratio 1 to 3
+#: The default objects of ``GripperShapeDesign-v0``: v2's, each an ellipse of aspect ratio 1 to 3
 #: at any orientation (0 to pi/2 covers them all: the grasp of psi + pi is that of psi, and
 #: that of -psi its mirror image)
 SHAPE_DISTRIBUTION = dict(aspect_ratio_range=(1.0, 3.0), orientation_range_rad=(0.0,
@@ -769,7 +778,9 @@ class GripperDesignEnv(gym.Env):
     The episode terminates after its single step (`terminated=True`, `truncated=False`): it is
     a contextual bandit, one object and one design per episode. It is registered without a
     `TimeLimit` (`max_episode_steps=None`), so `check_env(gym.make("GripperDesign-v2"))`
-    passes. Stepping again without a reset evaluates another design on the same object.
+    passes. Stepping again without a reset evaluates another design on the same object, with a
+    warning once an episode (:class:`~envs.validation.PsmGraspWarning`, as Gymnasium's own
+    environments warn): in a training loop it is a forgotten reset.
 
     Vectorized, every step should evaluate a design: `gym.make_vec("GripperDesign-v2", n)`
     (the batched :class:`GripperDesignVectorEnv`) resets ended sub-envs in the same step by
@@ -797,6 +808,9 @@ class GripperDesignEnv(gym.Env):
       disk, 0.0149 per radian: the spring scales with each object like the torque, so an
       action means the same grasp for every object); `torsion_stiffness_nm_per_rad`: an
       absolute spring [N·m/rad] instead. `self.joint_spring` holds the one given.
+    - `load_set`: how the gripper picks, the payload's directions a grasp must hold the
+      object in (`"top-down"`, `"side"` or `"any"`, :mod:`envs.model.loads`; default
+      `"any"`, every direction): a setting of the env, not observed.
 
     `info` holds every metric of :func:`~envs.evaluate.evaluate_designs` (`converged`,
     `valid_at_rest`, `jaw_angles_rad`, `n_contacts`, `peak_strain`, ...), the reward terms,
@@ -805,17 +819,18 @@ class GripperDesignEnv(gym.Env):
 
     ## Version History
 
-    * v4: objects that are not disks. Every object is an ellipse
+    * ``GripperShapeDesign-v0`` (an id of its own beside v2): objects that are not disks.
+      Every object is an ellipse
       (:class:`envs.objects.Ellipse`, the drawn radius its area-equivalent radius ``r_eq``) of
       aspect ratio 1 to 3 at an orientation of 0 to 90 degrees (:data:`SHAPE_DISTRIBUTION`;
       ``ObjectDistribution.aspect_ratio_range`` and ``orientation_range_rad``), placed with
       its lowest point ``d_1`` above the joints' line and the faces clearing it by the
       action's clearance; the observation gains its aspect ratio (linear, 1 to 4) and
       ``cos(2 psi)`` (shape 8). Actions, rewards and the placements are v2's
-      (``gym.make("GripperDesign-v4")``, ``observe_shapes=True``).
+      (``gym.make("GripperShapeDesign-v0")``, ``observe_shapes=True``).
     * v3: shaped jaws. The action gains the jaw columns of the design space
       (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``): a groove cut into the
-      gripping faces, chosen at make, `gym.make("GripperDesign-v3", jaw="cradle")` (default
+      gripping faces, chosen at make, `gym.make("GripperJawDesign-v0", jaw="cradle")` (default
       `"any"`: depth, bottom radius, opening angle and position, shape 10; `"cradle"` and
       `"vee"` 9; `jaw_per_finger=True` doubles the jaw columns). The observation, the
       objects and the reward are v2's; `bounds` may be given too (its jaw is replaced).
@@ -852,7 +867,9 @@ class GripperDesignEnv(gym.Env):
         element: str | None = None,
         calibrated: bool | None = None,
         observe_shapes: bool = False,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
+        load_set_code(load_set)  # (a bad setting at construction, not at the first step)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
@@ -861,8 +878,10 @@ class GripperDesignEnv(gym.Env):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.action_space, self.observation_space = _spaces(self.bounds, self.observe_shapes)
         self._disk: SoftDisk | None = None
+        self._terminated = 0  # steps since the episode ended (it ends with its first)
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
         self._obs = np.zeros(_n_obs(self.observe_shapes), dtype=np.float32)
         self._last_design: np.ndarray | None = None
@@ -885,6 +904,7 @@ class GripperDesignEnv(gym.Env):
         self._disk, self._needs, self._obs = _draw_object(
             self.np_random, self.distribution, opts, self.observe_shapes)
         self._last_design = None
+        self._terminated = 0
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), _object_info(self._disk, self._needs)
@@ -892,16 +912,21 @@ class GripperDesignEnv(gym.Env):
     def step(self, action):
         if self._disk is None:
             raise ResetNeeded("call reset() before step()")
+        if self._terminated == 1:  # said once an episode, as Gymnasium's own envs do
+            warnings.warn("GripperDesignEnv.step() after the episode ended (terminated=True): "
+                          "it evaluates another design on the same object; call reset() for "
+                          "the next episode", PsmGraspWarning, stacklevel=2)
         act, clipped = _check_actions(action, (self.bounds.n_var,))
         design = self.bounds.scale(act, self._disk)
         out = evaluate_objects(design[None, :], [self._disk], self._needs[None, :],
                                weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info = {key: _info_value(v[0]) for key, v in out.items()}
         info["clipped"] = bool(clipped)
         info["design"] = design
         info.update(_object_info(self._disk, self._needs))
         self._last_design = design
+        self._terminated += 1
         if self.render_mode == "human":
             self.render()
         return self._obs.copy(), float(out["reward"][0]), True, False, info
@@ -1003,14 +1028,16 @@ class GripperDesignVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
         observe_shapes: bool = False,
+        load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
-        if isinstance(num_envs, bool) or int(num_envs) != num_envs or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        load_set_code(load_set)
+        num_envs = check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
-        if max_episode_steps is not None and max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be >= 1, got {max_episode_steps!r}")
+        if max_episode_steps is not None:
+            max_episode_steps = check_integer("max_episode_steps", max_episode_steps, 1,
+                                              2**62)
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
@@ -1019,6 +1046,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
+        self.load_set = load_set
         self.max_episode_steps = max_episode_steps
         self.single_action_space, self.single_observation_space = _spaces(
             self.bounds, self.observe_shapes)
@@ -1089,7 +1117,7 @@ class GripperDesignVectorEnv(VectorEnv):
         designs = self.bounds.scale(act, [self._disks[i] for i in rows.tolist()])
         out = evaluate_objects(designs, [self._disks[i] for i in rows.tolist()],
                                self._needs[rows], weights=self.weights, **self.joint_spring,
-                               **self.model.kwargs())
+                               load_set=self.load_set, **self.model.kwargs())
         info: dict[str, np.ndarray] = {}
         mask = self._mask(rows)
         for key, (dtype, shape) in {**METRIC_KEYS, **ROBUST_KEYS}.items():
@@ -1186,7 +1214,7 @@ class GripperDesignVectorEnv(VectorEnv):
 
 def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
                bounds: DesignBounds | None = None) -> DesignBounds:
-    """The design space of ``GripperDesign-v3``: ``bounds`` (default the default box) with
+    """The design space of ``GripperJawDesign-v0``: ``bounds`` (default the default box) with
     the jaws ``jaw`` (one of :data:`envs.design_space.JAW_KINDS`, default ``"any"``) and
     ``jaw_per_finger`` (:meth:`~envs.evaluate.DesignBounds.with_jaw`)."""
     if bounds is not None and not isinstance(bounds, DesignBounds):
@@ -1196,7 +1224,7 @@ def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
 
 
 def make_vector_env_v4(num_envs: int = 1, **kwargs: Any) -> GripperDesignVectorEnv:
-    """The vector entry point of ``GripperDesign-v4``: a :class:`GripperDesignVectorEnv`
+    """The vector entry point of ``GripperShapeDesign-v0``: a :class:`GripperDesignVectorEnv`
     that draws ellipses at any orientation (:data:`SHAPE_DISTRIBUTION` unless a
     ``distribution`` is given) and observes their shape (``observe_shapes=True``)."""
     return GripperDesignVectorEnv(num_envs, observe_shapes=True, **kwargs)
@@ -1205,7 +1233,7 @@ def make_vector_env_v4(num_envs: int = 1, **kwargs: Any) -> GripperDesignVectorE
 def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,
                        bounds: DesignBounds | None = None, **kwargs: Any
                        ) -> GripperDesignVectorEnv:
-    """The vector entry point of ``GripperDesign-v3``: a :class:`GripperDesignVectorEnv`
+    """The vector entry point of ``GripperJawDesign-v0``: a :class:`GripperDesignVectorEnv`
     whose actions carry the jaw columns (:func:`jaw_bounds`); ``kwargs`` as for the class."""
     return GripperDesignVectorEnv(num_envs, bounds=jaw_bounds(jaw, jaw_per_finger, bounds),
                                   **kwargs)

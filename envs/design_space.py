@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import vectorize
 
+from .model.defaults import MAX_TORQUE_UNITS
 from .model.geometry import corner_radius
 from .model.jaw import MAX_DEPTH_OF_WIDTH, MAX_OPENING_RAD, groove_mouth
 from .scene import (
@@ -23,7 +24,7 @@ from .scene import (
     placement_support,
     relative_from_design,
 )
-from .validation import check_range
+from .validation import check_range, check_sequence
 
 __all__ = [
     "DesignBounds",
@@ -33,6 +34,8 @@ __all__ = [
     "JAW_BOUNDS",
     "jaw_mouth_half_width",
     "fitting_depth",
+    "RELATIVE_LIMITS",
+    "touch_foot_r",
 ]
 
 # what the jaws of a design space may be: straight bars (today's six columns), a circular
@@ -106,6 +109,28 @@ def fitting_depth(mouth_half_width, bottom_radius, opening_angle_rad):
     return (m * cb - r * (1.0 - sb)) / sb
 
 
+def touch_foot_r(relative) -> np.ndarray:
+    """Where a gripper's straight gripping face first meets the undeformed disk as the finger
+    closes from rest: the foot of the disk's centre on the finger's axis, its distance from the
+    joint in disk radii, of relative designs (..., 6 or more; :data:`~envs.scene.RELATIVE_FIELDS`).
+
+    In radii, with the joint at ``(d_3, 0)`` and the centre at ``(0, d_1 + 1)`` (``d_1`` of the
+    rest clearance, :func:`~envs.scene.design_from_relative`), the face's distance from the
+    centre is ``d_3 cos theta + (d_1 + 1) sin theta - w / 2``; it meets the disk at the angle
+    where that is 1, and the foot lies ``(d_1 + 1) cos theta - d_3 sin theta`` along the axis.
+    A face that clears the disk at every angle gives the foot at its closest angle.
+    """
+    rel = np.asarray(relative, dtype=np.float64)
+    one = np.ones(rel.shape[:-1])
+    distance = design_from_relative(rel[..., :N_DESIGN], one, one)[..., 5]
+    offset, width = rel[..., _OFFSET_R], rel[..., _WIDTH_R]
+    above = distance + 1.0
+    reach = np.hypot(offset, above)
+    theta = np.arcsin(np.clip((1.0 + 0.5 * width) / reach, -1.0, 1.0)) - np.arctan2(offset,
+                                                                                     above)
+    return above * np.cos(theta) - offset * np.sin(theta)
+
+
 def _scales(disks, batch: int | None) -> tuple[np.ndarray, np.ndarray]:
     """Radius [m] and torque unit ``s E t r^2`` [N·m] of one disk (scalars) or of a sequence of
     ``batch`` disks (arrays (batch,))."""
@@ -120,6 +145,20 @@ def _scales(disks, batch: int | None) -> tuple[np.ndarray, np.ndarray]:
     return (np.array([d.radius_m for d in disks], dtype=np.float64),
             np.array([d.torque_unit_nm for d in disks], dtype=np.float64))
 
+
+# the range each relative column's bounds may take at all: (low, high, low_open, high_open).
+# Lengths up to 100 radii (the default box reaches 8), a finger narrower than the object's
+# diameter, the rest angle in (0, 90 deg) as for a Gripper (in radians: 60 is degrees typed),
+# the torque up to MAX_TORQUE_UNITS (as envs.scene.check_torque), a rest clearance down to
+# an overlap of one radius (a box reaching into overlaps gets the graded invalid penalty)
+RELATIVE_LIMITS: dict[str, tuple[float, float, bool, bool]] = {
+    "finger_length_r": (0.0, 100.0, True, False),
+    "rest_angle_rad": (0.0, math.pi / 2, True, True),
+    "joint_offset_r": (0.0, 100.0, False, False),
+    "finger_width_r": (0.0, 2.0, True, True),
+    "torque_rel": (0.0, MAX_TORQUE_UNITS, False, False),
+    "rest_clearance_r": (-1.0, 100.0, False, False),
+}
 
 # the relative columns the joints-apart option couples (DesignBounds.joints_apart)
 _OFFSET_R = RELATIVE_FIELDS.index("joint_offset_r")
@@ -191,7 +230,10 @@ class DesignBounds:
     Parameters
     ----------
     low, high
-        Lower and upper bound of each of the six relative columns, ``low < high``.
+        Lower and upper bound of each of the six relative columns, ``low < high``, each
+        within :data:`RELATIVE_LIMITS` (lengths up to 100 radii, the finger narrower than the
+        object's diameter, the rest angle in (0, pi/2) radians, the torque up to 10 units, the
+        clearance from -1 to 100 radii).
     joints_apart
         Keep the joints at least half a finger width from the axis (``d_3 >= w / 2``); needs
         ``high`` of ``joint_offset_r`` at least half ``high`` of ``finger_width_r``.
@@ -216,11 +258,12 @@ class DesignBounds:
 
     def __post_init__(self) -> None:
         for name in ("low", "high"):
-            given = tuple(getattr(self, name))
-            if len(given) != N_DESIGN:
-                raise ValueError(f"DesignBounds.{name} needs {N_DESIGN} values, got {len(given)}")
+            given = check_sequence(f"DesignBounds.{name}", getattr(self, name), N_DESIGN)
             # checked as given, not after float(): "0.2" and True are not bounds
-            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v)
+            vals = tuple(check_range(f"DesignBounds.{name}[{field_name}]", v,
+                                     *RELATIVE_LIMITS[field_name][:2],
+                                     low_open=RELATIVE_LIMITS[field_name][2],
+                                     high_open=RELATIVE_LIMITS[field_name][3])
                          for field_name, v in zip(RELATIVE_FIELDS, given, strict=True))
             object.__setattr__(self, name, vals)
         for field_name, lo, hi in zip(RELATIVE_FIELDS, self.low, self.high, strict=True):
@@ -254,7 +297,7 @@ class DesignBounds:
             given = getattr(self, name)
             if given is None:
                 given = tuple(JAW_BOUNDS[self.jaw][c][index] for c in columns)
-            given = tuple(given)
+            given = check_sequence(f"DesignBounds.{name}", given)
             if len(given) != len(columns):
                 raise ValueError(f"DesignBounds.{name} needs {len(columns)} values for jaw "
                                  f"{self.jaw!r} ({', '.join(columns)}), got {len(given)}")
@@ -470,6 +513,53 @@ class DesignBounds:
         if not parts:
             return np.zeros((*d.shape[:-1], 0))
         return np.stack(parts, axis=-1)
+
+    def aligned(self, action, reach_r: float = 1.0) -> np.ndarray:
+        """Actions of this box from actions whose groove-position coordinates are offsets from
+        where the object meets the finger: ``-1`` to ``1`` put the groove's centre ``reach_r``
+        disk radii below to ``reach_r`` above the *touch foot* (:func:`touch_foot_r`), clipped
+        to the span the groove may take. The other coordinates pass unchanged; straight jaws
+        pass whole.
+
+        A groove away from where the object meets the finger leaves a straight bar's grasp,
+        so a search in these coordinates meets useful grooves far more often than one in the
+        box's own, where the position is a share of a span that moves with the finger length
+        and the groove's mouth (:mod:`optim.portfolio`).
+        """
+        a = np.array(action, dtype=np.float64)
+        self._check_width(a, self.n_var, "action")
+        if not self._fingers():
+            return a
+        rel = self.relative(a)
+        foot = touch_foot_r(rel)
+        length, width = rel[..., 0], rel[..., _WIDTH_R]
+        for cols in self._fingers():
+            depth = rel[..., cols[_DEPTH]] * width
+            bottom = self._jaw_value(rel, cols, _RADIUS)
+            opening = self._jaw_value(rel, cols, _OPENING)
+            start = (jaw_mouth_half_width(depth, bottom, opening) + corner_radius(width, 1.0)
+                     + _INSET * length)
+            k = cols[_POSITION]
+            centre = foot + reach_r * a[..., k]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                share = np.clip((centre - start) / (length - 2.0 * start), 0.0, 1.0)
+            a[..., k] = 2.0 * np.nan_to_num(share, nan=0.5) - 1.0
+        return a
+
+    def unaligned(self, action, reach_r: float = 1.0) -> np.ndarray:
+        """The inverse of :meth:`aligned` (search coordinates of this box's actions), where
+        the groove's centre lies within ``reach_r`` radii of the touch foot; farther grooves
+        are brought to that reach."""
+        a = np.array(action, dtype=np.float64)
+        self._check_width(a, self.n_var, "action")
+        if not self._fingers():
+            return a
+        rel = self.relative(a)
+        foot = touch_foot_r(rel)
+        centres = self._jaws_si(rel, np.ones(rel.shape[:-1]))
+        for cols, jaw in zip(self._fingers(), centres, strict=True):
+            a[..., cols[_POSITION]] = np.clip((jaw[..., 3] - foot) / reach_r, -1.0, 1.0)
+        return a
 
     def sample(self, rng: np.random.Generator, size: int, disks) -> np.ndarray:
         """Draw ``size`` SI designs uniformly in the box for the object(s), shape (size,

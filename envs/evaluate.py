@@ -33,7 +33,7 @@ fields prefixed ``left_``). A depth of 0 is the straight bar.
 from __future__ import annotations
 
 import functools
-import math
+import warnings
 
 import numpy as np
 
@@ -56,6 +56,7 @@ from .batch_inputs import (  # noqa: F401 (re-exported: the layouts of the batch
     _joint_springs,
     _payloads,
     _per_row,
+    nonfinite_rows,
 )
 from .batch_metrics import (  # noqa: F401 (re-exported: the metrics' definitions)
     METRIC_KEYS,
@@ -81,18 +82,21 @@ from .model.defaults import (
     FEM_DESIGN_RINGS,
     FEM_MAX_RINGS,
     MAX_FRICTION_COEFFICIENT,
+    PLAUSIBLE_RANGES,
 )
 from .model.family import resolve_model, triangle_range
+from .model.loads import DEFAULT_LOAD_SET, load_set_code
 from .model.problem import REST_OK, rest_codes
 from .reward import RewardWeights, add_reward  # noqa: F401
 from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
     Design,
+    design_fields,
 )
 from .solver.pipeline import solve_columns
-from .solver.status import NOT_SOLVED
-from .validation import check_integer
+from .solver.status import NOT_FINITE, NOT_SOLVED
+from .validation import InputWarning, check_integer
 
 __all__ = [
     "DESIGN_FIELDS",
@@ -109,6 +113,7 @@ __all__ = [
 ]
 
 DEFAULT_CHUNK_SIZE = 256
+MAX_CHUNK_SIZE = 10_000_000  # rows of a chunk at most (MAX_BUDGET's evaluations in one)
 FIDELITIES = ("psm", "fem")
 
 
@@ -116,13 +121,15 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                      kf: np.ndarray, weights: RewardWeights,
                      model: tuple[int, str, float] = (1, "spring", 1.0),
                      fidelity: str = "psm", fem_rings: int = FEM_DESIGN_RINGS,
-                     leaders: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                     leaders: np.ndarray | None = None,
+                     load_set: str = DEFAULT_LOAD_SET) -> dict[str, np.ndarray]:
     """In-process evaluation of validated, normalized inputs (one row per design);
     ``needs``: each object's strain limit, friction coefficient and payload (columns
     ``NEED_*``);
     ``model``: rings, element and the factor of the member's calibration on the disks'
     stiffness scale (``fidelity="psm"``); ``fem_rings``: the FEM mesh (``"fem"``);
-    ``leaders``: validated leader rows (see :func:`evaluate_designs`) or None."""
+    ``leaders``: validated leader rows (see :func:`evaluate_designs`) or None; ``load_set``:
+    the payload's directions (:data:`envs.model.loads.LOAD_SETS`)."""
     batch = des.shape[0]
     n_rings, element, model_scale = model
     out = _empty_output(batch)
@@ -131,6 +138,7 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     out["friction_coefficient"][:] = needs[:, NEED_FRICTION]
     out["payload_n"][:] = needs[:, NEED_PAYLOAD]
     out["status"][:] = NOT_SOLVED
+    out["status"][nonfinite_rows(des)] = NOT_FINITE
     material_scale = disk[:, DISK_SCALE]  # the disks' own (the contact width's modulus)
     if model_scale != 1.0:
         disk = disk.copy()
@@ -150,13 +158,13 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
         out["n_triangles"][:] = 0
         if rows.size:
             _fill_fem(out, rows, des, disk, kf, cols.take(rows), fem_rings,
-                      needs[rows, NEED_PAYLOAD])
+                      needs[rows, NEED_PAYLOAD], load_set)
     for n in (np.unique(n_tri[valid]).tolist() if fidelity == "psm" else ()):
         rows = np.flatnonzero(valid & (n_tri == n))
         group = cols.take(rows)
         sol = solve_columns(group, n, phase_rad=DEFAULT_PHASE_RAD, n_rings=n_rings,
                             element=element, payload_n=needs[rows, NEED_PAYLOAD],
-                            leaders=_group_leaders(leaders, rows))
+                            leaders=_group_leaders(leaders, rows), load_set=load_set)
         _fill_group(out, rows, sol, n, group, material_scale[rows])
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
@@ -170,6 +178,25 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
                        & (out["required_friction"] <= out["friction_coefficient"]))
     add_reward(out, valid, disk[:, DISK_RADIUS], weights)
     return out
+
+
+def _warn_nonfinite(des: np.ndarray) -> None:
+    """One :class:`~envs.validation.InputWarning` naming the rows whose design holds a value
+    that is not a finite number (the first one's column and value): they are flagged
+    (``status`` :data:`~envs.solver.status.NOT_FINITE`, invalid at rest), the others answered."""
+    rows = nonfinite_rows(des)
+    if not rows.size:
+        return
+    first = int(rows[0])
+    col = int(np.flatnonzero(~np.isfinite(des[first]))[0])
+    names = design_fields(des.shape[1])
+    shown = ", ".join(map(str, rows[:5].tolist())) + (", ..." if rows.size > 5 else "")
+    value = float(des[first, col])
+    warnings.warn(
+        f"evaluate_designs: {rows.size} of {des.shape[0]} design rows hold a value that is not a "
+        f"finite number (row {first}: {names[col]} = {value!r}; rows {shown}): they "
+        f"are not solved (status {NOT_FINITE}, valid_at_rest False, the invalid penalty), the "
+        "other rows are answered", InputWarning, stacklevel=3)
 
 
 def _group_leaders(leaders: np.ndarray | None, rows: np.ndarray) -> np.ndarray | None:
@@ -211,10 +238,11 @@ def _chunk_leaders(leaders: np.ndarray | None, start: int, size: int) -> np.ndar
 
 def _evaluate_chunk(chunk: tuple[np.ndarray, ...], weights: RewardWeights,
                     model: tuple[int, str, float] = (1, "spring", 1.0), fidelity: str = "psm",
-                    fem_rings: int = FEM_DESIGN_RINGS) -> dict[str, np.ndarray]:
+                    fem_rings: int = FEM_DESIGN_RINGS,
+                    load_set: str = DEFAULT_LOAD_SET) -> dict[str, np.ndarray]:
     *arrays, leaders = chunk
     return _evaluate_arrays(*arrays, weights=weights, model=model, fidelity=fidelity,
-                            fem_rings=fem_rings, leaders=leaders)
+                            fem_rings=fem_rings, leaders=leaders, load_set=load_set)
 
 
 def _result_of(item):
@@ -235,6 +263,7 @@ def evaluate_designs(
     friction_coefficients=None,
     offsets_x_m=None,
     payload_factors=None,
+    load_set: str = DEFAULT_LOAD_SET,
     executor=None,
     chunk_size: int | None = None,
     n_rings: int | None = None,
@@ -304,10 +333,16 @@ def evaluate_designs(
     payload_factors
         Payload factor ``f`` [-], in [0, 100]; scalar or shape (B,). The grasp must carry the
         payload ``W = f m g`` (``m = rho pi r^2 t`` of each row's disk, its
-        ``density_kg_m3``; g = 9.81 m/s^2) by friction, out of the plane and in every in-plane
-        direction, besides the centre's reaction (:mod:`envs.model.holding`). Default
+        ``density_kg_m3``; g = 9.81 m/s^2) in every direction of the ``load_set``, besides
+        the centre's reaction, the freed object's normal forces moved by each load as the
+        grasp's stiffness decides (:mod:`envs.model.loads`). Default
         :data:`~envs.model.defaults.DEFAULT_PAYLOAD_FACTOR` (2: the weight plus a lift at 1 g);
         0 turns the payload off (the reaction alone).
+    load_set
+        How the gripper picks, the payload's directions (one for the whole batch):
+        ``"top-down"`` (along the gripper's axis, towards the tips and back), ``"side"`` (out
+        of the plane, both ways) or ``"any"`` (every in-plane direction and out of the plane;
+        default, :data:`envs.model.loads.DEFAULT_LOAD_SET`).
     executor
         ``None``: evaluate in this process (the rows of each N group run in parallel threads).
         Otherwise any object with ``.map(fn, iterable)`` (``concurrent.futures`` executors, a
@@ -360,7 +395,9 @@ def evaluate_designs(
           and every output is finite (FEM: Newton converged, no element inverted).
         - ``stable``, ``status``, ``iterations``: solver diagnostics; ``status`` is a public
           code of :mod:`envs.solver.status` (-1: not solved, 0: converged, 8: folded, 11: the
-          independent check failed, 12: the FEM did not converge, ...; message in
+          independent check failed, 12: the FEM did not converge, 13: a design value is not a
+          finite number, NaN or inf: not solved, and an
+          :class:`~envs.validation.InputWarning` names the rows; ...; message in
           ``STATUS_MESSAGES``); FEM: Newton iterations.
         - ``n_triangles``: the model's contour points ``N`` (FEM: its quadratic triangles).
         - ``jaw_angles_rad`` (B, 2): right and left finger angles [rad].
@@ -402,12 +439,13 @@ def evaluate_designs(
           push the object out of the grip, along +y); ``pin_moment_nm``: its moment about the
           centre [N·m] (a hub's; ~0 for the fan's pin). FEM: the hub's reaction.
         - ``required_friction``: the smallest Coulomb coefficient with which friction at the
-          contacts could carry that force and moment instead of the centre [-]
-          (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction
-          can (one finger touching); ``tan(theta)`` for a symmetric grasp on the faces at
-          finger angle ``theta``. It includes the payload: friction must carry the reaction
-          plus ``payload_n`` out of the plane (3-D Coulomb cones, exact) and in every in-plane
-          direction (closed form).
+          contacts holds the object freed of its centre [-] (:mod:`envs.model.loads`): the
+          centre's reaction and ``payload_n`` in every direction of the ``load_set`` are loads
+          on the free object, whose normal forces move under each as the grasp's stiffness
+          decides; friction carries what they leave (3-D Coulomb cones out of the plane). 0
+          when nothing is carried, ``inf`` when no friction can (one finger touching);
+          ``tan(theta)`` for a symmetric grasp on the faces at finger angle ``theta`` without
+          a payload.
         - ``payload_n``: the payload ``W = f rho pi r^2 t g`` the required friction includes
           [N] (0 with ``payload_factors=0``); ``grip_force_n``: the sum of the contacts'
           normal forces [N] (``mu * grip_force_n >= payload_n`` is necessary to lift the
@@ -432,8 +470,9 @@ def evaluate_designs(
     Raises
     ------
     ValueError
-        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets). Physically
-        invalid designs do not raise.
+        For malformed inputs (shapes, disks, N, strain limits, ``k_f``, offsets; designs of
+        strings or booleans, which numpy would turn into numbers). Physically invalid designs
+        do not raise, nor do rows holding NaN or inf (status 13, see above).
     """
     weights = RewardWeights() if weights is None else weights
     if not isinstance(weights, RewardWeights):
@@ -447,10 +486,11 @@ def evaluate_designs(
         if given:
             raise ValueError(f"{', '.join(given)} choose a point-spring member: leave them None "
                              "with fidelity='fem' (its mesh is set by fem_rings)")
-        fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
+    fem_rings = check_integer("fem_rings", fem_rings, 2, FEM_MAX_RINGS)
     des = _design_table(designs)
     batch = des.shape[0]
     disk = _disk_table(disks, batch)
+    _warn_nonfinite(des)
     n_each = np.asarray(n_triangles, dtype=object)
     spec = resolve_model(None if n_each.ndim else n_triangles, n_rings,
                          DEFAULT_ELEMENT if element is None else element, calibrated)
@@ -470,18 +510,18 @@ def evaluate_designs(
         else friction_coefficients, batch, 0.0, MAX_FRICTION_COEFFICIENT, low_open=True)
     needs[:, NEED_PAYLOAD] = _payloads(disks, batch, DEFAULT_PAYLOAD_FACTOR
                                        if payload_factors is None else payload_factors)
+    load_set_code(load_set)  # (validated before any work)
     kf = _joint_springs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad, disk, batch)
     if offsets_x_m is not None:
-        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch, -math.inf,
-                                          math.inf, low_open=False)
+        disk[:, DISK_OFFSET_X] = _per_row("offsets_x_m", offsets_x_m, batch,
+                                          *PLAUSIBLE_RANGES["offset_x_m"], low_open=False)
     leaders = _check_leaders(leaders, batch) if fidelity == "psm" else None
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE if fidelity == "psm" else 1
-    if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
-        raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    chunk_size = check_integer("chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
     if executor is None:
         return _evaluate_arrays(des, disk, n_tri, needs, kf, weights, model, fidelity,
-                                fem_rings, leaders)
+                                fem_rings, leaders, load_set)
     if not callable(getattr(executor, "map", None)):
         raise ValueError("executor must have a .map(fn, iterable) method")
     starts = range(0, batch, int(chunk_size))
@@ -489,7 +529,7 @@ def evaluate_designs(
     chunks = [(*(a[s : s + int(chunk_size)] for a in (des, disk, n_tri, needs, kf)),
                _chunk_leaders(leaders, s, int(chunk_size))) for s in starts]
     fn = functools.partial(_evaluate_chunk, weights=weights, model=model, fidelity=fidelity,
-                           fem_rings=fem_rings)
+                           fem_rings=fem_rings, load_set=load_set)
     parts = [_result_of(p) for p in executor.map(fn, chunks)]
     if not parts:
         return _empty_output(0)

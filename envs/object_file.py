@@ -15,6 +15,8 @@ A designer's own object is four numbers and, optionally, what the design must re
                                     # [along, across] the gripper's axis
     density_kg_m3 = 1000          # optional: its density (default 1000, water-like)
     payload_factor = 2            # optional: payload W = f m g to lift (default 2; 0: none)
+    load_set = "top-down"         # optional: how it is picked, the payload's directions:
+                                  # "top-down", "side" or "any" (default: the command's, any)
     jaw = "cradle"                # optional: the jaws to design, "straight" (default),
                                   # "cradle", "vee" or "any" (envs.design_space.DesignBounds)
     jaw_per_finger = false        # optional: each finger its own groove (default false)
@@ -47,6 +49,15 @@ design is made for the ranges' centre and judged over the scenarios of :mod:`env
     torque_nm = 0.02              # optional (default: the command's --torque)
     torsion_stiffness_nm_per_rad = 0.001  # optional (default: relative to the object)
 
+    [gripper.tolerances]          # optional: manufacturing tolerances the design must survive
+    length_mm = 0.1               # finger length, width and joint offset, +-
+    angle_deg = 0.5               # rest angle, +-
+    spring_percent = 10           # joint spring, +-
+    torque_percent = 5            # actuation torque, +-
+
+The tolerances (:mod:`envs.tolerances`) are scenario dimensions of the design beside the
+object's ranges (the ``[gripper]`` table may hold them alone, without a gripper).
+
 Every key is checked before any work: an unknown key, a missing key or a bad value is one
 ``ValueError`` naming the file, the table, the key and the allowed range. A radius, thickness,
 modulus or density outside the plausible range of a graspable object
@@ -69,18 +80,21 @@ from .model.defaults import (
     MAX_PAYLOAD_FACTOR,
     OBJECT_DENSITY_KG_M3,
 )
+from .model.loads import LOAD_SETS
 from .objects import SHAPE_NAMES, as_object, outline_info, outline_of
 from .objects.files import OUTLINE_UNITS, read_outline
 from .scenarios import OUTLINE_RANGE_FIELDS, RANGE_FIELDS, Scenarios
-from .scene import Gripper, Scene, SoftDisk, joint_spring_nm_per_rad
-from .validation import check_range, read_text_file, unit_slip
+from .scene import Gripper, Scene, SoftDisk, check_torque, joint_spring_nm_per_rad
+from .tolerances import Tolerances, parse_tolerances
+from .validation import check_plausible, check_range, read_text_file
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["ObjectSpec", "GripperSpec", "load_object", "OBJECT_KEYS", "GRIPPER_KEYS"]
+__all__ = ["ObjectSpec", "GripperSpec", "load_object", "OBJECT_KEYS", "GRIPPER_KEYS",
+           "OBJECT_TABLE_KEYS", "check_value"]
 
 # key -> (low, high, low_open, high_open, required) of the [object] table
 OBJECT_KEYS: dict[str, tuple[float, float, bool, bool, bool]] = {
@@ -118,6 +132,13 @@ _LENGTH_RULE = (0.0, math.inf, True, False, False)
 _SHAPE_NEEDS = {"ellipse": ("semi_axes_m",), "superellipse": ("semi_axes_m", "exponent"),
                 "rounded_rectangle": ("sides_m", "corner_radius_m"),
                 "measured": ("outline_file", "outline_unit")}
+# how the object is picked: the payload's directions (envs.model.loads.LOAD_SETS)
+LOAD_SET_KEY = "load_set"
+# the [gripper] table's manufacturing tolerances (envs.tolerances.TOLERANCE_KEYS)
+TOLERANCES_KEY = "tolerances"
+# every key of the [object] table, in the order the unknown-key message lists them
+OBJECT_TABLE_KEYS = ("name", TOLERANCE_KEY, *OBJECT_KEYS, JAW_KEY, JAW_PER_FINGER_KEY,
+                     LOAD_SET_KEY, *SHAPE_KEYS)
 
 
 @dataclass(frozen=True)
@@ -163,9 +184,15 @@ class ObjectSpec:
         the ranges' centre.
     payload_factor
         ``f`` of the payload to lift, or ``None``.
+    load_set
+        How the object is picked, the payload's directions
+        (:data:`envs.model.loads.LOAD_SETS`), or ``None`` (the caller's default).
     jaw, jaw_per_finger
         The jaws to design (one of :data:`envs.design_space.JAW_KINDS`) and whether each
         finger has its own groove, or ``None`` (the caller's default: straight bars).
+    tolerances
+        The ``[gripper.tolerances]`` table (:class:`envs.tolerances.Tolerances`), or ``None``;
+        ``scenarios`` then carries them too.
     """
 
     name: str
@@ -178,6 +205,8 @@ class ObjectSpec:
     payload_factor: float | None = None
     jaw: str | None = None
     jaw_per_finger: bool | None = None
+    load_set: str | None = None
+    tolerances: Tolerances | None = None
 
     def scene(self) -> Scene:
         """The scene of the ``[gripper]`` table and this object.
@@ -209,6 +238,7 @@ class ObjectSpec:
                 "strain_limit": self.strain_limit,
                 "friction_coefficient": self.friction_coefficient,
                 "payload_factor": self.payload_factor,
+                **({} if self.load_set is None else {LOAD_SET_KEY: self.load_set}),
                 "file": None if self.path is None else str(self.path),
                 **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict()}),
                 **{k: v for k, v in ((JAW_KEY, self.jaw),
@@ -219,20 +249,25 @@ class ObjectSpec:
         return str(self.path) if self.path is not None else self.name
 
 
+def check_value(key: str, value: Any, rule: tuple[float, float, bool, bool, bool]) -> float:
+    """One number of an object's description (a key of :data:`OBJECT_KEYS` or
+    :data:`GRIPPER_KEYS` with its rule), wherever it is read (an object file, a run's result):
+    a number (not a bool or a string: ``True`` is not 1 m), in the key's allowed range and in
+    its plausible range (:func:`envs.validation.check_plausible`); ``ValueError`` naming
+    ``key`` otherwise."""
+    low, high, low_open, high_open, _ = rule
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{key} must be a number, got {value!r}")
+    check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+    return check_plausible(key, value)
+
+
 def _number(where: str, key: str, value: Any, rule: tuple[float, float, bool, bool, bool]
             ) -> float:
-    low, high, low_open, high_open, _ = rule
-    # TOML has booleans and strings: neither is a number here (True is not 1 m)
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{where}: {key} must be a number, got {value!r}")
     try:
-        value = check_range(key, value, low, high, low_open=low_open, high_open=high_open)
+        return check_value(key, value, rule)
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
-    slip = unit_slip(key, value)
-    if slip is not None:
-        raise ValueError(f"{where}: {slip}")
-    return value
 
 
 def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...] = (),
@@ -250,17 +285,24 @@ def _table(where: str, data: dict[str, Any], rules: dict, extra: tuple[str, ...]
     return {k: _number(where, k, v, rules[k]) for k, v in data.items() if k in rules}
 
 
-def _gripper(where: str, data: Any) -> GripperSpec:
+def _gripper(where: str, data: Any) -> tuple[GripperSpec | None, Tolerances | None]:
+    """The ``[gripper]`` table: a gripper (``None`` when the table holds only tolerances) and
+    its ``tolerances`` sub-table (``None`` without one)."""
     if not isinstance(data, dict):
         raise ValueError(f"{where}: must be a table")
-    values = _table(where, data, GRIPPER_KEYS)
+    data = dict(data)
+    tolerances = (parse_tolerances(data.pop(TOLERANCES_KEY), f"{where}: {TOLERANCES_KEY}")
+                  if TOLERANCES_KEY in data else None)
+    if not data and tolerances is not None:
+        return None, tolerances
+    values = _table(where, data, GRIPPER_KEYS, after=(TOLERANCES_KEY,))
     if ("rest_angle_deg" in values) == ("rest_angle_rad" in values):
         raise ValueError(f"{where}: give the rest angle once, as rest_angle_deg or "
                          "rest_angle_rad")
     angle = values.pop("rest_angle_rad", None)
     if angle is None:
         angle = math.radians(values.pop("rest_angle_deg"))
-    return GripperSpec(rest_angle_rad=angle, **values)
+    return GripperSpec(rest_angle_rad=angle, **values), tolerances
 
 
 def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
@@ -284,14 +326,21 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
     jaw, per_finger = _jaws(f"{where}: [object]", table.pop(JAW_KEY, None),
                             table.pop(JAW_PER_FINGER_KEY, None))
+    load_set = table.pop(LOAD_SET_KEY, None)
+    if load_set is not None and (not isinstance(load_set, str) or load_set not in LOAD_SETS):
+        raise ValueError(f"{where}: [object] {LOAD_SET_KEY} must be one of "
+                         f"{', '.join(repr(k) for k in LOAD_SETS)}, got {load_set!r}")
     table, ranges = _ranges(f"{where}: [object]", table)
     values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
-                    after=(JAW_KEY, JAW_PER_FINGER_KEY, *SHAPE_KEYS))
+                    after=(JAW_KEY, JAW_PER_FINGER_KEY, LOAD_SET_KEY, *SHAPE_KEYS))
     ranges.update(axis_ranges)
+    gripper, tolerances = (_gripper(f"{where}: [gripper]", data["gripper"])
+                           if "gripper" in data else (None, None))
     scenarios = None
-    if ranges or tolerance is not None or turn is not None:
+    if ranges or tolerance is not None or tolerances is not None or turn is not None:
         try:
-            scenarios = Scenarios.of(ranges, tolerance, turn)
+            scenarios = Scenarios.of(ranges, tolerance, tolerances, turn)
+            scenarios.check_placement(values["radius_m"])  # (the ranges' centre)
         except ValueError as exc:
             raise ValueError(f"{where}: [object]: {exc}") from None
     disk = as_object(SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
@@ -299,10 +348,16 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
                               values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
                               density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3)),
                      **outline)
-    gripper = _gripper(f"{where}: [gripper]", data["gripper"]) if "gripper" in data else None
+    if gripper is not None and gripper.torque_nm is not None:
+        try:  # a torque far beyond what squeezes this object (N·mm typed for N·m)
+            check_torque("torque_nm", data["gripper"]["torque_nm"], disk.torque_unit_nm,
+                         joint_spring_nm_per_rad(disk, None,
+                                                 gripper.torsion_stiffness_nm_per_rad))
+        except ValueError as exc:
+            raise ValueError(f"{where}: [gripper]: {exc}") from None
     return ObjectSpec(name.strip(), disk, values.get("strain_limit"),
                       values.get("friction_coefficient"), gripper, path, scenarios,
-                      values.get("payload_factor"), jaw, per_finger)
+                      values.get("payload_factor"), jaw, per_finger, load_set, tolerances)
 
 
 def _jaws(where: str, jaw: Any, per_finger: Any) -> tuple[str | None, bool | None]:
@@ -336,8 +391,14 @@ def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str
                              f"allowed for {allowed})")
         if len(value) != 2:
             raise ValueError(f"{where}: {key} as a range must be [low, high], got {value!r}")
-        low, high = (_number(where, f"{key}[{i}]", v, OBJECT_KEYS[key])
-                     for i, v in enumerate(value))
+        ends = []
+        for end, v in zip(("low", "high"), value, strict=True):
+            try:  # each end like the key's single value, the range quoted as written
+                ends.append(check_value(key, v, OBJECT_KEYS[key]))
+            except ValueError as exc:
+                raise ValueError(f"{where}: {key} = {_written(value)}: its {end} end: {exc}"
+                                 ) from None
+        low, high = ends
         if not low <= high:
             raise ValueError(f"{where}: {key} = {value!r}: low must not exceed high")
         ranges[key] = (low, high)
@@ -446,6 +507,12 @@ def _measured(where: str, given: dict[str, Any], folder: Path):
                          f"got {unit!r}")
     path = Path(name)
     return read_outline(path if path.is_absolute() else folder / path, unit)
+
+
+def _written(value: list) -> str:
+    """A TOML array as the file writes it (``[10, 15]``)."""
+    return "[" + ", ".join(repr(v) if not isinstance(v, bool) else str(v).lower()
+                           for v in value) + "]"
 
 
 def _tolerance(where: str, value: Any) -> float | tuple[float, float] | None:

@@ -60,7 +60,7 @@ def make_env(**kwargs: Any) -> gym.Env:
 
 def make_env_v3(*, jaw: str = "any", jaw_per_finger: bool = False, bounds=None,
                 **kwargs: Any) -> gym.Env:
-    """The entry point of ``GripperDesign-v3``: :func:`make_env` with the jaw columns in the
+    """The entry point of ``GripperJawDesign-v0``: :func:`make_env` with the jaw columns in the
     action (:func:`envs.design_env.jaw_bounds`: ``jaw`` one of ``"straight"``, ``"cradle"``,
     ``"vee"``, ``"any"`` (default), ``jaw_per_finger``)."""
     return make_env(bounds=jaw_bounds(jaw, jaw_per_finger, bounds), **kwargs)
@@ -68,7 +68,7 @@ def make_env_v3(*, jaw: str = "any", jaw_per_finger: bool = False, bounds=None,
 
 # gym.make reads the render modes from its entry point
 def make_env_v4(**kwargs: Any) -> gym.Env:
-    """The entry point of ``GripperDesign-v4``: :func:`make_env` of an env that draws
+    """The entry point of ``GripperShapeDesign-v0``: :func:`make_env` of an env that draws
     ellipses at any orientation and observes their shape (``observe_shapes=True``)."""
     return make_env(observe_shapes=True, **kwargs)
 

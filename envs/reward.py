@@ -4,7 +4,6 @@ metrics (:func:`add_reward`, the compiled :func:`envs.scoring.reward_rows`).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -24,6 +23,8 @@ from .scoring import (
     reward_rows,
 )
 from .validation import check_range
+
+MAX_WEIGHT = 1e3  # a reward weight at most: 1000 times another is no longer a weighting
 
 
 @dataclass(frozen=True)
@@ -104,8 +105,8 @@ class RewardWeights:
         for f in fields(self):
             low_open = f.name.endswith("_cap") or f.name in ("slip", "miss")
             low = 1.0 if f.name == "deform_cap" else 0.0
-            v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), low, math.inf,
-                            low_open=low_open)
+            v = check_range(f"RewardWeights.{f.name}", getattr(self, f.name), low,
+                            MAX_WEIGHT, low_open=low_open)
             object.__setattr__(self, f.name, v)
         worst_valid = self.deform * self.deform_cap + self.slip + 2 * self.miss + self.gap
         if self.fail < worst_valid:

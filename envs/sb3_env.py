@@ -318,7 +318,7 @@ def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs: Any):
         ``render_mode`` (``None`` or ``"rgb_array"``), ``bounds``, ``distribution``,
         ``weights``, ``n_triangles``, ``torsion_stiffness_rel`` (the joint spring relative to
         each object, the default) or ``torsion_stiffness_nm_per_rad`` (absolute), ...: as for
-        :class:`~envs.design_env.GripperDesignVectorEnv`. Shaped jaws (GripperDesign-v3's
+        :class:`~envs.design_env.GripperDesignVectorEnv`. Shaped jaws (GripperJawDesign-v0's
         actions): ``bounds=envs.design_env.jaw_bounds("cradle")``; the action space is as wide
         as the bounds' columns.
 

@@ -9,7 +9,6 @@ angles are measured from +y, positive when opening.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -22,8 +21,11 @@ from .model.defaults import (
     DEFAULT_STIFFNESS_SCALE,
     DEFAULT_THICKNESS_M,
     DEFAULT_YOUNGS_MODULUS_PA,
+    FOAM_DENSITY_KG_M3,
     GRAVITY_M_S2,
     MAX_PAYLOAD_FACTOR,
+    MAX_SPRING_REL,
+    MAX_TORQUE_UNITS,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
     PAPER_TORSION_STIFFNESS_REL,
     TPU_DENSITY_KG_M3,
@@ -50,7 +52,7 @@ from .model.problem import (
     _clearance,
     rest_codes,
 )
-from .validation import UnitSlipWarning, check_range, check_real, unit_slip
+from .validation import check_plausible, check_range, check_real, slip_hint
 
 __all__ = [
     "Gripper",
@@ -70,6 +72,7 @@ __all__ = [
     "joint_spring",
     "joint_spring_kwargs",
     "joint_spring_nm_per_rad",
+    "check_torque",
 ]
 
 # A design is six numbers in SI units, in this column order.
@@ -145,6 +148,10 @@ def design_mapping(row) -> dict[str, float]:
 # a 70 mm foam disk and a 2 mm TPU bead; and a positive clearance is valid at rest by
 # construction, which an independent placement ``d_1 / r`` is not (a third of such a box
 # overlaps the fingers at small rest angles).
+# the fields of a SoftDisk with a plausible range (envs.model.defaults.PLAUSIBLE_RANGES)
+PLAUSIBLE_DISK_FIELDS = ("radius_m", "distance_m", "thickness_m", "youngs_modulus_pa",
+                         "stiffness_scale", "offset_x_m", "density_kg_m3")
+
 RELATIVE_FIELDS = (
     "finger_length_r",
     "rest_angle_rad",
@@ -158,6 +165,10 @@ RELATIVE_FIELDS = (
 @dataclass(frozen=True)
 class Gripper:
     """Symmetric angular gripper with two rigid fingers on revolute joints.
+
+    A length or a joint spring outside its plausible range
+    (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: ``finger_length_m = 200`` was most likely
+    typed in millimetres) is refused, naming the likely unit.
 
     Parameters
     ----------
@@ -207,6 +218,7 @@ class Gripper:
         )
         for f in fields(self):
             if f.name not in ("jaw", "left_jaw"):
+                check_plausible(f.name, getattr(self, f.name))
                 object.__setattr__(self, f.name, float(getattr(self, f.name)))
         for name in ("jaw", "left_jaw"):
             value = getattr(self, name)
@@ -229,6 +241,10 @@ class SoftDisk:
     An object that is not a disk is an :class:`envs.objects.SoftObject`, this class with an
     ``outline`` and an ``orientation_rad`` (built by :func:`envs.objects.soft_object`); a
     disk's ``outline`` is ``None``.
+
+    A radius, thickness, modulus, density, stiffness scale or placement outside its plausible
+    range (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
+    is refused, naming the likely unit (:func:`~envs.validation.check_plausible`).
 
     Parameters
     ----------
@@ -264,12 +280,13 @@ class SoftDisk:
         invalid (:data:`~envs.model.problem.REST_OFFSET`).
     density_kg_m3
         Density ``rho`` of the object [kg/m^3], > 0: its mass ``rho pi r^2 t`` is the payload
-        a grasp must carry (:meth:`payload_n`). Default 50, the paper's soft foam
-        (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`); soft tissue ~1060, fruit
-        950-1050, silicone ~1100. A radius, thickness, modulus or density outside the
-        plausible range of a graspable object (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`:
-        most likely typed in another unit) gives a :class:`~envs.validation.UnitSlipWarning`
-        naming the likely unit.
+        a grasp must carry (:meth:`payload_n`). Default 1000, water-like, as in an object file
+        (:data:`~envs.model.defaults.DEFAULT_DENSITY_KG_M3`); soft tissue ~1060, fruit
+        950-1050, silicone ~1100; the paper's presets are soft foam, 50
+        (:data:`~envs.model.defaults.FOAM_DENSITY_KG_M3`). A radius, thickness, modulus or
+        density outside the plausible range of a graspable object
+        (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
+        gives a :class:`~envs.validation.UnitSlipWarning` naming the likely unit.
     """
 
     radius_m: float
@@ -299,12 +316,10 @@ class SoftDisk:
         check_range("area_stiffness_scale", self.area_stiffness_scale, 0.0, 1e3)
         check_range("offset_x_m", self.offset_x_m)
         check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
+        for name in PLAUSIBLE_DISK_FIELDS:  # (as given: quoted as the caller wrote it)
+            check_plausible(name, getattr(self, name))
         for f in fields(SoftDisk):  # (a SoftObject's outline is not a number)
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
-        for name in ("radius_m", "thickness_m", "youngs_modulus_pa", "density_kg_m3"):
-            slip = unit_slip(name, getattr(self, name))
-            if slip is not None:
-                warnings.warn(f"SoftDisk: {slip}", UnitSlipWarning, stacklevel=3)
 
     @property
     def mass_kg(self) -> float:
@@ -472,6 +487,13 @@ class Scene:
         gripper, disk = PRESETS[name]
         return cls(gripper, disk)
 
+    def check_torque(self, torque_nm, name: str = "torque_nm") -> float:
+        """Validate an actuation torque on this scene [N·m] (:func:`check_torque`: at most
+        :data:`~envs.model.defaults.MAX_TORQUE_UNITS` torque units of the disk beyond its
+        joint springs); returns it as ``float``."""
+        return check_torque(name, torque_nm, self.disk.torque_unit_nm,
+                            self.gripper.torsion_stiffness_nm_per_rad)
+
     def with_changes(self, **changes) -> Scene:
         """Return a copy with gripper or disk fields replaced by name."""
         gk = {k: v for k, v in changes.items() if k in Gripper.__dataclass_fields__}
@@ -593,6 +615,31 @@ SPRING_TWICE = ("give the joint spring once: torsion_stiffness_rel (relative to 
                 "torsion_stiffness_nm_per_rad (absolute), not both")
 
 
+def check_torque(name: str, torque_nm, torque_unit_nm: float,
+                 torsion_stiffness_nm_per_rad: float) -> float:
+    """Validate an actuation torque [N·m] on an object and gripper: a real number >= 0 and
+    at most :data:`~envs.model.defaults.MAX_TORQUE_UNITS` of the object's torque unit ``s E t
+    r^2`` (``torque_unit_nm``, :attr:`SoftDisk.torque_unit_nm`) beyond the moment of the joint
+    springs when the fingers close fully (``k_f pi / 2``); returns it as ``float``.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``name``, the value, the plausible range and the unit it was most
+        likely typed in (N·mm for N·m).
+    """
+    t = check_range(name, torque_nm, 0.0, math.inf)
+    springs = torsion_stiffness_nm_per_rad * math.pi / 2.0
+    ceiling = MAX_TORQUE_UNITS * torque_unit_nm + springs
+    if t > ceiling:
+        raise ValueError(
+            f"{name} = {torque_nm!r} is outside the plausible range [0, {ceiling:.4g}] N·m of "
+            f"this object and gripper ({MAX_TORQUE_UNITS:g} of the object's torque unit s E t "
+            f"r^2 = {torque_unit_nm:.4g} N·m beyond the joint springs' {springs:.4g} N·m at "
+            "full closing)" + slip_hint(name, t, lambda x: x <= ceiling))
+    return t
+
+
 def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
                  ) -> tuple[float | None, float | None]:
     """The joint torsion spring of a design problem, validated: ``(rel, None)`` or
@@ -602,8 +649,10 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
     ``torsion_stiffness_rel`` is ``k_f`` in the object's torque unit ``s E t r^2`` per radian
     [1/rad] (:attr:`SoftDisk.torque_unit_nm`), the default (both ``None``) the paper gripper's
     ``0.073 N·m/rad`` over its r = 0.07 m disk's 4.9 N·m
-    (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`). An absolute spring is asked for
-    by name, ``torsion_stiffness_nm_per_rad`` [N·m/rad]. Both must be positive and finite.
+    (:data:`~envs.model.defaults.PAPER_TORSION_STIFFNESS_REL`), at most
+    :data:`~envs.model.defaults.MAX_SPRING_REL`. An absolute spring is asked for by name,
+    ``torsion_stiffness_nm_per_rad`` [N·m/rad], in its plausible range (up to 1e4 N·m/rad).
+    Both must be positive and finite.
 
     Raises
     ------
@@ -613,10 +662,12 @@ def joint_spring(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
     if torsion_stiffness_nm_per_rad is not None:
         if torsion_stiffness_rel is not None:
             raise ValueError(SPRING_TWICE)
-        return None, check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad,
-                                 0.0, math.inf, low_open=True)
+        check_range("torsion_stiffness_nm_per_rad", torsion_stiffness_nm_per_rad, 0.0,
+                    math.inf, low_open=True)
+        return None, check_plausible("torsion_stiffness_nm_per_rad",
+                                     torsion_stiffness_nm_per_rad)
     rel = PAPER_TORSION_STIFFNESS_REL if torsion_stiffness_rel is None else torsion_stiffness_rel
-    return check_range("torsion_stiffness_rel", rel, 0.0, math.inf, low_open=True), None
+    return check_range("torsion_stiffness_rel", rel, 0.0, MAX_SPRING_REL, low_open=True), None
 
 
 def joint_spring_kwargs(torsion_stiffness_rel=None, torsion_stiffness_nm_per_rad=None
@@ -744,9 +795,9 @@ TPU_MODULUS_PA = 29e6
 TPU_SCALE = 0.033
 
 PRESETS: dict[str, tuple[Gripper, SoftDisk]] = {
-    "paper-r050": (PAPER_GRIPPER, SoftDisk(0.05, 0.004)),
-    "paper-r070": (PAPER_GRIPPER, SoftDisk(0.07, 0.013)),
-    "paper-r100": (PAPER_GRIPPER, SoftDisk(0.10, 0.025)),
+    "paper-r050": (PAPER_GRIPPER, SoftDisk(0.05, 0.004, density_kg_m3=FOAM_DENSITY_KG_M3)),
+    "paper-r070": (PAPER_GRIPPER, SoftDisk(0.07, 0.013, density_kg_m3=FOAM_DENSITY_KG_M3)),
+    "paper-r100": (PAPER_GRIPPER, SoftDisk(0.10, 0.025, density_kg_m3=FOAM_DENSITY_KG_M3)),
 }
 for _tag, (_r_mm, _d_mm) in zip(
     "abcdef", [(2, 11), (2, 15), (2.5, 13), (2.5, 16), (3, 13), (3, 15)], strict=True

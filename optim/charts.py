@@ -27,11 +27,12 @@ from envs.render import draw_design, draw_grasp, grasp_figure
 from envs.scene import Design, Scene, SoftDisk, design_row
 
 from .build_sheet import assembly_of
-from .result import OptimResult
+from .result import OptimResult, front_point
 
 __all__ = ["scene_of", "convergence_figure", "best_grasp_figure", "pareto_figure",
            "scenario_figure"]
 
+SCENARIO_LABELS_MAX = 30  # scenarios whose labels a scenario chart writes under its bars
 METHOD_COLOURS = {"cmaes": "tab:blue", "ga": "tab:green", "nsga2": "tab:olive",
                   "random": "tab:gray", "policy": "tab:purple"}
 
@@ -156,13 +157,21 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     millimetres (every length in its title too), the centre held where the object sits."""
     from envs.solver import simulate
 
+    from .design_verdict import verdict_of
+
     obj = result.object
     d, m = result.best_design, result.best_metrics
     name = obj.get("name") or "the object"
     size = "r" if obj.get("outline_coefficients") is None else f"{obj.get('shape')}, r_eq"
-    title = (f"{name}, {size} = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
+    governing = m.get("governing_scenario")
+    # with scenarios the numbers are the governing scenario's, the drawing the nominal grasp
+    where = (f"governing scenario {governing}: " if governing is not None else "")
+    banner = verdict_of(m, result.extra.get("scenario_rows")).banner
+    title = ((f"{banner}\n" if banner else "")
+             + f"{name}, {size} = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
-             f"contact {m.get('contact_score', math.nan):.2f}, "
+             + (f"drawn: the nominal scenario; {where}" if governing is not None else "")
+             + f"contact {m.get('contact_score', math.nan):.2f}, "
              f"compression {m.get('peak_compression', math.nan):.3f}; fingers "
              f"{assembly_of(d['joint_offset_m'], d['finger_width_m'])[0]}\n"
              f"l = {d['finger_length_m'] * 1e3:.3g} mm, "
@@ -183,6 +192,9 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     res = simulate(scene, result.best_design["torque_nm"], **member)
     fig = grasp_figure(scene, res, strain_limit=obj.get("strain_limit"), title=title,
                        figsize=(6.0, 6.0), length_unit="mm")
+    if banner:
+        fig.suptitle(banner, color="white", backgroundcolor="tab:red", fontsize=9,
+                     fontweight="bold")
     return _save(fig, path)
 
 
@@ -223,8 +235,7 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
                    color="0.75",
                    label="feasible evaluated")
     if front:
-        strain = [p["peak_compression"] for p in front]
-        contact = [p["contact_score"] for p in front]
+        contact, strain = (list(v) for v in zip(*map(front_point, front), strict=True))
         ax.step(strain, contact, where="post", color="tab:red", linewidth=1)
         ax.plot(strain, contact, "o", color="tab:red", markersize=4, label="NSGA-II front")
         for k, i in enumerate(picks):
@@ -247,9 +258,10 @@ def pareto_figure(result: OptimResult, path: str | Path | None = None, *,
     for k, i in enumerate(picks):
         sub = fig.add_subplot(grid[0, 1 + k])
         p = front[i]
+        worst = "worst " if "min_contact_score" in p else ""
         _draw_design_grasp(sub, p["design"], result.object,
-                           f"{chr(ord('A') + k)}: contact {p['contact_score']:.2f}, "
-                           f"compression {p['peak_compression']:.3f}", legend=k == 0)
+                           f"{chr(ord('A') + k)}: {worst}contact {contact[i]:.2f}, "
+                           f"{worst}compression {strain[i]:.3f}", legend=k == 0)
     fig.tight_layout()
     return _save(fig, path)
 
@@ -267,13 +279,19 @@ def scenario_figure(result: OptimResult, path: str | Path | None = None) -> Figu
     rows = result.extra.get("scenario_rows")
     if not rows:
         raise ValueError("the result has no scenario rows (a run without scenarios)")
-    labels = [r["scenario"]["label"].replace(" ", "\n") for r in rows]
+    from .sheet.drawing import short_label
+
+    many = len(rows) > SCENARIO_LABELS_MAX
+    # many scenarios: their indices (the scenarios CSV names them), not their labels
+    labels = [str(i) if many else short_label(r["scenario"]["label"]).replace(" ", "\n")
+              for i, r in enumerate(rows)]
     reward = np.array([r["reward"] for r in rows])
     compression = np.array([r["peak_compression"] for r in rows])
     limit = float(rows[0]["strain_limit"])
     ok = np.array([bool(r["holds"]) and r["peak_compression"] <= r["strain_limit"]
                    for r in rows])
-    fig = Figure(figsize=(max(6.0, 0.55 * len(rows) + 2.0), 5.2), layout="constrained")
+    fig = Figure(figsize=(min(max(6.0, 0.55 * len(rows) + 2.0), 14.0), 5.2),
+                 layout="constrained")
     ax, ax2 = fig.subplots(2, 1, sharex=True)
     x = np.arange(len(rows))
     ax.bar(x, reward, color=np.where(ok, "tab:blue", "tab:red"))
@@ -289,5 +307,8 @@ def scenario_figure(result: OptimResult, path: str | Path | None = None) -> Figu
     ax2.axhline(limit, color="tab:red", lw=1.0, label=f"strain limit {limit:g}")
     ax2.set_ylabel("peak compression")
     ax2.legend(fontsize=8)
-    ax2.set_xticks(x, labels, fontsize=6)
+    step = max(1, len(rows) // 36)
+    ax2.set_xticks(x[::step], labels[::step], fontsize=6)
+    if many:
+        ax2.set_xlabel("scenario (its row in the scenarios CSV; 0 the nominal)", fontsize=8)
     return _save(fig, path)

@@ -33,6 +33,8 @@ import uuid
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
+from envs.validation import check_integer
+
 __all__ = [
     "check_executor_options",
     "ChunkFailedError",
@@ -340,6 +342,14 @@ class DaskExecutor(RetryingExecutor):
             self.cluster.close()
 
 
+MAX_WORKERS_PER_CPU = 4  # local workers per core at most (--workers)
+
+
+def max_workers() -> int:
+    """The most local workers ``--workers`` may start: :data:`MAX_WORKERS_PER_CPU` per core."""
+    return MAX_WORKERS_PER_CPU * (os.cpu_count() or 1)
+
+
 def check_executor_options(dask: str | None = None, workers: int | None = None) -> None:
     """Validate the CLI's ``--dask`` and ``--workers`` without starting anything.
 
@@ -348,9 +358,14 @@ def check_executor_options(dask: str | None = None, workers: int | None = None) 
     ValueError
         Naming the option and the user's value.
     """
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
-                                or workers < 1):
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    most = max_workers()
+    if workers is not None:
+        try:
+            check_integer("workers", workers, 1, most)
+        except ValueError as exc:
+            raise ValueError(f"{exc} ({MAX_WORKERS_PER_CPU} per core of this machine's "
+                             f"{os.cpu_count() or 1}: more local processes only compete for "
+                             "them)") from None
     if dask is not None and not str(dask).strip():
         raise ValueError(f"dask must be 'local' or a scheduler address such as "
                          f"tcp://host:8786, got {dask!r}")

@@ -9,7 +9,11 @@ exactly ``budget`` evaluations are made, as for every driver.
 - NSGA-II: two objectives, ``F = (-contact_score, peak_compression)`` (contact up, compression
   down), and three inequality constraints ``G <= 0``: the grasp converged, both fingers touch
   the disk, the peak compression is within the strain limit. The Pareto front of the result is
-  the non-dominated set of every feasible design evaluated in the run.
+  the non-dominated set of every feasible design evaluated in the run. With scenarios the
+  objectives and constraints are the envelopes over them (the smallest contact score, the
+  largest compression and required friction, converged and touching in every scenario:
+  :func:`~optim.problem.front_columns`): a feasible design holds within the strain limit in
+  every scenario.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .problem import DesignProblem, check_budget, check_seed
+from .problem import DesignProblem, check_budget, check_seed, front_columns
 from .result import OptimResult
 
 __all__ = ["run_ga", "run_nsga2", "pymoo_problem", "DEFAULT_POP_SIZE"]
@@ -60,14 +64,18 @@ def pymoo_problem(problem: DesignProblem, n_obj: int):
             if n_obj == 1:
                 out["F"] = -m["reward"][:, None]
                 return
-            out["F"] = np.column_stack([-m["contact_score"], m["peak_compression"]])
-            missing = np.count_nonzero(~m["touching"], axis=1)
+            contact, compression = front_columns(m)
+            out["F"] = np.column_stack([-contact, compression])
+            # (with scenarios: in every scenario)
+            missing = np.count_nonzero(~m.get("all_touching", m["touching"]), axis=1)
+            converged = m.get("all_converged", m["converged"])
+            friction = m.get("max_required_friction", m["required_friction"])
             out["G"] = np.column_stack([
-                0.5 - m["converged"].astype(np.float64),  # <= 0 iff converged
+                0.5 - converged.astype(np.float64),  # <= 0 iff converged
                 missing - 0.5,  # <= 0 iff both fingers touch
-                (m["peak_compression"] - problem.strain_limit) / problem.strain_limit,
+                (compression - problem.strain_limit) / problem.strain_limit,
                 # <= 0 iff it holds without the pin (inf, one finger: a large finite value)
-                np.minimum(m["required_friction"] / problem.friction_coefficient - 1.0, 1e6),
+                np.minimum(friction / problem.friction_coefficient - 1.0, 1e6),
             ])
 
     return _GraspDesign()

@@ -21,6 +21,7 @@ __all__ = ["METHODS", "Optimizer", "get_optimizer", "option_names", "check_optio
 
 # method -> (module, function, pip extra holding its dependency)
 _DRIVERS: dict[str, tuple[str, str, str]] = {
+    "portfolio": ("optim.portfolio", "run_portfolio", "optim"),
     "cmaes": ("optim.cmaes", "run_cmaes", "optim"),
     "ga": ("optim.ga", "run_ga", "optim"),
     "nsga2": ("optim.ga", "run_nsga2", "optim"),

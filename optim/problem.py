@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.evaluate import (
+    MAX_CHUNK_SIZE,
     METRIC_KEYS,
     DesignBounds,
     RewardWeights,
@@ -35,8 +36,15 @@ from envs.model.defaults import (
     MAX_PAYLOAD_FACTOR,
 )
 from envs.model.family import resolve_model
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.objects import outline_info
-from envs.scenarios import ROBUST_MEASURES, Scenarios, ScenarioTable, evaluate_scenarios
+from envs.scenarios import (
+    ENVELOPE_KEYS,
+    ROBUST_MEASURES,
+    Scenarios,
+    ScenarioTable,
+    evaluate_scenarios,
+)
 from envs.scene import (
     PRESETS,
     Scene,
@@ -49,7 +57,7 @@ from envs.scene import (
     placement_support,
     relative_from_design,
 )
-from envs.validation import check_range
+from envs.validation import check_integer, check_range, real_array
 
 from .result import NoGraspWarning, OptimResult, grasp_found, no_grasp_reason, to_jsonable
 
@@ -59,24 +67,27 @@ __all__ = [
     "DesignProblem",
     "check_budget",
     "check_seed",
+    "check_time_limit",
+    "default_budget",
     "pareto_mask",
     "paper_design",
     "paper_design_for",
 ]
 
 DEFAULT_CHUNK_SIZE = 256
-# The search judges the payload this many times heavier than the finish and verify do. Holding
-# a payload has an edge where the required friction jumps to infinity (a sideways load whose
-# moment the faces' contact patches cannot take: no friction helps), and an optimizer's designs
-# sit on it; the search model's edge lies a few percent from the finer member's, so without a
-# margin the finish rejects every one of them (the strawberry example with a +-1.5 mm placement
-# tolerance: the finer member's robust reward -1.5 for all ten best designs at margin 1, -0.077
-# at 1.1, where the search model said -0.075).
-SEARCH_PAYLOAD_MARGIN = 1.1
 # Rows per task at least. Measured on 2 cores (paper-r070, N = 20, ~0.25 ms a design in
 # process): a round trip to a spawned worker costs about 6 ms, so 9 designs in 2 tasks ran at
 # 600 designs/s against 2600 in process, and 64-row tasks reach 80-90 % of the in-process rate.
 MIN_CHUNK_SIZE = 64
+# the most evaluations a run may be given: about an hour of the default model in process on 2
+# cores (~2,600 designs/s, MIN_CHUNK_SIZE's note); a larger budget is a typo (an extra 000)
+MAX_BUDGET = 10_000_000
+# the default budget of a run (default_budget): as many designs as this many grasps allow (each
+# design solves one grasp per scenario), so that the default run takes about the same time
+# whatever the scenario count (~30 s on 2 cores for the examples' 9 scenarios), within these
+DEFAULT_GRASP_BUDGET = 54_000
+DEFAULT_BUDGET_RANGE = (1_000, 12_000)
+MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
 DISTINCT_DESIGN = 0.02  # normalized coordinates in [-1, 1]: 1 % of the design box's width
 # metric keys copied into OptimResult.best_metrics
@@ -87,11 +98,31 @@ BEST_METRIC_KEYS = (
     "strain_limit", "pin_force_n", "pin_moment_nm", "required_friction", "friction_coefficient",
     "payload_n", "grip_force_n", "friction_limit", "friction_limit_angle_rad",
     "holds", "penalty_slip",
-    "reward_contact", "reward_deform", "penalty_miss", "penalty_invalid", "penalty_fail",
-    "reward",
+    "reward_contact", "reward_deform", "penalty_miss", "penalty_gap", "penalty_invalid",
+    "penalty_fail", "reward",
 )
 
+# with scenarios, what a summary row adds to BEST_METRIC_KEYS: the governing scenario (whose
+# own row the metrics are) and the envelopes over the scenarios, under their own names
+SCENARIO_METRIC_KEYS = ("worst_scenario", "governing_scenario", "reward_worst", "reward_mean",
+                        "reward_cvar", "reward_nominal", *ENVELOPE_KEYS)
+
 ProgressHook = Callable[[int, float], None]
+
+
+def metrics_row(out: dict[str, np.ndarray], i: int) -> dict[str, Any]:
+    """Row ``i`` of an evaluation as plain data: :data:`BEST_METRIC_KEYS` and, with
+    scenarios, :data:`SCENARIO_METRIC_KEYS` (what :attr:`OptimResult.best_metrics` holds)."""
+    keys = (*BEST_METRIC_KEYS, *(k for k in SCENARIO_METRIC_KEYS if k in out))
+    return {k: to_jsonable(out[k][i]) for k in keys}
+
+
+def front_columns(out: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The contact score and peak compression NSGA-II trades and the archive records: with
+    scenarios their envelopes (the smallest contact score, the largest compression over the
+    scenarios), else the grasp's own."""
+    return (out.get("min_contact_score", out["contact_score"]),
+            out.get("max_peak_compression", out["peak_compression"]))
 
 
 class BudgetExhaustedError(RuntimeError):
@@ -99,7 +130,7 @@ class BudgetExhaustedError(RuntimeError):
 
 
 def check_budget(budget: Any) -> int:
-    """Validate an evaluation budget: an integer >= 1.
+    """Validate an evaluation budget: an integer in [1, :data:`MAX_BUDGET`].
 
     Raises
     ------
@@ -107,8 +138,34 @@ def check_budget(budget: Any) -> int:
         Naming the value and the allowed range.
     """
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
-        raise ValueError(f"budget must be an integer >= 1 (evaluations), got {budget!r}")
+        raise ValueError(f"budget must be an integer in [1, {MAX_BUDGET:,}] (evaluations), got "
+                         f"{budget!r}")
+    if budget > MAX_BUDGET:
+        raise ValueError(f"budget = {int(budget):,} is outside the allowed range [1, "
+                         f"{MAX_BUDGET:,}] (evaluations: {MAX_BUDGET:.0e} take about an hour at "
+                         "the in-process rate of ~2,600 designs/s on 2 cores; for a longer "
+                         "search give --time SECONDS)")
     return int(budget)
+
+
+def default_budget(scenario_count: int) -> int:
+    """The evaluations of a run given neither a budget nor a time: :data:`DEFAULT_GRASP_BUDGET`
+    grasps over the scenario count, within :data:`DEFAULT_BUDGET_RANGE` (6,000 designs with 9
+    scenarios, 2,160 with 25, 12,000 without scenarios)."""
+    low, high = DEFAULT_BUDGET_RANGE
+    return int(min(high, max(low, DEFAULT_GRASP_BUDGET // max(1, int(scenario_count)))))
+
+
+def check_time_limit(time_limit_s: Any, name: str = "time_limit_s") -> float:
+    """Validate a run's time limit: seconds in (0, :data:`MAX_TIME_LIMIT_S`] (``name``: the
+    parameter's, for the message).
+
+    Raises
+    ------
+    ValueError
+        Naming the value and the allowed range.
+    """
+    return check_range(name, time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
 
 
 def check_seed(seed: Any) -> int:
@@ -221,6 +278,10 @@ class DesignProblem:
         ``f`` of the payload ``W = f rho pi r^2 t g`` (the disk's ``density_kg_m3``) that
         friction must carry besides the centre's reaction, in [0, 100] (default 2: the weight
         plus a lift at 1 g; 0: no payload). A grasp that cannot lift its object does not hold.
+    load_set
+        How the gripper picks, the payload's directions (:mod:`envs.model.loads`):
+        ``"top-down"`` (along the gripper's axis, both ways), ``"side"`` (out of the plane,
+        both ways) or ``"any"`` (every direction; default).
     torsion_stiffness_rel
         Joint torsion spring ``k_f`` in the object's torque unit ``s E t r^2`` per radian
         [1/rad], > 0 (:func:`envs.scene.joint_spring`). Default (with
@@ -254,8 +315,9 @@ class DesignProblem:
         relative design space is scaled to), the joint spring is that of the nominal object for
         every scenario (one physical gripper), and every design is solved under every scenario
         in one batch (:func:`envs.scenarios.evaluate_scenarios`): its reward is the
-        ``robust`` measure, its metrics the worst case over the scenarios (a design is
-        feasible when it holds within the strain limit in every scenario).
+        ``robust`` measure, its metrics the governing (lowest reward) scenario's own row with
+        the envelopes over the scenarios under their own names (a design is feasible when it
+        holds within the strain limit in every scenario, ``holds_all``).
     robust
         The robust reward with scenarios: ``"worst"`` (default), ``"mean"`` or ``"cvar"``.
     joints_apart
@@ -276,6 +338,7 @@ class DesignProblem:
         friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
         *,
         payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+        load_set: str = DEFAULT_LOAD_SET,
         torsion_stiffness_rel: float | None = None,
         torsion_stiffness_nm_per_rad: float | None = None,
         n_triangles: int | None = None,
@@ -310,6 +373,8 @@ class DesignProblem:
             else self.scenarios.nominal_friction(friction_coefficient))
         self.payload_factor = check_payload_factor(payload_factor)
         self.payload_n = self.disk.payload_n(self.payload_factor)
+        load_set_code(load_set)
+        self.load_set = load_set
         self.torsion_stiffness_rel, self._torsion_absolute = joint_spring(
             torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.model = resolve_model(n_triangles, n_rings,
@@ -329,11 +394,11 @@ class DesignProblem:
         if executor is not None and not callable(getattr(executor, "map", None)):
             raise ValueError("executor must be None or have a .map(fn, iterable) method")
         self.executor = executor
-        if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
-            raise ValueError(f"chunk_size must be None or an integer >= 1, got {chunk_size!r}")
-        self.chunk_size = None if chunk_size is None else int(chunk_size)
+        self.chunk_size = None if chunk_size is None else check_integer(
+            "chunk_size", chunk_size, 1, MAX_CHUNK_SIZE)
         self.progress = progress
         self.name = name
+        self.time_limit_s: float | None = None
         self.start(None)
 
     @property
@@ -382,9 +447,17 @@ class DesignProblem:
 
     # --- bookkeeping --------------------------------------------------------------------------
 
-    def start(self, budget: int | None) -> None:
-        """Reset the count, best, history, archive and clock; set the budget (None: unlimited)."""
+    def start(self, budget: int | None, time_limit_s: float | None = None) -> None:
+        """Reset the count, best, history, archive and clock; set the budget (None: unlimited).
+
+        ``time_limit_s``: wall seconds the run may take from now (default
+        :attr:`time_limit_s`, set by whoever hands the problem to a driver; ``None``: no
+        limit). Once it has passed, :attr:`remaining` is 0, so every driver stops after the
+        batch under way (a batch is never cut short).
+        """
         self.budget = None if budget is None else check_budget(budget)
+        if time_limit_s is not None:
+            self.time_limit_s = check_time_limit(time_limit_s)
         self.n_evaluations = 0
         self.best_reward = -math.inf
         self.best_x: np.ndarray | None = None
@@ -397,10 +470,18 @@ class DesignProblem:
 
     @property
     def remaining(self) -> int:
-        """Evaluations left in the budget (a large number when unlimited)."""
+        """Evaluations left in the budget (a large number when unlimited); 0 once the time
+        limit (:attr:`time_limit_s`) has passed."""
+        if self.out_of_time:
+            return 0
         if self.budget is None:
             return 2**62
         return self.budget - self.n_evaluations
+
+    @property
+    def out_of_time(self) -> bool:
+        """Whether the run's time limit has passed (never without one)."""
+        return self.time_limit_s is not None and self.elapsed_s >= self.time_limit_s
 
     @property
     def elapsed_s(self) -> float:
@@ -419,9 +500,9 @@ class DesignProblem:
 
     def to_physical(self, x: Any) -> np.ndarray:
         """Normalized rows (..., :attr:`n_var`), clipped to [-1, 1], in physical units (SI:
-        6, 10 or 14 columns, :attr:`DesignBounds.design_width
-        <envs.evaluate.DesignBounds.design_width>`)."""
-        return self.bounds.scale(np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0), self.disk)
+        6, 10 or 14 columns,
+        :attr:`~envs.design_space.DesignBounds.design_width`)."""
+        return self.bounds.scale(np.clip(real_array("x", x), -1.0, 1.0), self.disk)
 
     def design_dict(self, x: Any) -> dict[str, float]:
         """One normalized row as ``{field: value}`` in physical units (the jaw fields of
@@ -429,59 +510,61 @@ class DesignProblem:
         row = self.to_physical(np.asarray(x, dtype=np.float64).reshape(self.n_var))
         return design_mapping(row)
 
-    def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None, *,
-                          margin: float = 1.0) -> dict[str, np.ndarray]:
+    def evaluate_physical(self, designs: Any, member: dict[str, Any] | None = None
+                          ) -> dict[str, np.ndarray]:
         """Evaluate physical designs (B, 6), (B, 10) or (B, 14) on this object without
         counting them.
 
-        With scenarios, one row per design: the robust reward and the worst case of each metric
-        over the scenarios (:class:`envs.scenarios.ScenarioTable` ``summary``). ``member``: a
+        With scenarios, one row per design: the robust reward, the governing scenario's own
+        row and the envelopes over the scenarios (:class:`envs.scenarios.ScenarioTable`
+        ``summary``). ``member``: a
         model member's keyword arguments instead of the problem's own (the finish's finer
-        member). ``margin``: the payload judged this many times heavier (the search's
-        :data:`SEARCH_PAYLOAD_MARGIN`).
+        member).
         """
         designs = np.asarray(designs, dtype=np.float64)
         if self.scenarios is not None:
-            return self.evaluate_scenarios(designs, member, margin=margin).summary
+            return self.evaluate_scenarios(designs, member).summary
         return evaluate_designs(
             designs, self.disk, strain_limits=self.strain_limit,
             friction_coefficients=self.friction_coefficient,
-            payload_factors=self.payload_factor * margin, **self.joint_spring_kwargs(),
-            weights=self.weights, executor=self.executor,
+            payload_factors=self.payload_factor, **self.joint_spring_kwargs(),
+            load_set=self.load_set, weights=self.weights, executor=self.executor,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(designs.shape[0]),
         )
 
     def evaluate_scenarios(self, designs: Any, member: dict[str, Any] | None = None, *,
-                           margin: float = 1.0) -> ScenarioTable:
+                           full: bool = False) -> ScenarioTable:
         """Physical designs (B, 6/10/14) under every scenario of the problem (the one nominal
-        scenario without scenarios), one batch, not counted; ``margin`` as in
-        :meth:`evaluate_physical`."""
+        scenario without scenarios), one batch, not counted; ``member`` as in
+        :meth:`evaluate_physical`; ``full``: every corner of the box, not the covering set
+        (:func:`envs.scenarios.evaluate_scenarios`)."""
         designs = np.asarray(designs, dtype=np.float64)
         scenarios = Scenarios() if self.scenarios is None else self.scenarios
-        rows = designs.shape[0] * len(scenarios.scenarios())
+        rows = designs.shape[0] * len(scenarios.scenarios(full))
         return evaluate_scenarios(
             designs, self.disk, scenarios,
             torsion_stiffness_nm_per_rad=self.torsion_stiffness_nm_per_rad,
             friction_coefficient=self.friction_coefficient, robust=self.robust,
-            strain_limits=self.strain_limit, payload_factors=self.payload_factor * margin,
-            weights=self.weights, executor=self.executor,
+            strain_limits=self.strain_limit, payload_factors=self.payload_factor,
+            load_set=self.load_set, weights=self.weights, executor=self.executor, full=full,
             **(self.model.kwargs() if member is None else member),
             chunk_size=self._chunk_size_for(rows))
 
     def scenario_rows(self, design: dict[str, float],
-                      member: dict[str, Any] | None = None) -> list[dict[str, Any]]:
-        """One design (``{field: value}``, SI) under every scenario: a row per scenario with
-        the scenario and its grasp's metrics (what a result JSON records)."""
+                      member: dict[str, Any] | None = None,
+                      full: bool = False) -> list[dict[str, Any]]:
+        """One design (``{field: value}``, SI) under every scenario (``full``: every corner):
+        a row per scenario with the scenario and its grasp's metrics (what a result JSON
+        records)."""
         row = design_row(design)[None, :]
-        table = self.evaluate_scenarios(row, member)
+        table = self.evaluate_scenarios(row, member, full=full)
         return [{"scenario": sc.as_dict(),
                  **{k: to_jsonable(table.per_scenario[k][0, j]) for k in BEST_METRIC_KEYS}}
                 for j, sc in enumerate(table.scenarios)]
 
     def evaluate(self, x: Any) -> dict[str, np.ndarray]:
-        """Evaluate a population of normalized designs and record it (the search: the payload
-        judged :data:`SEARCH_PAYLOAD_MARGIN` times heavier).
+        """Evaluate a population of normalized designs and record it (the search).
 
         Parameters
         ----------
@@ -506,8 +589,53 @@ class DesignProblem:
                 f"{x.shape[0]} evaluations asked, {self.remaining} left in the budget")
         if x.shape[0] == 0:
             return {k: np.zeros((0, *shape), dtype=dt) for k, (dt, shape) in METRIC_KEYS.items()}
-        out = self.evaluate_physical(self.bounds.scale(x, self.disk), margin=SEARCH_PAYLOAD_MARGIN)
+        out = self.evaluate_physical(self.bounds.scale(x, self.disk))
         self._record(x, out)
+        return out
+
+    @property
+    def scenario_count(self) -> int:
+        """Scenarios every evaluation solves (1 without scenarios)."""
+        return 1 if self.scenarios is None else len(self.scenarios.scenarios())
+
+    def screen_cost(self, rows: int) -> int:
+        """Evaluations :meth:`screen` charges for ``rows`` designs: a ninth of one each with 9
+        scenarios, rounded up over the batch."""
+        return math.ceil(rows / self.scenario_count)
+
+    def screen(self, x: Any) -> dict[str, np.ndarray]:
+        """Evaluate normalized designs on the nominal scenario alone: a cheap first look,
+        charged :meth:`screen_cost` evaluations, not recorded as the run's designs (its best,
+        archive and top designs hold robust judgements only).
+
+        Raises
+        ------
+        BudgetExhaustedError
+            If the charge exceeds :attr:`remaining`.
+        """
+        x = np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0)
+        if x.ndim != 2 or x.shape[1] != self.n_var:
+            raise ValueError(f"x must have shape (B, {self.n_var}), got {x.shape}")
+        cost = self.screen_cost(x.shape[0])
+        if cost > self.remaining:
+            raise BudgetExhaustedError(
+                f"a screen of {x.shape[0]} designs costs {cost} evaluations, {self.remaining} "
+                "left in the budget")
+        designs = self.bounds.scale(x, self.disk)
+        out = evaluate_designs(
+            designs, self.disk, strain_limits=self.strain_limit,
+            friction_coefficients=self.friction_coefficient,
+            payload_factors=self.payload_factor, **self.joint_spring_kwargs(),
+            load_set=self.load_set, weights=self.weights, executor=self.executor,
+            **self.model.kwargs(),
+            chunk_size=self._chunk_size_for(designs.shape[0]))
+        self.n_evaluations += cost
+        if math.isfinite(self.best_reward):  # (the history holds robust judgements only)
+            self.history_evaluations.append(self.n_evaluations)
+            self.history_best_reward.append(self.best_reward)
+            self.history_wall_time_s.append(self.elapsed_s)
+        if self.progress is not None:
+            self.progress(cost, self.best_reward)
         return out
 
     def add_external_evaluations(self, count: int) -> None:
@@ -526,16 +654,17 @@ class DesignProblem:
         if reward[i] > self.best_reward:
             self.best_reward = float(reward[i])
             self.best_x = x[i].copy()
-            self.best_metrics = {k: to_jsonable(out[k][i]) for k in BEST_METRIC_KEYS}
+            self.best_metrics = metrics_row(out, i)
         self.n_evaluations += x.shape[0]
         self.history_evaluations.append(self.n_evaluations)
         self.history_best_reward.append(self.best_reward)
         self.history_wall_time_s.append(self.elapsed_s)
+        contact, compression = front_columns(out)
         self._archive.append({
             "x": x.copy(),
             "reward": reward.copy(),
-            "contact_score": out["contact_score"].copy(),
-            "peak_compression": out["peak_compression"].copy(),
+            "contact_score": contact.copy(),
+            "peak_compression": compression.copy(),
             "feasible": self.feasible(out),
         })
         if self.progress is not None:
@@ -543,7 +672,10 @@ class DesignProblem:
 
     def feasible(self, out: dict[str, np.ndarray]) -> np.ndarray:
         """Grasps that hold the object (converged, both fingers touching, the required friction
-        within the coefficient) and keep their peak compression within the strain limit."""
+        within the coefficient) and keep their peak compression within the strain limit; with
+        scenarios, in every scenario (``holds_all``)."""
+        if "holds_all" in out:
+            return out["holds_all"].copy()
         return out["holds"] & (out["peak_compression"] <= self.strain_limit)
 
     def archive(self) -> dict[str, np.ndarray]:
@@ -576,7 +708,8 @@ class DesignProblem:
 
     def pareto_front(self) -> list[dict[str, Any]]:
         """Non-dominated feasible evaluated designs (contact score up, peak compression down),
-        sorted by contact score."""
+        sorted by contact score; with scenarios, of their envelopes, under the envelopes'
+        names ``min_contact_score`` and ``max_peak_compression``."""
         arc = self.archive()
         rows = np.flatnonzero(arc["feasible"])
         if rows.size == 0:
@@ -584,10 +717,11 @@ class DesignProblem:
         obj = np.column_stack([-arc["contact_score"][rows], arc["peak_compression"][rows]])
         front = rows[pareto_mask(obj)]
         front = front[np.argsort(arc["contact_score"][front], kind="stable")]
+        prefix = ("min_", "max_") if self.scenarios is not None else ("", "")
         return [{
             "design": self.design_dict(arc["x"][i]),
-            "contact_score": float(arc["contact_score"][i]),
-            "peak_compression": float(arc["peak_compression"][i]),
+            f"{prefix[0]}contact_score": float(arc["contact_score"][i]),
+            f"{prefix[1]}peak_compression": float(arc["peak_compression"][i]),
             "reward": float(arc["reward"][i]),
         } for i in front.tolist()]
 
@@ -607,6 +741,7 @@ class DesignProblem:
             "density_kg_m3": d.density_kg_m3,
             "payload_factor": self.payload_factor,
             "payload_n": self.payload_n,
+            "load_set": self.load_set,
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
             **outline_info(d),
@@ -649,6 +784,8 @@ class DesignProblem:
             options=to_jsonable(dict(options or {})),
             executor=_describe_executor(self.executor),
             extra=to_jsonable({**(extra or {}), "grasp_found": found,
+                               "time_limit_s": self.time_limit_s,
+                               "out_of_time": self.out_of_time,
                                "joints_apart": self.bounds.joints_apart,
                                "jaw": self.bounds.jaw,
                                "jaw_per_finger": self.bounds.jaw_per_finger,
@@ -656,9 +793,21 @@ class DesignProblem:
         )
 
     def scenario_extra(self, design: dict[str, float],
-                       member: dict[str, Any] | None = None) -> dict[str, Any]:
-        """``{"scenario_rows": [...]}``: the design under every scenario (a result's extra);
-        empty without scenarios or without a design."""
+                       member: dict[str, Any] | None = None,
+                       full: bool = False) -> dict[str, Any]:
+        """``{"scenario_rows": [...], "scenario_set": ...}``: the design under every scenario
+        (``full``: every corner) and which set that is (a result's extra); empty without
+        scenarios or without a design."""
         if self.scenarios is None or not design:
             return {}
-        return {"scenario_rows": self.scenario_rows(design, member)}
+        covering = self.scenarios.uses_covering_set and not full
+        return {"scenario_rows": self.scenario_rows(design, member, full),
+                "scenario_set": "covering" if covering else "full"}
+
+    def use_spring_nm(self, torsion_stiffness_nm_per_rad: float) -> None:
+        """Build every design with this absolute joint spring [N·m/rad] from now on (the
+        spring rounded to the manufacturing resolution, :mod:`optim.parts.resolution`)."""
+        self.torsion_stiffness_rel = None
+        self._torsion_absolute = check_range("torsion_stiffness_nm_per_rad",
+                                             torsion_stiffness_nm_per_rad, 0.0, math.inf,
+                                             low_open=True)

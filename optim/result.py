@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import MISSING, asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from envs.validation import read_text_file
+from envs.validation import PsmGraspWarning, check_integer, check_real, read_text_file
 
-__all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable"]
+__all__ = ["NoGraspWarning", "OptimResult", "grasp_found", "no_grasp_reason", "to_jsonable",
+           "check_result_data", "front_point"]
 
 RESULT_VERSION = 1
 
@@ -32,7 +33,14 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
-class NoGraspWarning(UserWarning):
+def front_point(point: dict[str, Any]) -> tuple[float, float]:
+    """A Pareto front entry's contact score and peak compression: with scenarios their
+    envelopes (``min_contact_score``, ``max_peak_compression``)."""
+    return (float(point.get("min_contact_score", point.get("contact_score", math.nan))),
+            float(point.get("max_peak_compression", point.get("peak_compression", math.nan))))
+
+
+class NoGraspWarning(PsmGraspWarning):
     """An optimization's best design does not grasp its object (invalid, not converged, or a
     finger that does not touch): the run's answer is not a gripper to build."""
 
@@ -45,7 +53,9 @@ def grasp_found(metrics: dict[str, Any]) -> bool:
     touching = metrics.get("touching") or [False, False]
     within = metrics.get("peak_compression", 0.0) <= metrics.get("strain_limit", math.inf)
     return bool(metrics.get("valid_at_rest") and metrics.get("converged") and all(touching)
-                and metrics.get("holds", True) and within)
+                and metrics.get("holds", True) and within
+                # with scenarios: in every one (the governing row says so too)
+                and metrics.get("holds_all", True))
 
 
 def no_grasp_reason(metrics: dict[str, Any]) -> str:
@@ -192,13 +202,15 @@ class OptimResult:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> OptimResult:
-        """Inverse of :meth:`to_dict` (unknown keys raise ``ValueError``)."""
+        """Inverse of :meth:`to_dict`: every field checked before use (:func:`check_result_data`;
+        an unknown key, a missing field or a bad value raises one ``ValueError`` naming it)."""
         data = dict(data)
         data.pop("version", None)
         names = {f.name for f in fields(cls)}
         unknown = set(data) - names
         if unknown:
             raise ValueError(f"unknown OptimResult fields {sorted(unknown)}")
+        check_result_data(data)
         data["pareto_front"] = tuple(data.get("pareto_front", ()))
         data["top_designs"] = tuple(data.get("top_designs", ()))
         return cls(**data)
@@ -243,11 +255,170 @@ class OptimResult:
         return self.n_evaluations / self.wall_time_s if self.wall_time_s > 0 else math.inf
 
     def summary(self) -> str:
-        """One line: method, seed, best reward, contact score, peak strain, time."""
+        """One line: method, seed, best reward and the reward's terms that give it, the
+        contact score and peak compression of the grasp they come from (with scenarios the
+        governing scenario's, named), evaluations, time."""
+        from .design_verdict import reward_terms
+
         m = self.best_metrics
-        return (
-            f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f} "
-            f"(contact {m.get('contact_score', float('nan')):.3f}, "
-            f"peak compression {m.get('peak_compression', float('nan')):.4f}) after "
-            f"{self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
-        )
+        terms = " ".join(f"{name} {value:+.4f}" for name, value in reward_terms(m))
+        governing = m.get("governing_scenario")
+        robust = self.object.get("robust", "worst")
+        head = f"{self.method:>7s} seed {self.seed}: best reward {self.best_reward:.4f}"
+        grasp = (f"contact {m.get('contact_score', float('nan')):.4f}, peak compression "
+                 f"{m.get('peak_compression', float('nan')):.4f}")
+        if governing is None:
+            body = f" = {terms} ({grasp})"
+        elif robust == "worst":
+            body = (f" = {terms} (governing scenario {governing!r} of "
+                    f"{m.get('n_scenarios')}: {grasp})")
+        else:
+            body = (f" ({robust} over {m.get('n_scenarios')} scenarios; the governing scenario "
+                    f"{governing!r} scores {m.get('reward', float('nan')):.4f} = {terms}: "
+                    f"{grasp})")
+        return f"{head}{body} after {self.n_evaluations} evaluations in {self.wall_time_s:.1f} s"
+
+
+# --- a result read back: every field checked before use ---------------------------------------
+
+
+def _json_real(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> float:
+    """A real field of a result JSON: a number, or the text ``"inf"`` / ``"-inf"`` that
+    :func:`to_jsonable` writes for an infinite one, in ``[low, high]``."""
+    if isinstance(value, str) and value in ("inf", "-inf"):
+        value = float(value)
+    v = check_real(name, value)
+    if not low <= v <= high:  # (NaN is outside too)
+        raise ValueError(f"{name} = {value!r} is outside the allowed range [{low:g}, {high:g}]")
+    return v
+
+
+def _json_list(name: str, value: Any) -> list:
+    if not isinstance(value, list | tuple):
+        raise ValueError(f"{name} must be a list, got {value!r}")
+    return list(value)
+
+
+def _json_dict(name: str, value: Any) -> dict:
+    if not isinstance(value, dict):
+        raise ValueError(f"{name} must be an object ({{...}}), got {value!r}")
+    return value
+
+
+def _check_object(obj: dict[str, Any]) -> None:
+    """A result's ``object``: each number by the object file's rule for its key (range and
+    plausible range), the model member, the text fields."""
+    from envs.object_file import GRIPPER_KEYS, OBJECT_KEYS, check_value
+
+    rules = {**OBJECT_KEYS, "torsion_stiffness_nm_per_rad":
+             GRIPPER_KEYS["torsion_stiffness_nm_per_rad"]}
+    for key, value in obj.items():
+        if key in rules and value is not None:
+            check_value(f"object.{key}", value, rules[key])
+    for key in ("name", "scene", "file", "element", "robust"):
+        if obj.get(key) is not None and not isinstance(obj[key], str):
+            raise ValueError(f"object.{key} must be a string, got {obj[key]!r}")
+    if any(k in obj for k in ("n_triangles", "n_rings", "element")):
+        from envs.model.family import resolve_model
+
+        try:
+            resolve_model(obj.get("n_triangles"), obj.get("n_rings"), obj.get("element"),
+                          obj.get("calibrated"))
+        except ValueError as exc:
+            raise ValueError(f"object: {exc}") from None
+
+
+def _check_design(name: str, design: Any, obj: dict[str, Any]) -> None:
+    """A recorded design: its fields (:func:`envs.scene.design_row`), each a finite number,
+    the gripper's by the rules of a ``[gripper]`` table (range and plausible range) and the
+    torque plausible on the object (:func:`envs.scene.check_torque`)."""
+    from envs.model.defaults import PAPER_TORSION_STIFFNESS_REL
+    from envs.object_file import GRIPPER_KEYS, check_value
+    from envs.scene import DESIGN_FIELDS, check_torque, design_fields, design_row
+
+    absent = [k for k in DESIGN_FIELDS if isinstance(design, dict) and k not in design]
+    if absent:
+        raise ValueError(f"{name} has no {absent[0]!r}")
+    try:
+        row = design_row(design)
+        for key, v in zip(design_fields(row.size), row.tolist(), strict=True):
+            if key in GRIPPER_KEYS:  # a gripper's field: as in a [gripper] table
+                check_value(key, design[key], GRIPPER_KEYS[key])
+            elif not math.isfinite(v):
+                raise ValueError(f"{key} = {design[key]!r} is not a finite number")
+        unit = _torque_unit_nm(obj)
+        if unit is not None:
+            rel = obj.get("torsion_stiffness_rel") or PAPER_TORSION_STIFFNESS_REL
+            kf = obj.get("torsion_stiffness_nm_per_rad") or rel * unit
+            check_torque("torque_nm", design["torque_nm"], unit, kf)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None
+
+
+def _torque_unit_nm(obj: dict[str, Any]) -> float | None:
+    """The torque unit ``s E t r^2`` [N·m] of a result's (checked) object, ``None`` when it
+    lacks a field of it."""
+    keys = ("stiffness_scale", "youngs_modulus_pa", "thickness_m", "radius_m")
+    if not all(isinstance(obj.get(k), int | float) for k in keys):
+        return None
+    s, e, t, r = (float(obj[k]) for k in keys)
+    return s * e * t * r * r
+
+
+def _check_extra(extra: dict[str, Any]) -> None:
+    from envs.design_space import JAW_KINDS
+    from envs.validation import check_choice
+
+    if "jaw" in extra:
+        check_choice("extra.jaw", extra["jaw"], JAW_KINDS)
+    for key in ("jaw_per_finger", "grasp_found", "joints_apart", "out_of_time"):
+        if key in extra and not isinstance(extra[key], bool):
+            raise ValueError(f"extra.{key} must be true or false, got {extra[key]!r}")
+    if extra.get("time_limit_s") is not None:
+        _json_real("extra.time_limit_s", extra["time_limit_s"], 0.0)
+
+
+def check_result_data(data: dict[str, Any]) -> None:
+    """Validate the fields of a result read back (a JSON written by :meth:`OptimResult.to_json`,
+    perhaps edited by hand or cut short) before any of them is used: each is of its type and
+    in its range, the object's numbers by the object file's rules (a radius of 12 m is
+    refused as in an object file), each kept design's fields finite and plausible.
+
+    Raises
+    ------
+    ValueError
+        One line naming the field (``best_reward``, ``object.radius_m``, ``top_designs[2]``)
+        and what is wrong with it.
+    """
+    missing = [f.name for f in fields(OptimResult) if f.default is MISSING
+               and f.default_factory is MISSING and f.name not in data]
+    if missing:
+        raise ValueError(f"no field {missing[0]!r}")
+    if not isinstance(data["method"], str) or not data["method"].strip():
+        raise ValueError(f"method must be a non-empty string, got {data['method']!r}")
+    check_integer("seed", data["seed"], 0, 2**32 - 1)
+    # (any budget a run may have had: optim.problem.MAX_BUDGET may change between versions)
+    budget = check_integer("budget", data["budget"], 1, 2**62)
+    _json_real("best_reward", data["best_reward"])
+    _json_dict("best_metrics", data["best_metrics"])
+    for name, low in (("history_best_reward", -math.inf), ("history_wall_time_s", 0.0)):
+        for i, v in enumerate(_json_list(name, data[name])):
+            _json_real(f"{name}[{i}]", v, low)
+    for i, v in enumerate(_json_list("history_evaluations", data["history_evaluations"])):
+        check_integer(f"history_evaluations[{i}]", v, 0, budget)
+    check_integer("n_evaluations", data["n_evaluations"], 0, budget)
+    _json_real("wall_time_s", data["wall_time_s"], 0.0)
+    obj = _json_dict("object", data.get("object", {}))
+    _check_object(obj)
+    if _json_dict("best_design", data["best_design"]):
+        _check_design("best_design", data["best_design"], obj)
+    for name in ("top_designs", "pareto_front"):
+        for i, pick in enumerate(_json_list(name, data.get(name, []))):
+            pick = _json_dict(f"{name}[{i}]", pick)
+            _check_design(f"{name}[{i}].design", pick.get("design"), obj)
+            if "reward" in pick:
+                _json_real(f"{name}[{i}].reward", pick["reward"])
+    _json_dict("options", data.get("options", {}))
+    if not isinstance(data.get("executor", ""), str):
+        raise ValueError(f"executor must be a string, got {data['executor']!r}")
+    _check_extra(_json_dict("extra", data.get("extra", {})))

@@ -49,6 +49,7 @@ from envs.evaluate import DesignBounds, RewardWeights
 from envs.model.defaults import DEFAULT_PAYLOAD_FACTOR
 from envs.model.family import resolve_model
 from envs.scene import SoftDisk
+from envs.validation import check_input_file
 
 from .problem import DesignProblem, check_budget, check_seed
 from .result import OptimResult
@@ -73,8 +74,17 @@ RL_METHODS = ("sac", "ppo")
 RL_HINT = "training a policy needs stable-baselines3 and torch: pip install 'psm-grasp[rl]'"
 POLICY_FORMAT = 1
 POLICY_FILES = ("policy.json", "policy.npz")
+ACTIVATIONS = ("relu", "tanh")  # of the hidden layers (DesignPolicy.actions)
+SQUASHES = ("tanh", "clip")  # of the output: SAC's tanh, PPO's clipped mean
+MAX_LAYERS = 64  # a policy's linear layers at most (the shipped ones have 3)
+# the type of each key of a policy's metadata (DesignPolicy.save, train_policy's meta)
+POLICY_META_TYPES: dict[str, type] = {
+    "format": int, "obs_fields": list, "bounds": dict, "name": str, "package_version": str,
+    "reward_weights": dict, "model": dict, "joint_spring": dict, "distribution": dict,
+    "method": str, "training": dict, "activation": str, "squash": str, "n_layers": int}
+_KIND_WORDS = {int: "an integer", list: "a list", dict: "an object ({...})", str: "a string"}
 SHIPPED_POLICY = Path(__file__).resolve().parent / "policies" / "default"
-# the shipped policy that designs shaped jaws too (the "any" jaw space of GripperDesign-v3)
+# the shipped policy that designs shaped jaws too (the "any" jaw space of GripperJawDesign-v0)
 SHIPPED_JAW_POLICY = Path(__file__).resolve().parent / "policies" / "jaws"
 SHIPPED_JAWS = {"straight": SHIPPED_POLICY, "any": SHIPPED_JAW_POLICY}
 REFINE_SIGMA = 0.1  # CMA-ES step size around the policy's design, in the normalized box
@@ -258,24 +268,46 @@ class DesignPolicy:
                                             dtype=float))
         return self.actions(obs)[0]
 
+    def starts(self, problem: DesignProblem) -> np.ndarray:
+        """The policy's candidate designs for a problem's object, normalized rows (k,
+        :attr:`~optim.problem.DesignProblem.n_var`): its own design and, for a policy of shaped
+        jaws, the same gripper with its groove centred where the object meets the finger
+        (:meth:`~envs.design_space.DesignBounds.aligned`) and the shipped straight policy's
+        design as a straight bar. A policy of shaped jaws places grooves where its training
+        left them, often away from the contact."""
+        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient,
+                             problem.payload_factor, problem_tolerance_rel(problem))
+        if self.jaw == "straight":
+            return x0[None, :]
+        fields = self.bounds.fields
+        at_foot = x0.copy()
+        at_foot[fields.index("jaw_position")] = 0.0
+        bar = np.zeros_like(x0)
+        bar[:6] = _shipped_policy("straight").normalized(
+            problem.disk, problem.strain_limit, problem.friction_coefficient,
+            problem.payload_factor, problem_tolerance_rel(problem))
+        bar[fields.index("jaw_depth_w")] = -1.0  # depth 0: a straight bar
+        return np.stack([x0, self.bounds.aligned(at_foot[None, :])[0], bar])
+
     def run(self, problem: DesignProblem, *, budget: int = 1, seed: int = 0) -> OptimResult:
-        """The policy's design for a problem's object, then ``budget - 1`` evaluations of
-        CMA-ES started at it (step size :data:`REFINE_SIGMA`, :data:`REFINE_JAW_SIGMA` in the
-        jaw columns, :func:`refine_stds`): an :class:`OptimResult` with method ``"policy"``."""
+        """The best of the policy's candidate designs for a problem's object (:meth:`starts`),
+        then CMA-ES started at it for the rest of the budget (step size :data:`REFINE_SIGMA`,
+        :data:`REFINE_JAW_SIGMA` in the jaw columns, :func:`refine_stds`): an
+        :class:`OptimResult` with method ``"policy"``."""
         from .cmaes import run_cmaes
 
         budget, seed = check_budget(budget), check_seed(seed)
         if problem.bounds != self.bounds:
             raise ValueError(f"the problem's design box {problem.bounds} is not the one the "
                              f"policy designs in, {self.bounds}")
-        x0 = self.normalized(problem.disk, problem.strain_limit, problem.friction_coefficient,
-                             problem.payload_factor, problem_tolerance_rel(problem))
+        starts = self.starts(problem)
         problem.start(budget)
-        problem.evaluate(x0[None, :])
+        first_out = problem.evaluate(starts[:budget])
+        x0 = starts[int(np.argmax(first_out["reward"]))]
         first = (problem.best_reward, problem.n_evaluations)
         stds = refine_stds(self.bounds)
-        if budget > 1:
-            run_cmaes(_Continue(problem), budget=budget - 1, seed=seed,
+        if budget > first[1]:
+            run_cmaes(_Continue(problem), budget=budget - first[1], seed=seed,
                       x0=np.clip(x0, -1.0, 1.0), sigma0=REFINE_SIGMA, stds=stds)
         return problem.result("policy", seed, options={"refine": budget - 1,
                                                        "sigma0": REFINE_SIGMA,
@@ -325,7 +357,7 @@ class _Continue:
     def __init__(self, problem: DesignProblem) -> None:
         self._problem = problem
 
-    def start(self, budget: int | None) -> None:
+    def start(self, budget: int | None, time_limit_s: float | None = None) -> None:
         pass
 
     def result(self, *args: Any, **kwargs: Any) -> None:
@@ -426,11 +458,32 @@ def load_policy(path: str | Path | None = None, jaw: str = "straight") -> Design
     meta = _read_meta(folder / "policy.json")
     _check_meta(meta, where)
     layers = _read_layers(folder / "policy.npz", meta["n_layers"])
+    _check_layers(layers, bounds_of_meta(meta["bounds"]).n_var, folder / "policy.npz")
     return DesignPolicy(layers, meta.pop("activation"), meta.pop("squash"), meta)
+
+
+def _check_layers(layers: list[tuple[np.ndarray, np.ndarray]], n_out: int, path: Path) -> None:
+    """The layers of a policy chain from the observation to the action: ``w{k}`` (out, in)
+    with ``in`` the previous layer's ``out`` (the first: the observation's fields), ``b{k}``
+    (out,), the last ``out`` the action's width, every number finite; ``ValueError`` naming
+    the file and the array otherwise."""
+    width = len(OBS_FIELDS)
+    for k, (w, b) in enumerate(layers):
+        out = n_out if k == len(layers) - 1 else (w.shape[0] if w.ndim == 2 else -1)
+        if w.shape != (out, width) or b.shape != (out,):
+            raise ValueError(f"{str(path)!r}: not a policy this package can run (w{k} has "
+                             f"shape {w.shape} and b{k} {b.shape}, layer {k} needs "
+                             f"({out}, {width}) and ({out},))")
+        for name, a in ((f"w{k}", w), (f"b{k}", b)):
+            if not np.isfinite(a).all():
+                raise ValueError(f"{str(path)!r}: {name} holds a value that is not a finite "
+                                 "number (NaN or inf): not a trained policy")
+        width = out
 
 
 def _read_meta(path: Path) -> dict[str, Any]:
     """A policy's ``policy.json``; ``ValueError`` naming the file otherwise."""
+    check_input_file("the policy's metadata", path)
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
@@ -440,12 +493,21 @@ def _read_meta(path: Path) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise ValueError(f"{str(path)!r}: not a policy's metadata (a JSON "
                          f"{type(meta).__name__}, not an object)")
+    for key, kind in POLICY_META_TYPES.items():
+        value = meta.get(key)
+        if key in meta and (not isinstance(value, kind) or isinstance(value, bool)):
+            raise ValueError(f"{str(path)!r}: not a policy's metadata ({key} = {value!r} is "
+                             f"not {_KIND_WORDS[kind]})")
     missing = [k for k in ("n_layers", "activation", "squash") if k not in meta]
     n = meta.get("n_layers")
-    if missing or isinstance(n, bool) or not isinstance(n, int) or n < 1:
+    if missing or isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_LAYERS:
         raise ValueError(f"{str(path)!r}: not a policy's metadata (" + (
-            f"no {missing[0]!r}" if missing else f"n_layers = {n!r}, not an integer >= 1")
-            + ")")
+            f"no {missing[0]!r}" if missing else f"n_layers = {n!r}, not an integer in "
+            f"[1, {MAX_LAYERS}]") + ")")
+    for key, allowed in (("activation", ACTIVATIONS), ("squash", SQUASHES)):
+        if meta[key] not in allowed:
+            raise ValueError(f"{str(path)!r}: not a policy's metadata ({key} = {meta[key]!r} "
+                             f"is not one of {allowed})")
     return meta
 
 
@@ -455,6 +517,7 @@ def _read_layers(path: Path, n_layers: int) -> list[tuple[np.ndarray, np.ndarray
     import zipfile
     import zlib
 
+    check_input_file("the policy's archive", path)
     try:
         with np.load(path, allow_pickle=False) as data:
             names = [name for k in range(n_layers) for name in (f"w{k}", f"b{k}")]
@@ -479,6 +542,23 @@ def run_policy(problem: DesignProblem, *, budget: int, seed: int = 0,
     elif not isinstance(policy, DesignPolicy):
         policy = load_policy(policy)
     return policy.run(problem, budget=budget, seed=seed)
+
+
+def policy_starts(problem: DesignProblem) -> np.ndarray:
+    """The shipped policy's candidate designs for a problem (:meth:`DesignPolicy.starts`),
+    normalized rows; none (shape (0, n_var)) where no shipped policy designs in the problem's
+    box or observes its object: a search's optional starts (:mod:`optim.portfolio`)."""
+    none = np.zeros((0, problem.n_var))
+    jaw = problem.bounds.jaw
+    if jaw not in SHIPPED_JAWS or problem.bounds.jaw_per_finger:
+        return none
+    try:
+        policy = _shipped_policy(jaw)
+        if problem.bounds != policy.bounds:
+            return none
+        return policy.starts(problem)
+    except (ValueError, OSError):  # an object it cannot observe, a policy that does not fit
+        return none
 
 
 @functools.cache
@@ -653,7 +733,7 @@ def train_policy(method: str = "sac", *, steps: int = 200_000, seed: int = 0,
         The policy's name in its metadata.
     jaw, jaw_per_finger
         The jaws it designs: ``"straight"`` (default: GripperDesign-v2's six actions) or a kind
-        of shaped jaws (GripperDesign-v3's action with the jaw columns of
+        of shaped jaws (GripperJawDesign-v0's action with the jaw columns of
         :func:`envs.design_env.jaw_bounds`; ``"any"``: cradles, V-grooves and the rounded
         grooves between them).
     **settings

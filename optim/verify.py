@@ -24,17 +24,19 @@ from envs.model.defaults import (
     FEM_DESIGN_RINGS,
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
-from envs.scenarios import Scenarios, evaluate_scenarios, place
+from envs.model.loads import DEFAULT_LOAD_SET
+from envs.scenarios import Scenarios, evaluate_scenarios, place_built
 from envs.scene import DESIGN_FIELDS, design_row
 from envs.validation import check_integer
 
 from .charts import disk_of, model_of
 from .finish import RANKING_MEMBER
-from .result import OptimResult
+from .result import OptimResult, grasp_found
+from .verdict import NO_GRASP_EXIT
 
 __all__ = ["DEFAULT_TOP", "RANKING_MEMBER", "CONFIRM_RELATIVE", "CONFIRM_ABSOLUTE",
-           "NOT_CONFIRMED_EXIT", "confirm_margin", "confirmed", "find_result", "verify_result",
-           "verify_run", "verify_figure", "verify_exit_code"]
+           "NOT_CONFIRMED_EXIT", "NO_GRASP_EXIT", "confirm_margin", "confirmed", "find_result",
+           "verify_result", "verify_run", "verify_figure", "verify_exit_code"]
 
 DEFAULT_TOP = 3
 # the FEM confirms the reported optimum when the reported reward lies within this share of the
@@ -53,7 +55,10 @@ MAX_TOP = 10  # what an OptimResult keeps
 # finding (a converged optimizer's best designs often differ only in fields the grasp ignores)
 TIE_REWARD = 1e-3
 REPORTED = ("reward", "contact_score", "grip_share", "peak_compression", "converged",
-            "valid_at_rest", "status")
+            "valid_at_rest", "status", "holds", "required_friction", "strain_limit", "touching")
+# with scenarios, what the point-spring rows add: the governing scenario and whether the design
+# holds in every scenario checked
+SCENARIO_REPORTED = ("holds_all", "scenarios_holding", "n_scenarios", "governing_scenario")
 
 
 def find_result(out_dir: str | Path, result: str | None = None) -> Path:
@@ -90,12 +95,28 @@ def confirmed(reported_reward: float, fem_reward: float) -> bool:
 
 
 def verify_exit_code(report: dict[str, Any]) -> int:
-    """The exit code of a verification: :data:`NOT_CONFIRMED_EXIT` when the FEM does not
-    confirm the reported optimum, else 1 when a FEM grasp did not converge, else 0."""
+    """The exit code of a verification: :data:`NO_GRASP_EXIT` when the reported design does
+    not hold (by the model that reported it, in every scenario checked, or by the FEM), else
+    :data:`NOT_CONFIRMED_EXIT` when the FEM does not confirm the reported optimum, else 1 when
+    a FEM grasp did not converge, else 0."""
     s = report["summary"]
+    if not s.get("reported_holds", True):  # reports written before the verdict lack it
+        return NO_GRASP_EXIT
     if not s.get("best_confirmed", True):  # reports written before the finish lack it
         return NOT_CONFIRMED_EXIT
     return 0 if s["all_fem_converged"] else 1
+
+
+def _row(table: dict[str, Any], i: int, keys) -> dict[str, Any]:
+    """Row ``i`` of a table's ``keys`` (those it has) as plain data."""
+    from .result import to_jsonable
+
+    return {k: to_jsonable(table[k][i]) for k in keys if k in table}
+
+
+def _holds(row: dict[str, Any]) -> bool:
+    """Whether a verified row holds within the strain limit (in every scenario checked)."""
+    return grasp_found(row)
 
 
 def _ranks(values: np.ndarray) -> list[int]:
@@ -134,7 +155,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
               "torsion_stiffness_nm_per_rad": obj.get("torsion_stiffness_nm_per_rad",
                                                       PAPER_TORSION_STIFFNESS_NM_PER_RAD),
               # (a run recorded before the payload had none)
-              "payload_factors": obj.get("payload_factor", 0.0)}
+              "payload_factors": obj.get("payload_factor", 0.0),
+              # (a run recorded before the load sets checked every direction)
+              "load_set": obj.get("load_set", DEFAULT_LOAD_SET)}
     disk = disk_of(obj)
     model = model_of(obj)
     reward_model = result.extra.get("reward_model", model)
@@ -147,9 +170,9 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
         rows.append({
             "design": p["design"],
             "label": p.get("label", f"#{i + 1}"),
-            "psm": {k: psm[k][i].item() for k in REPORTED},
-            "ranking_member": {k: fine[k][i].item() for k in REPORTED},
-            "fem": {k: fem[k][i].item() for k in REPORTED},
+            "psm": _row(psm, i, (*REPORTED, *SCENARIO_REPORTED)),
+            "ranking_member": _row(fine, i, (*REPORTED, *SCENARIO_REPORTED)),
+            "fem": _row(fem, i, REPORTED),
             **({"fem_scenario": scores["fem_scenario"][i],
                 "reward_model_at_fem_scenario": float(scores["model_at_fem"][i])}
                if "fem_scenario" in scores else {}),
@@ -178,6 +201,13 @@ def verify_result(result: OptimResult, top: int = DEFAULT_TOP,
         "ranking_member_same_best": fine_rank.index(1) == fem_rank.index(1),
         "fem_rank_of_ranking_member_best": fem_rank[fine_rank.index(1)],
     }
+    # does the reported design hold: by the model that reported it (in every scenario,
+    # every corner of the box) and by the FEM (in the scenario it solved)
+    reporting = rows[best]["ranking_member" if dict(reward_model) == dict(RANKING_MEMBER)
+                           else "psm"]
+    summary["reported_holds_model"] = _holds(reporting)
+    summary["reported_holds_fem"] = _holds(rows[best]["fem"])
+    summary["reported_holds"] = summary["reported_holds_model"] and summary["reported_holds_fem"]
     summary["tied"] = bool(np.ptp(psm["reward"]) < TIE_REWARD
                            or np.ptp(fem["reward"]) < TIE_REWARD)
     if len(rows) >= 3 and not summary["tied"]:
@@ -199,9 +229,11 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     """The designs' metrics by the run's model, the ranking member and the FEM.
 
     Without scenarios each is one grasp a design. With scenarios (``obj["scenarios"]``) the
-    point-spring rows are the robust summary (:func:`envs.scenarios.evaluate_scenarios`) and
-    the FEM solves each design in its worst scenario by the ranking member
-    (``fem_scenario``), where ``model_at_fem`` is the reward model's reward to compare.
+    point-spring rows are the robust summary over every corner of the scenario box
+    (:func:`envs.scenarios.evaluate_scenarios` ``full=True``: the governing scenario's row and
+    the envelopes) and the FEM solves each design in its worst scenario by the ranking member
+    (``fem_scenario``, the design as built there), where ``model_at_fem`` is the reward
+    model's reward to compare.
     """
     if not obj.get("scenarios"):
         return {"psm": evaluate_designs(designs, disk, **common, **model),
@@ -212,16 +244,19 @@ def _scores(designs: np.ndarray, disk, obj: dict[str, Any], common: dict[str, An
     mu = common["friction_coefficients"]
     kw = {"torsion_stiffness_nm_per_rad": common["torsion_stiffness_nm_per_rad"],
           "friction_coefficient": mu, "strain_limits": common["strain_limits"],
-          "payload_factors": common["payload_factors"], "robust": obj.get("robust", "worst")}
-    psm = evaluate_scenarios(designs, disk, scenarios, **kw, **model)
-    fine = evaluate_scenarios(designs, disk, scenarios, **kw, **RANKING_MEMBER)
+          "payload_factors": common["payload_factors"], "load_set": common["load_set"],
+          "robust": obj.get("robust", "worst")}
+    psm = evaluate_scenarios(designs, disk, scenarios, **kw, **model, full=True)
+    fine = evaluate_scenarios(designs, disk, scenarios, **kw, **RANKING_MEMBER, full=True)
     worst = fine.summary["worst_scenario"]
     cases = [fine.scenarios[w] for w in worst.tolist()]
-    rows, disks, frictions, offsets = place(designs, disk, mu, cases)
+    rows, disks, frictions, offsets, springs = place_built(
+        designs, disk, mu, common["torsion_stiffness_nm_per_rad"], cases)
     fem = evaluate_designs(rows, disks, strain_limits=common["strain_limits"],
                            friction_coefficients=frictions, offsets_x_m=offsets,
                            payload_factors=common["payload_factors"],
-                           torsion_stiffness_nm_per_rad=common["torsion_stiffness_nm_per_rad"],
+                           load_set=common["load_set"],
+                           torsion_stiffness_nm_per_rad=springs,
                            fidelity="fem", fem_rings=fem_rings, executor=executor)
     table = fine if dict(reward_model) == dict(RANKING_MEMBER) else psm
     pick = np.arange(designs.shape[0])
@@ -370,8 +405,19 @@ def print_report(report: dict[str, Any], paths: dict[str, Path]) -> None:
               f"FEM {s['fem_reward_of_reported']:.4f}: "
               + ("confirmed" if s["best_confirmed"] else "NOT confirmed")
               + f" (within {CONFIRM_RELATIVE:.0%} of the FEM's + {CONFIRM_ABSOLUTE:g})")
+    if "reported_holds" in s:  # reports written before the verdict lack it
+        print(f"  reported design holds: {'yes' if s['reported_holds_model'] else 'NO'} by "
+              f"the reporting model" + (" in every scenario checked" if report["designs"][
+                  _reported_row(report)].get("fem_scenario") else "")
+              + f", {'yes' if s['reported_holds_fem'] else 'NO'} by the FEM")
     for name, p in paths.items():
         print(f"  {name:12s}: {p}")
+    if not s.get("reported_holds", True):
+        print("psm-grasp: warning: the reported design does not hold its object "
+              + ("" if s["reported_holds_model"] else "in every scenario by the model that "
+                 "reported it" + ("" if s["reported_holds_fem"] else " nor ")) +
+              ("" if s["reported_holds_fem"] else "by the FEM") + ": do not build it",
+              file=sys.stderr)
     if not s["best_confirmed"]:
         _warn_not_confirmed(report)
 

@@ -239,7 +239,7 @@ def main() -> None:
                         help="only compute the per-object optima (cached in --out)")
     parser.add_argument("--jaw", default="straight", choices=("straight", "any"),
                         help="the jaws designed: straight, or any shaped jaws (the policies "
-                        "trained in GripperDesign-v3's space; --shipped: the shipped one)")
+                        "trained in GripperJawDesign-v0's space; --shipped: the shipped one)")
     parser.add_argument("--out", type=Path, default=Path("out"))
     args = parser.parse_args()
     JAW["jaw"] = args.jaw

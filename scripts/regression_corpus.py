@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 import envs
+from envs.model.defaults import FOAM_DENSITY_KG_M3
 
 SEED = 20261123
 DESIGN_ROWS = {0.07: 1200, 0.05: 300, 0.10: 300}
@@ -67,7 +68,8 @@ def design_inputs() -> tuple[np.ndarray, np.ndarray]:
 
 def evaluate_corpus_designs(designs: np.ndarray, radii: np.ndarray) -> dict[str, np.ndarray]:
     """Evaluate the corpus designs (each with its own disk) at N = 20."""
-    disks = [envs.SoftDisk(float(r), 0.0) for r in radii]
+    # the paper's foam disks (their density sets the default payload the rows were stored with)
+    disks = [envs.SoftDisk(float(r), 0.0, density_kg_m3=FOAM_DENSITY_KG_M3) for r in radii]
     return envs.evaluate_designs(designs, disks, n_triangles=20, element="spring")
 
 

@@ -5,12 +5,19 @@ this, ...), each importing its own ``envs`` (``PYTHONPATH``) with this interpret
 (or compiles, the first time) its kernels, warms up, and times:
 
 - ``batch``: one :func:`envs.evaluate.evaluate_designs` call on ``--batch`` random designs of
-  the design box on paper-r070, the default model (designs per second; ``--fan``: the paper's
-  fan too);
+  the design box on paper-r070 (``--jaw``: with grooved jaws), the default model (designs per
+  second; ``--fan``: the paper's fan too);
 - ``scenarios``: :func:`envs.scenarios.evaluate_scenarios` of ``--scenario-designs`` designs
   under a 3 x 3 placement grid (``--placement-mm``, both ways, 9 scenarios a design), from
   rest (``warm_start=False``, as every scenario was solved before) and, where the checkout
-  has it, with the warm start from each design's nominal scenario (seconds).
+  has it, with the warm start from each design's nominal scenario (seconds); ``--scenario-jaws
+  straight any``: the same batch of designs of each jaw (keys ``scenarios_<jaw>_*`` for a jaw
+  other than straight);
+- ``objects`` (``--objects FILE ...``): each object file's own scenario batch (its ranges and
+  placement tolerance, strain limit, friction and payload, as ``psm-grasp optimize --object``
+  judges a design) of ``--scenario-designs`` random designs of each jaw of ``--object-jaws``
+  (straight bars and ``any`` shaped jaws by default), as the search runs it (designs per
+  second, and the batch's seconds; keys ``object_<file>_<jaw>_*``).
 
 Each is timed twice: wall seconds, and the CPU seconds of the measuring process (its threads'
 work, which the other jobs of a shared machine disturb far less; keys ``*_cpu_s``). It prints
@@ -64,7 +71,7 @@ def measure(args: argparse.Namespace) -> dict:
 
     disk = PRESETS["paper-r070"][1]
     rng = np.random.default_rng(args.seed)
-    designs = DesignBounds().sample(rng, args.batch, disk)
+    designs = DesignBounds(jaw=getattr(args, "jaw", "straight")).sample(rng, args.batch, disk)
     members = {"default": {}}
     if args.fan:
         members["fan"] = {"element": "spring"}
@@ -75,25 +82,57 @@ def measure(args: argparse.Namespace) -> dict:
         out[f"batch_{name}_designs_per_s"] = args.batch / wall
         out[f"batch_{name}_cpu_s"] = cpu
     grid = Scenarios.of(placement_tolerance_m=args.placement_mm * 1e-3)
-    picked = designs[: args.scenario_designs]
     common = {"torsion_stiffness_nm_per_rad": PAPER_TORSION_STIFFNESS_NM_PER_RAD,
               "friction_coefficient": 0.5}
     modes = {"independent": {}}
     if "warm_start" in inspect.signature(evaluate_scenarios).parameters:
         modes = {"independent": {"warm_start": False}, "warm": {"warm_start": True}}
-    for mode, extra in modes.items():
-        evaluate_scenarios(picked[:2], disk, grid, **common, **extra)
-        out[f"scenarios_{mode}_s"], out[f"scenarios_{mode}_cpu_s"] = _seconds(
-            lambda extra=extra: evaluate_scenarios(picked, disk, grid, **common, **extra))
+    for jaw in (args.scenario_jaws if args.scenario_designs > 0 else ()):
+        picked = (designs[: args.scenario_designs] if jaw == "straight" else
+                  DesignBounds(jaw=jaw).sample(np.random.default_rng(args.seed),
+                                               args.scenario_designs, disk))
+        prefix = "scenarios" if jaw == "straight" else f"scenarios_{jaw}"
+        for mode, extra in modes.items():
+            evaluate_scenarios(picked[:2], disk, grid, **common, **extra)
+            out[f"{prefix}_{mode}_s"], out[f"{prefix}_{mode}_cpu_s"] = _seconds(
+                lambda extra=extra, picked=picked: evaluate_scenarios(picked, disk, grid,
+                                                                      **common, **extra))
+    for path in (args.objects if args.scenario_designs > 0 else ()):
+        for jaw in args.object_jaws:
+            problem = _object_problem(path, jaw)
+            rng = np.random.default_rng(args.seed)
+            picked = problem.to_physical(rng.uniform(-1.0, 1.0, (args.scenario_designs,
+                                                                  problem.n_var)))
+            problem.evaluate_physical(picked[:2])  # warm up
+            key = f"object_{Path(path).stem}_{jaw}"
+            wall, out[f"{key}_cpu_s"] = _seconds(
+                lambda problem=problem, picked=picked: problem.evaluate_physical(picked))
+            out[f"{key}_s"] = wall
+            out[f"{key}_designs_per_s"] = args.scenario_designs / wall
     out["load_after"] = _load()
     return out
+
+
+def _object_problem(path: Path, jaw: str):
+    """The problem ``psm-grasp optimize --object path --jaw jaw`` evaluates designs of."""
+    from envs.object_file import load_object
+    from optim.problem import DesignProblem
+    from optim.run import problem_kwargs
+
+    obj = load_object(path)
+    target, settings = problem_kwargs(None, obj, None, None, None, None, jaw=jaw)
+    return DesignProblem(target, name=obj.name, **settings)
 
 
 def _run_worker(tree: Path, args: argparse.Namespace) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree))
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--batch",
            str(args.batch), "--scenario-designs", str(args.scenario_designs), "--placement-mm",
-           str(args.placement_mm), "--seed", str(args.seed)] + (["--fan"] if args.fan else [])
+           str(args.placement_mm), "--seed", str(args.seed), "--jaw",
+           getattr(args, "jaw", "straight"), "--scenario-jaws",
+           *args.scenario_jaws, "--object-jaws", *args.object_jaws]
+    cmd += (["--fan"] if args.fan else []) + (["--objects", *map(str, args.objects)]
+                                              if args.objects else [])
     done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise SystemExit(f"measurement in {tree} failed:\n{done.stderr[-3000:]}")
@@ -114,9 +153,20 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--placement-mm", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fan", action="store_true", help="also the paper's fan's batch")
+    parser.add_argument("--jaw", default="straight",
+                        help="the designs' jaws (envs.DesignBounds jaw: straight, cradle, vee, "
+                        "any)")
+    parser.add_argument("--scenario-jaws", nargs="+", default=["straight"],
+                        choices=("straight", "cradle", "vee", "any"),
+                        help="the jaws of the placement batch's designs")
+    parser.add_argument("--objects", type=Path, nargs="*", default=[],
+                        help="object files whose own scenario batches to time")
+    parser.add_argument("--object-jaws", nargs="+", default=["straight", "any"],
+                        choices=("straight", "cradle", "vee", "any"))
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, default=None, help="write the results as JSON")
     args = parser.parse_args(argv)
+    args.objects = [path.resolve() for path in args.objects]
     if args.worker:
         print(json.dumps(measure(args)))
         return

@@ -10,7 +10,7 @@ KB): what :func:`optim.rl.load_policy` reads. The learning curve is scored on he
 (:func:`optim.rl.heldout_objects`, a seed no training env draws from).
 
 Usage: ``python scripts/train_shipped_policy.py [--steps 80000] [--seed 0] [--jaw any]
-[--out DIR]`` (``--jaw any``: the policy that designs shaped jaws too, GripperDesign-v3's
+[--out DIR]`` (``--jaw any``: the policy that designs shaped jaws too, GripperJawDesign-v0's
 action, written to ``optim/policies/jaws``).
 A step solves up to 9 placements, so the shipped training takes fewer steps than
 ``train-policy``'s default.

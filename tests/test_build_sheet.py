@@ -133,7 +133,8 @@ def test_fingers_closer_than_half_a_width_are_stacked():
     rows = {r["quantity"]: r["value"] for r in sheet["rows"]}
     assert rows["joint_end_overlap_mm"] == pytest.approx(1.0)
     assert build_sheet(APART, OBJ)["assembly"] == ASSEMBLY_SIDE_BY_SIDE == "side by side"
-    assert assembly_of(0.0, 1e-3)[0] == ASSEMBLY_STACKED
+    assert assembly_of(0.1e-3, 1e-3)[0] == ASSEMBLY_STACKED
+    assert assembly_of(0.0, 1e-3)[0] == "common pivot"  # both fingers on one pin
     assert assembly_of(0.6e-3, 1e-3)[0] == ASSEMBLY_SIDE_BY_SIDE
 
 
@@ -255,8 +256,8 @@ def test_the_optimize_command_writes_the_sheet_of_a_run_with_scenarios(tmp_path)
                  "0.0015", "--joints-apart", "--no-finish", "--no-progress", "--out",
                  str(tmp_path)])
     assert code in (0, 3)  # a short run need not find a grasp; its sheet is written either way
-    result = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
-    sheet = json.loads((tmp_path / "cmaes_seed0_design.json").read_text())
+    result = json.loads((tmp_path / "portfolio_seed0_result.json").read_text())
+    sheet = json.loads((tmp_path / "portfolio_seed0_design.json").read_text())
     assert result["extra"]["joints_apart"] is True and sheet["assembly"] == "side by side"
     rows = result["extra"]["scenario_rows"]
     assert len(sheet["scenarios"]) == len(rows) == 9
@@ -266,10 +267,10 @@ def test_the_optimize_command_writes_the_sheet_of_a_run_with_scenarios(tmp_path)
         assert entry["reward"] == pytest.approx(row["reward"])
     assert sorted({round(abs(r["dx_mm"]), 9) for r in sheet["scenarios"]}) == [0.0, 1.5]
     assert sheet["tolerances"]["placement_across_mm"] == pytest.approx(1.5)
-    assert (tmp_path / "cmaes_seed0_scenarios.csv").read_text().count("\n") == 10
+    assert (tmp_path / "portfolio_seed0_scenarios.csv").read_text().count("\n") == 10
     from optim.build_sheet import dxf_available
 
-    assert (tmp_path / "cmaes_seed0_fingers.dxf").exists() == dxf_available()
+    assert (tmp_path / "portfolio_seed0_fingers.dxf").exists() == dxf_available()
 
 
 def test_the_dxf_holds_each_finger_outline_in_millimetres(tmp_path):

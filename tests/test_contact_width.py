@@ -156,7 +156,7 @@ def test_a_run_whose_cap_is_far_below_its_extent_keeps_its_extent_less_half_a_sp
 
 # --- continuity in the design -------------------------------------------------------------------
 
-DISK = SoftDisk(0.07, 0.0)
+DISK = SoftDisk(0.07, 0.0, density_kg_m3=50.0)  # (the paper's foam)
 # a squeeze of the paper-r070 disk whose faces press several contour points (a resolved contact
 # that a count of points measures in steps of 1 / N)
 SQUEEZE = np.array([0.2, math.radians(45.0), 0.025, 0.01, 0.3, 0.013])

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -153,12 +154,14 @@ def test_the_option_ranges_of_cli_md_are_the_checks():
 
 def test_cli_md_lists_every_exit_code_the_commands_return():
     from cli.main import BROKEN_PIPE_EXIT, ERROR_EXIT
-    from optim.run import NO_GRASP_EXIT
+    from optim.run import NO_GRASP_EXIT, UNDECIDED_EXIT
+    from optim.verify import NO_GRASP_EXIT as DOES_NOT_HOLD
     from optim.verify import NOT_CONFIRMED_EXIT
 
     rows = _table_rows("docs/cli.md", "## Exit codes")
+    assert DOES_NOT_HOLD == NO_GRASP_EXIT  # one code, one meaning: the design does not hold
     assert {int(code) for code in rows if code.isdigit()} == {
-        0, 1, ERROR_EXIT, NO_GRASP_EXIT, NOT_CONFIRMED_EXIT, BROKEN_PIPE_EXIT}
+        0, 1, ERROR_EXIT, NO_GRASP_EXIT, NOT_CONFIRMED_EXIT, UNDECIDED_EXIT, BROKEN_PIPE_EXIT}
     assert "10 %" in rows[str(NOT_CONFIRMED_EXIT)][1] and "`1e-4`" in rows["4"][1]
 
 
@@ -224,3 +227,99 @@ def test_the_reading_of_a_reward_in_own_object_md_is_the_evaluator_s():
     np.testing.assert_allclose(out["reward"][holds], expected, rtol=0, atol=1e-12)
     # the page's bands: a hold scores at least -1, anything else below -1
     assert np.all(out["reward"][holds] >= -1.0) and np.all(out["reward"][~holds] < -1.0)
+
+
+# --- the pages run as written: README, cli.md, limitations.md, own-object.md ------------------
+
+RUN_PAGES = ("README.md", "docs/cli.md", "docs/limitations.md", "docs/own-object.md")
+FENCE = re.compile(r"^```(\w*)\n(.*?)^```", re.MULTILINE | re.DOTALL)
+# what a page's command or snippet asks for, made small enough to run in a test
+SMALL = ((re.compile(r"--budget \d+"), "--budget 12"), (re.compile(r"budget=\d+"), "budget=12"),
+         (re.compile(r"--refine \d+"), "--refine 3"), (re.compile(r"--top \d+"), "--top 1"),
+         (re.compile(r"--verify-top \d+"), "--verify-top 1"),
+         (re.compile(r"--steps \d+"), "--steps 256"))
+
+
+def _blocks(page: str, language: str) -> list[str]:
+    return [body for lang, body in FENCE.findall((ROOT / page).read_text()) if lang == language]
+
+
+def _commands(page: str) -> list[str]:
+    """The ``psm-grasp`` command lines of a page's bash blocks (comments dropped)."""
+    lines = [line.split("#")[0].strip() for block in _blocks(page, "bash")
+             for line in block.splitlines()]
+    return [line for line in lines if line.startswith("psm-grasp ")]
+
+
+def test_every_option_of_every_command_is_in_cli_md():
+    from cli.main import build_parser
+
+    text = (ROOT / "docs" / "cli.md").read_text()
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction"]
+    for name, command in sub.choices.items():
+        options = [o for a in command._actions for o in a.option_strings
+                   if o.startswith("--") and o != "--help"]
+        missing = [o for o in options if f"`{o}" not in text]
+        assert not missing, (name, missing)
+    rows = _table_rows("docs/cli.md", "## optimize", "| option | meaning |")
+    (optimize,) = [c for n, c in sub.choices.items() if n == "optimize"]
+    for action in optimize._actions:
+        for option in action.option_strings:
+            if option.startswith("--") and option not in ("--help", "--object", "--scene"):
+                assert any(option in first for first in rows), option
+
+
+@pytest.mark.parametrize("page", RUN_PAGES)
+def test_the_pages_files_and_commands_are_what_the_package_reads(page):
+    """Every TOML block of a page loads, and every command line of it parses (a typo in an
+    option fails here, in the fast suite; the slow test below runs them)."""
+    import shlex
+
+    from cli.main import build_parser
+    from envs.object_file import parse_object
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    for body in _blocks(page, "toml"):
+        data = tomllib.loads(body)
+        if "object" in data:
+            parse_object(data, page)
+    for line in _commands(page):
+        build_parser().parse_args(shlex.split(line)[1:])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", RUN_PAGES)
+def test_the_pages_run_as_written(page, tmp_path, monkeypatch, capsys):
+    """Every command of a page (budgets made small) and every Python snippet run, in order, in a
+    folder of their own; placeholders (``my_object.toml``) are an example object."""
+    import shlex
+    import shutil
+
+    from cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    shutil.copy(ROOT / "examples" / "objects" / "cherry_tomato.toml", "my_object.toml")
+    for line in _commands(page):
+        for pattern, small in SMALL:
+            line = pattern.sub(small, line)
+        args = shlex.split(line)[1:]
+        if args[0] == "train-policy":
+            pytest.importorskip("stable_baselines3")
+            if "--steps" not in args:  # (the default trains for 200,000 designs)
+                args += ["--steps", "256"]
+        if "--policy" in args and not Path(args[args.index("--policy") + 1]).exists():
+            continue  # (a policy the page trained with more steps than a test takes)
+        code = main(args)
+        # a short run need not find a grasp (3, 5), nor its optimum be confirmed (4)
+        assert code in (0, 3, 4, 5), (page, line, code, capsys.readouterr().err[-2000:])
+    for body in _blocks(page, "python"):
+        if "stable_baselines3" in body:
+            pytest.importorskip("stable_baselines3")
+        for pattern, small in SMALL:
+            body = pattern.sub(small, body)
+        exec(compile(body, page, "exec"), {"__name__": "__doc_snippet__"})

@@ -66,7 +66,9 @@ def test_simulate_reports_solve_and_kernel_load_apart(capsys):
     (["--triangles", "600", "--element", "spring"], r"beyond N = 500 most solves fail"),
     (["--triangles", "2001"], r"n_triangles = 2001 is outside the allowed range \[4, 2000\]"),
     (["--rings", "1", "--element", "nhquad"], r"n_rings = 1 is outside the allowed range"),
-    (["--budget", "0"], r"--budget: budget must be an integer >= 1 .*got 0"),
+    (["--budget", "0"], r"--budget: budget must be an integer in \[1, 10,000,000\] .*got 0"),
+    (["--budget", "1000000000000"], r"--budget: budget = 1,000,000,000,000 is outside the "
+                                    r"allowed range \[1, 10,000,000\]"),
     (["--strain-limit", "1.5"], r"--strain-limit: strain_limit = 1.5 is outside"),
 ])
 def test_optimize_checks_options_before_any_evaluation(argv, match, tmp_path, capsys,
@@ -104,10 +106,12 @@ def test_a_run_without_a_grasp_warns_and_fails(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(optim.run, "get_optimizer", lambda method: no_torque)
     code = main(["optimize", "--budget", "2", "--out", str(tmp_path), "--no-progress"])
-    assert code == optim.run.NO_GRASP_EXIT != 0
+    # one start cannot say that nothing holds: no verdict about the object (not exit 3)
+    assert code == optim.run.UNDECIDED_EXIT != 0
     err = capsys.readouterr().err
-    assert "found no grasp in 2 evaluations" in err and "does not touch" in err
-    data = json.loads((tmp_path / "cmaes_seed0_result.json").read_text())
+    assert "no design that holds was found in 2 evaluations" in err and "does not touch" in err
+    assert "one start" in err
+    data = json.loads((tmp_path / "portfolio_seed0_result.json").read_text())
     assert data["extra"]["grasp_found"] is False
 
 

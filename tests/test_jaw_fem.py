@@ -17,13 +17,14 @@ from scipy.optimize import brentq
 from envs import fem
 from envs.fem import contact as fem_contact
 from envs.fem import grasp as fem_grasp_module
+from envs.fem.loaded import fem_holding
 from envs.model.contact_width import (
     FLAT_FACE_CURVATURE_PER_M,
     hertz_arc_coefficient,
     relative_radius_m,
     segment_hertz_cap,
 )
-from envs.model.geometry import finger_frame
+from envs.model.geometry import closed_angle_rad, finger_frame
 from envs.model.holding import H_MU, NO_PATCH, hertz_half_width, holding_row
 from envs.model.jaw import STRAIGHT, JawProfile
 from envs.scene import Scene
@@ -326,7 +327,9 @@ def test_fitted_cradle_touches_along_its_arc_at_a_small_torque(cradle):
 def test_a_cradle_s_arc_of_rim_nodes_is_one_pressure_patch(cradle):
     """The FEM's contact list labels each finger's run of loaded rim nodes on the cradle as
     one pressure patch (the rule the point-spring model applies to its contour points), the
-    two fingers' runs apart, and the holding row is the one of those labels."""
+    two fingers' runs apart, and the holding row is the one of those labels (the freed disk's
+    loaded grasp, :func:`envs.fem.loaded.fem_holding`); the normal forces as solved (the
+    bound) need more."""
     scene, onset, (res,), system, x, load = cradle
     normals, points, forces, net, moment, patches = system.contact_list(
         x, load, with_patches=True)
@@ -341,9 +344,15 @@ def test_a_cradle_s_arc_of_rim_nodes_is_one_pressure_patch(cradle):
     moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
     half = hertz_half_width(disk.radius_m, disk.thickness_m, disk.youngs_modulus_pa,
                             disk.poisson_ratio)
-    row = holding_row(normals, points, forces, centre, disk.radius_m, -net, -moment_c, 0.0,
-                      half, patches)
+    grip = scene.gripper
+    locked = tuple(bool(q < closed_angle_rad(grip)) for q in x[system.n:])
+    row = fem_holding(system, system.body, system.rim, x, load, centre, disk.radius_m,
+                      grip.joint_offset_m, grip.torsion_stiffness_nm_per_rad, locked, 0.0, "any",
+                      half, disk.youngs_modulus_pa * disk.thickness_m * disk.radius_m)
     assert res.required_friction == pytest.approx(row[H_MU], rel=1e-9, abs=1e-12)
+    bound = holding_row(normals, points, forces, centre, disk.radius_m, -net, -moment_c, 0.0,
+                        half, patches)
+    assert row[H_MU] < bound[H_MU]
 
 
 def test_fitted_cradle_is_not_capped_when_pressed_hard():

@@ -73,7 +73,7 @@ def test_defaults_of_the_optional_keys(tmp_path):
     (GOOD + "[gripper]\nfinger_length_m = 0.05\njoint_offset_m = 0.002\nfinger_width_m = "
      "0.004\ndistance_m = 0.01\n", r"give the rest angle once"),
     (GOOD + "[gripper]\nfinger_length_m = 0.05\njoint_offset_m = 0.002\nfinger_width_m = "
-     "0.004\ndistance_m = 0.01\nrest_angle_deg = 95\n", r"rest_angle_deg = 95.0 is outside"),
+     "0.004\ndistance_m = 0.01\nrest_angle_deg = 95\n", r"rest_angle_deg = 95 is outside"),
 ])
 def test_a_bad_file_is_one_line_naming_the_file_and_the_key(tmp_path, text, match):
     path = _write(tmp_path, text)

@@ -22,9 +22,11 @@ from envs.evaluate import finger_gaps_m
 from envs.model.family import resolve_model
 from envs.model.geometry import distance_to_finger_bar
 from envs.model.holding import hertz_half_width
-from envs.model.layout import S_OFFSET_X
-from envs.model.problem import REST_OFFSET, REST_OK, REST_OVERLAP, rest_codes
+from envs.model.layout import S_OFFSET_X, S_RADIUS, S_SCALE, S_THICKNESS, S_YOUNG
+from envs.model.problem import REST_OFFSET, REST_OK, REST_OVERLAP, pack_params, rest_codes
 from envs.scene import DESIGN_FIELDS, Design, SoftDisk
+from envs.solver.pipeline import solve_columns
+from envs.solver.reaction import loaded_contacts
 from tests.kkt_reference import kkt_check
 from tests.test_holding import _lp_friction
 
@@ -228,14 +230,30 @@ def test_the_fixed_centre_carries_what_the_contacts_leave_about_the_true_centre(
     assert abs(moment) < 1e-9 * scale and abs(res.pin_moment_nm) < 1e-9 * scale
     about_axis = moment + 1e-3 * float(forces[:, 1].sum())
     assert abs(about_axis) > 1e-4 * scale
-    # the required friction is the linear program's about the true centre (scipy)
-    pressed = forces.any(axis=1)
-    side = np.where(res.contact_forces_n[0] > 0, 0, 1)[pressed]
-    lp = _lp_friction(np.array([normals[j] for j in side]), res.points_m[pressed],
-                      np.linalg.norm(forces[pressed], axis=1), scene.disk.center_m,
-                      DISK.radius_m, res.pin_force_n, res.pin_moment_nm,
+    # the required friction is the linear program's about the true centre (scipy), on the
+    # freed disk's normal forces (the released reaction moves them)
+    spec = resolve_model(**FAN)
+    rows = scene.rows(0.2)
+    rows[:, S_SCALE] *= spec.scale
+    n = spec.n_triangles
+    sol = solve_columns(rows, n, phase_rad=math.pi / 2, element=spec.element)
+    prm = pack_params(rows, n, "van_gelder", math.pi / 2, spec.n_rings, spec.element)
+    unit = rows[0, S_SCALE] * rows[0, S_YOUNG] * rows[0, S_THICKNESS] * rows[0, S_RADIUS]
+    got = loaded_contacts(rows[0], prm[0], n, sol.state_scaled[0], sol.face_scaled[0],
+                          sol.corner_forces_n[0] / unit,
+                          sol.stop_torques_nm[0] / (unit * rows[0, S_RADIUS]))
+    np.testing.assert_allclose(np.sort(got["forces"]),
+                               np.sort(np.linalg.norm(forces[forces.any(axis=1)], axis=1)),
+                               rtol=1e-9)
+    loaded = got["forces"] + got["response"] @ -got["row"][:3]
+    assert loaded.min() > 0.0
+    arm = got["points"] - scene.disk.center_m
+    nu = got["normals"]
+    lp = _lp_friction(nu, got["points"], loaded, scene.disk.center_m, DISK.radius_m,
+                      -(loaded[:, None] * nu).sum(axis=0),
+                      -float(np.sum(loaded * (arm[:, 0] * nu[:, 1] - arm[:, 1] * nu[:, 0]))),
                       hertz_half_width(DISK.radius_m, DISK.thickness_m,
-                                       resolve_model(**FAN).scale * DISK.stiffness_scale
+                                       spec.scale * DISK.stiffness_scale
                                        * DISK.youngs_modulus_pa, DISK.poisson_ratio))
     assert res.required_friction == pytest.approx(lp, rel=1e-6)
     # a grasp turned off the axis needs about tan(theta) of its mean angle

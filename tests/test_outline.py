@@ -1,7 +1,7 @@
 """Objects that are not disks (envs.objects): the outline's geometry against its analytic
 shape, the refusals of measured outlines, the disk reproduced by its own outline at both
 fidelities, the symmetries of a turned ellipse, placement, scenarios, files, sheets and the
-GripperDesign-v4 environment."""
+GripperShapeDesign-v0 environment."""
 
 from __future__ import annotations
 

@@ -239,11 +239,15 @@ def test_the_payload_of_an_object_and_what_holds_it():
            for f in (0.0, 1.0, 2.0)}
     assert np.all(out[2.0]["payload_n"] == pytest.approx(heavy.payload_n(2.0)))
     grasp = out[0.0]["converged"] & out[0.0]["touching"].all(axis=1)
-    # more payload never needs less friction; holding implies that friction can lift it
+    # more payload never needs less friction (the reaction alone is in every load set);
+    # holding implies that friction can lift it. Along a ray of loads the need is the largest
+    # of ratios of affine functions of the load (the loaded normal forces are linear in it), so
+    # a larger circle of pulls reaches at least the smaller one's worst, up to the Hertz
+    # patches' pressure shift, which grows as F^1.5 (measured: at most 7e-4 of the need)
     assert np.all(out[1.0]["required_friction"][grasp]
                   >= out[0.0]["required_friction"][grasp] * (1 - 1e-9))
     assert np.all(out[2.0]["required_friction"][grasp]
-                  >= out[1.0]["required_friction"][grasp] * (1 - 1e-9))
+                  >= out[1.0]["required_friction"][grasp] * (1 - 2e-3))
     holds = out[2.0]["holds"]
     assert holds.sum() < out[0.0]["holds"].sum()
     assert np.all(out[2.0]["friction_coefficient"][holds] * out[2.0]["grip_force_n"][holds]
@@ -270,12 +274,13 @@ def test_simulate_reports_the_payload_and_the_grip():
 @pytest.mark.parametrize(("key", "value", "unit"), [
     ("radius_m", 15, "millimetres"), ("thickness_m", 5, "millimetres"),
     ("youngs_modulus_pa", 0.005, "MPa"), ("density_kg_m3", 1.06, "g/cm^3")])
-def test_an_object_file_value_in_another_unit_is_refused_naming_the_unit(key, value, unit):
+def test_a_value_in_another_unit_is_refused_naming_the_unit_by_a_file_and_the_api(key, value, unit):
     table = {"radius_m": 0.01, "youngs_modulus_pa": 5e3, "poisson_ratio": 0.45,
              "thickness_m": 0.005, key: value}
     with pytest.raises(ValueError, match=f"{key}.*{re.escape(unit)}"):
         parse_object({"object": table}, "liver.toml")
-    with pytest.warns(UnitSlipWarning, match=re.escape(unit)):
+    with pytest.raises(ValueError, match=f"^{key} = {value} is outside the plausible range.*"
+                                         f"{re.escape(unit)}"):
         SoftDisk(**{"radius_m": 0.01, "distance_m": 0.0, "youngs_modulus_pa": 5e3,
                     "thickness_m": 0.005, key: value})
 
@@ -294,12 +299,15 @@ def test_plausible_objects_pass_silently_and_carry_their_density():
             Scene.preset(name)
 
 
-def test_a_cradle_lifts_the_water_like_disk_that_the_same_straight_jaws_cannot():
+def test_a_cradle_carries_the_water_like_disk_by_its_normal_forces():
     """The paper's r = 0.07 m disk as dense as water (examples/objects/water_disk.toml: 3.02 N
     with the lift, friction 0.5, strain limit 0.10): the optimum of ``psm-grasp optimize
     --jaw any --budget 800`` (a cradle of 68.8 mm, 20.1 mm deep) holds and lifts it within the
-    strain limit, its grip times the friction above the payload; the same gripper with straight
-    jaws needs more friction than the disk has."""
+    strain limit, its grip times the friction above the payload. Its run's normals wrap the
+    disk and carry the in-plane loads: it needs a quarter of the friction the same gripper
+    needs with straight jaws, and what it needs is set out of the plane, where only friction
+    carries the weight (``W / sum N`` with the reaction's small need beside it)."""
+    from envs.model.holding import LIMIT_OUT_OF_PLANE
     from envs.object_file import load_object
 
     obj = load_object(Path(__file__).resolve().parents[1] / "examples/objects/water_disk.toml")
@@ -314,4 +322,7 @@ def test_a_cradle_lifts_the_water_like_disk_that_the_same_straight_jaws_cannot()
     assert out["peak_compression"][0] < obj.strain_limit
     assert obj.friction_coefficient * out["grip_force_n"][0] > out["payload_n"][0]
     assert out["contact_score"][0] > 0.3
-    assert not out["holds"][1] and out["required_friction"][1] > obj.friction_coefficient
+    assert out["required_friction"][0] < 0.3 * out["required_friction"][1]
+    assert out["friction_limit"][0] == LIMIT_OUT_OF_PLANE
+    share = out["payload_n"][0] / out["grip_force_n"][0]
+    assert share <= out["required_friction"][0] <= 1.25 * share

@@ -185,7 +185,7 @@ def test_the_policy_refuses_what_it_cannot_answer(tmp_path, capsys, monkeypatch)
 
 
 def test_the_shipped_jaw_policy_designs_a_groove_in_one_forward_pass():
-    """``load_policy(jaw="any")``: the shipped policy of GripperDesign-v3's action space gives
+    """``load_policy(jaw="any")``: the shipped policy of GripperJawDesign-v0's action space gives
     a design with the four jaw fields, a groove that fits its finger, for an object it never
     saw; the straight policy's design has none."""
     from envs.model.jaw import JAW_FIELDS, JawProfile

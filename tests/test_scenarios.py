@@ -52,8 +52,10 @@ def test_bad_scenarios_are_named():
         Scenarios.of({"radius_m": (0.02, 0.01)})
     with pytest.raises(ValueError, match="placement_tolerance_m"):
         Scenarios.of(placement_tolerance_m="1 mm")
-    with pytest.raises(ValueError, match="placement_across_m"):
+    with pytest.raises(ValueError, match=r"placement_tolerance_m\[1\] = -0.001 is outside"):
         Scenarios.of(placement_tolerance_m=(0.001, -0.001))
+    with pytest.raises(ValueError, match="placement_across_m"):
+        Scenarios(placement_across_m=-0.001)
 
 
 def test_no_variation_is_the_plain_evaluation(paper_disk, designs):
@@ -82,7 +84,7 @@ def test_each_scenario_is_its_own_grasp(paper_disk, designs, warm_start):
         rows = designs.copy()
         rows[:, D1] += paper_disk.radius_m + s.dy_m - radius
         disk = SoftDisk(radius, 0.0, paper_disk.youngs_modulus_pa, paper_disk.poisson_ratio,
-                        paper_disk.thickness_m)
+                        paper_disk.thickness_m, density_kg_m3=paper_disk.density_kg_m3)
         alone = evaluate_designs(rows, disk, torsion_stiffness_nm_per_rad=KF,
                                  friction_coefficients=s.values.get("friction_coefficient",
                                                                     0.5),
@@ -93,12 +95,40 @@ def test_each_scenario_is_its_own_grasp(paper_disk, designs, warm_start):
     r = table.per_scenario["reward"]
     np.testing.assert_array_equal(table.summary["reward"], r.min(axis=1))
     np.testing.assert_array_equal(table.summary["reward_nominal"], r[:, 0])
-    np.testing.assert_array_equal(table.summary["holds"],
-                                  table.per_scenario["holds"].all(axis=1))
-    np.testing.assert_array_equal(table.summary["peak_compression"],
-                                  table.per_scenario["peak_compression"].max(axis=1))
     worst = table.summary["worst_scenario"]
-    np.testing.assert_array_equal(r[np.arange(r.shape[0]), worst], r.min(axis=1))
+    pick = np.arange(r.shape[0])
+    np.testing.assert_array_equal(r[pick, worst], r.min(axis=1))
+    _check_governing_and_envelopes(table)
+
+
+def _check_governing_and_envelopes(table):
+    """The summary row is the governing (lowest reward) scenario's own row, so its terms give
+    its reward; the envelopes over the scenarios are fields of their own."""
+    from envs.evaluate import METRIC_KEYS
+
+    per, summary = table.per_scenario, table.summary
+    worst = summary["worst_scenario"]
+    pick = np.arange(worst.size)
+    for key in METRIC_KEYS:
+        if key != "reward":  # (the robust measure's: the worst scenario's here)
+            np.testing.assert_array_equal(summary[key], per[key][pick, worst], err_msg=key)
+    terms = sum(summary[k] for k in ("reward_contact", "reward_deform", "penalty_slip",
+                                     "penalty_miss", "penalty_gap", "penalty_invalid",
+                                     "penalty_fail"))
+    np.testing.assert_allclose(terms, summary["reward"], rtol=0, atol=1e-12)
+    assert [table.scenarios[w].label for w in worst] == list(summary["governing_scenario"])
+    within = per["holds"] & (per["peak_compression"] <= per["strain_limit"])
+    np.testing.assert_array_equal(summary["holds_all"], within.all(axis=1))
+    np.testing.assert_array_equal(summary["scenarios_holding"], within.sum(axis=1))
+    np.testing.assert_array_equal(summary["max_payload_n"], per["payload_n"].max(axis=1))
+    np.testing.assert_array_equal(summary["max_peak_compression"],
+                                  per["peak_compression"].max(axis=1))
+    np.testing.assert_array_equal(summary["max_required_friction"],
+                                  per["required_friction"].max(axis=1))
+    np.testing.assert_array_equal(summary["min_contact_score"], per["contact_score"].min(axis=1))
+    # feasible in every scenario is the governing row's feasibility (the reward's tiers)
+    governing_ok = summary["holds"] & (summary["peak_compression"] <= summary["strain_limit"])
+    np.testing.assert_array_equal(governing_ok, summary["holds_all"])
 
 
 def test_a_displacement_across_is_mirror_symmetric(paper_disk, designs):
@@ -141,7 +171,7 @@ def test_object_file_ranges_and_tolerance():
         parse_object({"object": {**base, "strain_limit": [0.1, 0.2]}}, "tomato.toml")
     with pytest.raises(ValueError, match="low must not exceed high"):
         parse_object({"object": {**base, "radius_m": [0.02, 0.01]}}, "tomato.toml")
-    with pytest.raises(ValueError, match=r"radius_m\[1\]"):
+    with pytest.raises(ValueError, match=r"radius_m = \[0.01, -1\]: its high end: radius_m = -1 "):
         parse_object({"object": {**base, "radius_m": [0.01, -1]}}, "tomato.toml")
     with pytest.raises(ValueError, match="placement_tolerance_m"):
         parse_object({"object": {**base, "placement_tolerance_m": -0.001}}, "tomato.toml")

@@ -30,7 +30,7 @@ from .contact_reference import face_extent_shares
 
 @pytest.fixture(scope="module")
 def batch():
-    disk = SoftDisk(0.07, 0.0)
+    disk = SoftDisk(0.07, 0.0, density_kg_m3=50.0)  # (the paper's foam)
     rng = np.random.default_rng(5)
     designs = DesignBounds().sample(rng, 160, disk)
     designs[::7, 5] = -0.05  # some overlap the disk at rest

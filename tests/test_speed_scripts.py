@@ -30,11 +30,16 @@ def test_a_baseline_that_is_no_checkout_is_refused(tmp_path, capsys):
 
 def test_one_measurement_has_every_figure():
     throughput = _script("throughput")
-    args = argparse.Namespace(batch=8, scenario_designs=2, placement_mm=2.0, seed=0, fan=True)
+    strawberry = ROOT / "examples" / "objects" / "strawberry.toml"
+    args = argparse.Namespace(batch=8, scenario_designs=2, placement_mm=2.0, seed=0, fan=True,
+                              scenario_jaws=["straight", "any"], objects=[strawberry],
+                              object_jaws=["straight", "any"])
     row = throughput.measure(args)
     assert Path(row["envs"]) == ROOT / "envs"
     for key in ("batch_default_designs_per_s", "batch_fan_designs_per_s",
-                "scenarios_independent_s"):
+                "scenarios_independent_s", "scenarios_any_warm_cpu_s",
+                "object_strawberry_straight_designs_per_s", "object_strawberry_any_s",
+                "object_strawberry_any_cpu_s"):
         assert row[key] > 0.0, key
     # the medians the printed ratios are taken of (a key a checkout lacks has none)
     rows = [{"x_per_s": 1.0}, {"x_per_s": 3.0}, {"x_per_s": 2.0}]
@@ -89,3 +94,27 @@ def test_the_lanes_probe_answers_as_the_package(tmp_path):
         ceiling = row[f"ceiling_{lanes}"]
         # the optimistic ceiling is above the parts-only one, lockstep groups below refill
         assert ceiling["all_free"] >= ceiling["parts_free"] >= ceiling["parts_fixed"]
+
+
+def test_the_scenario_profile_breaks_an_object_batch_down(tmp_path):
+    """scripts/scenario_profile.py --objects: an object file's own scenario batch split into
+    its stages and its grasps from rest by contact, for each jaw; the shares add up."""
+    profile = _script("scenario_profile")
+    out = tmp_path / "w.json"
+    obj = ROOT / "examples" / "objects" / "strawberry.toml"
+    profile.main(["--objects", str(obj), "--designs", "2", "--repeats", "1", "--out", str(out)])
+    per_jaw = json.loads(out.read_text())["where"][str(obj)]
+    assert set(per_jaw) == {"straight", "any"}
+    for row in per_jaw.values():
+        assert row["scenarios"] == 9 and row["cpu_s"] > 0.0
+        assert row["from_rest_over_warm"] > 0.0
+        assert set(row["stages_cpu_s"]) == {"from_rest", "fast_path", "finish", "python"}
+        rest = row["from_rest"]
+        shares = [rest[k]["share_of_time"] for k in ("faces", "mouth_edge", "bar_corner")
+                  if k in rest]
+        assert abs(sum(shares) - 1.0) < 1e-9
+        assert sum(rest[k]["rows"] for k in ("faces", "mouth_edge", "bar_corner")
+                   if k in rest) == rest["rows"]
+    # grooved designs lead no scenario; straight ones do
+    assert per_jaw["any"]["followers_tried"] == 0 and per_jaw["straight"]["followers_tried"] > 0
+    assert per_jaw["straight"]["cpu_over_straight"] == 1.0

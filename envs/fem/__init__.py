@@ -50,7 +50,7 @@ previous converged states when that is admissible.
 Public API
 ----------
 :func:`fem_grasp`, :class:`FemResult`, :func:`fem_plate_compression`,
-:func:`hertz_line_compressio
+:func:`hertz_line_compression`,
 :data:`FEM_VERSION`, :func:`default_mesh_size_m`.
 
 Layout

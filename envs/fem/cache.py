@@ -24,8 +24,9 @@ from .result import FemResult
 # patches in the holding (envs.model.holding); fem-11 (fem-10 was a measured, reverted variant of
 # the mouth edges' radius whose entries may still be in caches): a grooved jaw's contact shares
 # by envs.model.contact_width.run_share (force-weighted curvature, the cap at most half a spacing
-# below the extent at each edge)
-FEM_VERSION = "fem-11"
+# below the extent at each edge); fem-12: the free object's grasp under load (envs.fem.loaded)
+# and the load set
+FEM_VERSION = "fem-12"
 
 
 def fem_cache_dir() -> Path:

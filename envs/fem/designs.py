@@ -23,17 +23,18 @@ __all__ = ["fem_design_grasps", "fem_metrics"]
 
 
 def fem_design_grasps(scenes: Sequence[Scene], torques_nm: Sequence[float], rings: int,
-                      cache: bool = True, payloads_n: Sequence[float] | None = None
-                      ) -> list[FemResult]:
+                      cache: bool = True, payloads_n: Sequence[float] | None = None,
+                      load_set: str = "any") -> list[FemResult]:
     """The FEM grasp of each scene at its torque, reached by ramping from the open gripper.
 
     One :func:`~envs.fem.fem_grasp` per scene on a mesh of ``rings`` rings (element size
     ``r / rings``), read from and written to its disk cache when ``cache``: a design is solved
-    once. ``payloads_n``: each grasp's payload [N] (default none).
+    once. ``payloads_n``: each grasp's payload [N] (default none); ``load_set``: its
+    directions (:data:`envs.model.loads.LOAD_SETS`).
     """
     payloads = [0.0] * len(scenes) if payloads_n is None else [float(w) for w in payloads_n]
     return [fem_grasp(scene, [float(t)], mesh_size_m=scene.disk.radius_m / rings,
-                      cache=cache, payload_n=w)[0]
+                      cache=cache, payload_n=w, load_set=load_set)[0]
             for scene, t, w in zip(scenes, torques_nm, payloads, strict=True)]
 
 

@@ -15,18 +15,16 @@ from dataclasses import fields, replace
 import numpy as np
 
 from envs.model.geometry import closed_angle_rad
-from envs.model.holding import (
-    hertz_half_width,
-    holding_fields,
-    holding_row,
-)
+from envs.model.holding import hertz_half_width, holding_fields
 from envs.model.jaw import jaw_row
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.scene import Scene
 from envs.validation import check_range
 
 from .body import _Body
 from .cache import FEM_VERSION, _cache_dir, _cache_key, _load_cache, _store_cache
 from .contact import _PENALTY_FACTOR, _Rim, jaw_corners, jaw_obstacle, rim_contact_shares
+from .loaded import fem_holding
 from .material import _check_plane, _log_strain_magnitude, _stretch_strain_magnitude
 from .mesh import (
     OutlineMap,
@@ -54,6 +52,7 @@ def fem_grasp(
     penalty_pa_per_m: float | None = None,
     al_iterations: int = 0,
     payload_n: float = 0.0,
+    load_set: str = DEFAULT_LOAD_SET,
 ) -> list[FemResult]:
     """Finite-element grasp of the scene's disk at a sequence of actuation torques.
 
@@ -95,7 +94,12 @@ def fem_grasp(
         Augmented-Lagrangian multiplier updates per torque (0 = pure penalty).
     payload_n
         The payload ``W`` [N], >= 0, that the required friction includes (carried in every
-        direction of the load set, :mod:`envs.model.holding`); 0: the hub's reaction alone.
+        direction of the load set, :mod:`envs.model.loads`); 0: the hub's reaction alone.
+    load_set
+        How the gripper picks: the payload's directions, ``"top-down"`` (along the gripper's
+        axis, both ways), ``"side"`` (out of the plane, both ways) or ``"any"`` (every
+        direction; default). The free object's grasp is solved with the FEM's own compliance
+        (:mod:`envs.fem.loaded`).
 
     Returns
     -------
@@ -126,6 +130,7 @@ def fem_grasp(
     if penalty_pa_per_m is not None:
         check_range("penalty_pa_per_m", penalty_pa_per_m, 0.0, math.inf, low_open=True)
     payload = check_range("payload_n", payload_n, 0.0, math.inf)
+    load_set_code(load_set)
     if not isinstance(al_iterations, int | np.integer) or not 0 <= al_iterations <= 50:
         raise ValueError(f"al_iterations must be an integer in [0, 50], got {al_iterations!r}")
     rings = max(2, math.ceil(r / h - 1e-9))
@@ -162,13 +167,16 @@ def fem_grasp(
         # the model's own curve: the same key for a shape and its SplineOutline
         inputs["outline"] = disk.outline.coefficients().tolist()
         inputs["orientation_rad"] = disk.orientation_rad
+    if load_set != DEFAULT_LOAD_SET:  # (the default's keys stay as they were)
+        inputs["load_set"] = load_set
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
     if cache:
         hit = _load_cache(path, inputs)
         if hit is not None:
             return hit
 
-    results = _solve_grasp(scene, torques, rings, plane, hub, eps, int(al_iterations), payload)
+    results = _solve_grasp(scene, torques, rings, plane, hub, eps, int(al_iterations), payload,
+                           load_set)
     if cache:
         _store_cache(path, inputs, results)
     return results
@@ -183,6 +191,7 @@ def _solve_grasp(
     eps: float,
     al_iterations: int,
     payload: float = 0.0,
+    load_set: str = DEFAULT_LOAD_SET,
 ) -> list[FemResult]:
     disk, grip = scene.disk, scene.gripper
     r, t = disk.radius_m, disk.thickness_m
@@ -298,13 +307,11 @@ def _solve_grasp(
         finger_corner_n = [float(sum(f for c, f in zip(system.corners, corner_forces,
                                                        strict=True) if c.side == side))
                            for side in (0, 1)]
-        normals, points, node_forces, net, moment, patches = system.contact_list(
-            x, load, with_patches=True)
-        # the hub carries what the contacts leave unbalanced (moment about the disk's centre)
-        moment_c = moment - (centre[0] * net[1] - centre[1] * net[0])
-        hold = holding_row(normals, points, node_forces, centre, r, -net, -moment_c, payload,
+        hold = fem_holding(system, body, rim, x, load, centre, r, grip.joint_offset_m, kf,
+                           (bool(x[n] < th_stop), bool(x[n + 1] < th_stop)), payload,
+                           load_set,
                            hertz_half_width(r, t, disk.youngs_modulus_pa, disk.poisson_ratio),
-                           patches)
+                           disk.youngs_modulus_pa * t * r)
         gaps = system.gaps(x)
         pen = 0.0
         for (g, valid), f in zip(gaps, forces, strict=True):
@@ -355,6 +362,7 @@ def _solve_grasp(
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
                 peak_compression=compression,
                 **holding_fields(hold),
+                load_set=load_set,
                 **common,
             )
         )

@@ -90,8 +90,10 @@ class FemResult:
     required_friction
         The smallest Coulomb coefficient with which friction at the contacts (rim nodes on the
         faces, the tip corners) could carry the hub's force and moment instead [-]
-        (:mod:`envs.model.holding`, the point-spring model's definition), including the
-        payload where one is given.
+        (:mod:`envs.model.holding`, the point-spring model's definition): the freed disk's
+        grasp under the hub's reaction and, where one is given, the payload in every direction
+        of :attr:`load_set`, its normal forces moved by the FEM's own compliance
+        (:mod:`envs.fem.loaded`).
     payload_n, grip_force_n, friction_limit, friction_limit_angle_rad
         The payload the required friction includes [N], the sum of the contacts' normal forces
         [N], what sets the required friction (a ``LIMIT_*`` code of :mod:`envs.model.holding`)
@@ -101,6 +103,8 @@ class FemResult:
         An outline's largest shortening of a rim node's distance from the centroid over its
         rest distance, ``max (r_i - |p_i - C|) / r_i`` [-] (the point-spring model's measure);
         NaN for a disk (:func:`envs.fem.designs.fem_metrics` measures it from ``contour_m``).
+    load_set
+        The payload's directions checked (:data:`envs.model.loads.LOAD_SETS`).
     from_cache
         Whether the result was read from the disk cache (ignored by ``==``).
     """
@@ -136,6 +140,7 @@ class FemResult:
     friction_limit: int = 0
     friction_limit_angle_rad: float = math.nan
     peak_compression: float = math.nan
+    load_set: str = "any"
     from_cache: bool = field(default=False, compare=False)
 
     def __eq__(self, other: object) -> bool:

@@ -243,8 +243,8 @@ class _System:
         out = self._contact(x, load, False)
         return out[3], out[4]
 
-    def contact_list(self, x: np.ndarray, load: float, with_patches: bool = False
-                     ) -> tuple[np.ndarray, ...]:
+    def contact_list(self, x: np.ndarray, load: float, with_patches: bool = False,
+                     carriers: list | None = None) -> tuple[np.ndarray, ...]:
         """The contacts on the body and their net force and moment about the origin.
 
         Returns ``(normals (k, 2), points (k, 2) [m], forces (k,) [N], net_force (2,) [N],
@@ -256,7 +256,9 @@ class _System:
         (k,) of each contact's pressure-patch label (:func:`envs.model.holding.holding_row`):
         on a grooved jaw the run of consecutive loaded rim nodes it belongs to (a groove's
         rounded mouth edge joins the run of a node it presses), else
-        :data:`envs.model.holding.NO_PATCH`.
+        :data:`envs.model.holding.NO_PATCH`. ``carriers``, a list, gets one ``(finger, nodes,
+        shares)`` a contact: its finger (0 right, 1 left) and the rim nodes its force acts on
+        with their shares of it (the loaded grasp's compliance, :mod:`envs.fem.loaded`).
         """
         p = self.rim_positions(x)
         nodes, corner_forces = self.contact_forces(x, load)
@@ -274,6 +276,8 @@ class _System:
             normals.append(dgdp[act])
             points.append(p[act])
             forces.append(f[act])
+            if carriers is not None:
+                carriers.extend((ob.qi, np.array([node]), np.ones(1)) for node in act)
             labels = np.full(act.size, NO_PATCH)
             if getattr(ob, "grooved", False) and self.rim_order is not None:
                 labels = _run_labels(f > 0, self.rim_order, index)[act]
@@ -290,6 +294,7 @@ class _System:
                 lam = 0.0 if corner.radius_m > 0.0 else lam_c
                 total = np.zeros(2)
                 pressed = []  # the rim nodes (rim indices) this corner pushes
+                pushes = []  # the size of its push on each
                 for gap, kind, idx, sign in _corner_terms(poly, c, corner.radius_m):
                     trial = lam - k * gap
                     if not trial > 0:
@@ -304,6 +309,7 @@ class _System:
                     gz = sign * np.real(gz[: 2 * len(ends)]).reshape(-1, 2)
                     vec = trial * gz  # the force on each rim node the corner presses
                     pressed.extend(int(self.rim_order[e]) for e in ends)
+                    pushes.extend(np.linalg.norm(vec, axis=1))
                     net += vec.sum(axis=0)
                     moment += float(np.sum(poly[ends, 0] * vec[:, 1] - poly[ends, 1] * vec[:, 0]))
                     total += vec.sum(axis=0)
@@ -312,6 +318,9 @@ class _System:
                 # a rounded corner touches the rim its radius from its centre, along the push
                 points.append((c + corner.radius_m * total / size)[None, :])
                 forces.append(np.array([size]))
+                if carriers is not None:
+                    carriers.append((corner.qi, np.array(pressed), np.array(pushes)
+                                     / float(np.sum(pushes))))
                 patches.append(np.array([_corner_patch(corner, pressed, node_patch,
                                                        len(self.obstacles) * p.shape[0]
                                                        + len(patches))]))

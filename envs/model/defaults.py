@@ -134,15 +134,41 @@ MAX_PAYLOAD_FACTOR = 100.0  # a lift at 99 g: beyond any gripper
 FOAM_DENSITY_KG_M3 = 50.0
 TPU_DENSITY_KG_M3 = 1200.0
 OBJECT_DENSITY_KG_M3 = 1000.0
-DEFAULT_DENSITY_KG_M3 = FOAM_DENSITY_KG_M3  # the default disk is the paper's foam
+# one default for the API and object files: water-like (produce, tissue, silicone lie within 10 %);
+# the paper's presets are foam and say so (envs.scene.PRESETS)
+DEFAULT_DENSITY_KG_M3 = OBJECT_DENSITY_KG_M3
 
-# Plausible ranges of an object's description [SI]: a value outside is most likely typed in
-# another unit (a radius of 15 "m" meant in millimetres gives 62 m fingers). Object files and
-# the command line refuse such values; the API warns (envs.validation.unit_slip). Soft objects
-# span ~100 Pa (hydrogels, brain) to tens of MPa (TPU, rubber); 1e10 Pa is a glass.
+# Plausible ranges [SI]: a value outside is most likely typed in another unit (a radius of 15
+# "m" meant in millimetres gives 62 m fingers) or not meant at all (a stiffness scale of 1e30).
+# Every entry refuses such a value with the unit it was most likely typed in
+# (envs.validation.check_plausible). An object's description: soft objects span ~100 Pa
+# (hydrogels, brain) to tens of MPa (TPU, rubber), 1e10 Pa is a glass; the calibration scale s
+# of the point-spring model is ~0.8-1 for the default model, 0.033 for the forceps' TPU beads
+# and never beyond a factor 1000 either way. A gripper (two rigid fingers and joint springs)
+# for such objects: the design box reaches fingers of 8 radii for the 1 m radius at the top of
+# the objects' range, and microgrippers of a few micrometres at its bottom; a joint spring
+# beyond 1e4 N·m/rad is a rigid joint. A gripper value outside is refused the same way
+# (millimetres typed for metres: finger_length_m = 200).
 PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
     "radius_m": (1e-5, 1.0),
     "thickness_m": (1e-6, 1.0),
     "youngs_modulus_pa": (50.0, 1e10),
     "density_kg_m3": (5.0, 25e3),
+    "stiffness_scale": (1e-3, 1e3),
+    "finger_length_m": (1e-6, 10.0),
+    "joint_offset_m": (0.0, 10.0),
+    "finger_width_m": (1e-8, 2.0),
+    "distance_m": (-10.0, 10.0),
+    "offset_x_m": (-10.0, 10.0),
+    "placement_tolerance_m": (0.0, 1.0),
+    "torsion_stiffness_nm_per_rad": (0.0, 1e4),
 }
+# The squeeze of a plausible actuation torque: at most this many of the object's torque unit
+# s E t r^2 beyond what the joint springs take when the fingers close fully (k_f pi / 2). At 10
+# units the r = 0.07 m paper disk is compressed by 75 % (envs.simulate(Scene.preset(
+# "paper-r070"), 50.0): peak compression 0.750, peak strain 2.3); a larger torque is a unit slip
+# (N·mm typed for N·m) or not meant, and far beyond the model's range.
+MAX_TORQUE_UNITS = 10.0
+# A relative joint spring at most, in the object's torque unit per radian: it would take the
+# largest plausible squeeze (MAX_TORQUE_UNITS) in a tenth of a radian (the paper's is 0.0149)
+MAX_SPRING_REL = 100.0

@@ -43,7 +43,13 @@ import warnings
 from dataclasses import replace
 from typing import NamedTuple
 
-from ..validation import check_choice, check_integer, check_n_triangles, check_range
+from ..validation import (
+    PsmGraspWarning,
+    check_choice,
+    check_integer,
+    check_n_triangles,
+    check_range,
+)
 from .defaults import (
     DEFAULT_ELEMENT,
     DEFAULT_MODEL_N_TRIANGLES,
@@ -238,8 +244,8 @@ def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
     """The shipped discretization scale of a member of the family.
 
     An nh-quad member with N outside ``NHQUAD_N_RANGE`` times its fitted N range (M = 2:
-    26-60) gets the scale with a ``UserWarning``: its error grows there (see the module's
-    docstring).
+    26-60) gets the scale with a :class:`~envs.validation.PsmGraspWarning`: its error grows
+    there (see the module's docstring).
 
     Raises
     ------
@@ -261,7 +267,7 @@ def calibration_scale(n_triangles: int, n_rings: int, element: str) -> float:
                 f"at n_triangles = {n} (outside {low:.0f}-{high:.0f}) its closing-angle error "
                 "against the FEM grows (e.g. M = 2, r = 0.10 m: 1.2 % RMS at N = 40, 9 % at "
                 "N = 20, 3.5 % at N = 200; scripts/fig5_error_vs_n.py): refine N and M together "
-                "(N / M about 16-20)", UserWarning, stacklevel=4)
+                "(N / M about 16-20)", PsmGraspWarning, stacklevel=4)
         return NHQUAD_SCALES[m][0]
     if element == "cst":
         if (n, m) not in CST_SCALES:

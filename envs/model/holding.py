@@ -13,7 +13,8 @@ these cones carry the reaction instead::
 
     sum_i t_i tau_i = F,     sum_i t_i (p_i - C) x tau_i = M,     |t_i| <= mu N_i.
 
-The normal forces are those of the solved grasp, with one freedom a free object has: on a face,
+The normal forces are those given (the freed object's loaded ones, :mod:`envs.model.loads`),
+with one freedom a free object has: on a face,
 the pressure may shift within its contact patch (its total fixed), which moves the face's normal
 force along the face and changes its moment about ``C`` within ``N_f [-a, a]``, ``a`` the
 patch's half-width, the Hertz line contact of the face's force (:func:`hertz_half_width`: the
@@ -40,9 +41,11 @@ Closed form for a symmetric grasp on the two gripping faces at finger angle ``th
 faces push the object away from the joints with ``(N_R + N_L) sin theta``, and the tangential
 forces along the finger axes can hold it with ``mu = tan theta``.
 
-One implementation for both fidelities: :mod:`envs.solver.reaction` (the point-spring model's
-contacts, in the solver's own contact geometry) and :mod:`envs.fem.grasp` (the FEM's rim nodes
-and tip corners) build the contact list and call :func:`required_friction`.
+The freed object's loaded grasp (:mod:`envs.model.loads`) moves the normal forces under each
+load and calls these kernels on them; :func:`holding_row` keeps them as solved (the former rule,
+a bound). One implementation for both fidelities: :mod:`envs.solver.reaction` (the point-spring
+model's contacts, in the solver's own contact geometry) and :mod:`envs.fem.loaded` (the FEM's
+rim nodes and tip corners) build the contact list.
 """
 
 from __future__ import annotations
@@ -73,8 +76,6 @@ __all__ = [
     "NO_PATCH",
     "in_plane_friction",
     "lift_friction",
-    "payload_friction",
-    "holding_of_contacts",
     "holding_row",
     "HOLDING_SCALARS",
     "holding_fields",
@@ -464,93 +465,6 @@ def lift_friction(gens, m, cx, cy, cz, shift, weight, tol):
                _lift_at(gens, m, cx, cy, hi, weight, tol))
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def payload_friction(gens, count, cx, cy, cz, shift, weight, tol, out):
-    """The required friction over the whole load set and what sets it, into the holding row
-    ``out`` (slots ``H_MU``, ``H_LIMIT``, ``H_LIMIT_ANGLE``).
-
-    Parameters
-    ----------
-    gens, count
-        Generators ``N_i (tau_i, m_i / L)`` (>= count, 3; overwritten: merged) and their count.
-    cx, cy, cz, shift
-        The reaction's force [N], the middle of the reach of its moment over L and the
-        half-width of that reach [N] (the pressure shift).
-    weight
-        The payload ``W`` [N], >= 0.
-    tol
-        Absolute tolerance of "inside the span" [N].
-    out
-        The holding row, written.
-    """
-    m = _merge(gens, count)
-    mu0 = in_plane_friction(gens, m, cx, cy, cz, shift, 0.0, tol)[0]
-    mu, code, angle = mu0, LIMIT_REACTION, math.nan
-    if weight > 0.0 and mu0 < math.inf:
-        mu, ux, uy, uz = in_plane_friction(gens, m, cx, cy, cz, shift, weight, tol)
-        code = LIMIT_IN_PLANE
-        if mu < math.inf and ux * ux + uy * uy > 0.0:
-            # the worst pull on the object: against the facet's in-plane normal, on the side
-            # where the reaction already loads it
-            sign = -1.0 if ux * cx + uy * cy + uz * cz >= 0.0 else 1.0
-            angle = math.atan2(sign * uy, sign * ux)
-        total = _total(gens, m)
-        ratio = weight / total if total > 0.0 else math.inf
-        # the proportional shares bound the out-of-plane need: the exact one only where it may
-        # set the answer
-        if mu < math.inf and math.sqrt(mu0 * mu0 + ratio * ratio) > mu:
-            lift = lift_friction(gens, m, cx, cy, cz, shift, weight, tol)
-            if lift > mu:
-                mu, code, angle = lift, LIMIT_OUT_OF_PLANE, math.nan
-    if mu == 0.0:
-        code = LIMIT_NONE
-    out[H_MU] = mu
-    out[H_LIMIT] = code
-    out[H_LIMIT_ANGLE] = angle
-
-
-@njit(cache=True, error_model="numpy", _nrt=False)
-def _pressure_shift(normals, points, forces, patches, count, length_scale, half_width):
-    """How far the normal forces' moment about the centre can change [N·m] when the pressure
-    on each face shifts within its contact patch, total fixed: (low <= 0, high >= 0).
-
-    A face is the contacts of one normal on one line (a finger's gripping face; a corner is a
-    face of one point), or the contacts of one patch label (``patches[i] >= 0``: a run of
-    contacts along the object's contour on a grooved jaw, :data:`NO_PATCH` otherwise). Its
-    patch is the Hertz line contact of its total force ``F``, half-width ``a = half_width
-    sqrt(F)`` [m] (:func:`hertz_half_width`) about the resultant: moving the resultant along
-    the face by ``s`` changes its moment by ``F s``, so the face adds ``-F a`` to ``low`` and
-    ``F a`` to ``high``. The patch, not the pressed points, bounds the shift: it is the
-    physical width, the same at every mesh and at both fidelities, and it shrinks
-    continuously to nothing as a contact is released (the points' span jumps by a spacing when
-    one point more is pressed). A run on a curved surface (a cradle's arc, a flank and the
-    rounded mouth edge beside it) is one patch, as on a flat face: its nodes are the
-    discretization's, not contacts of their own (a mesh that puts ten nodes where another
-    puts two would otherwise shift its pressure by a third as much)."""
-    low = high = 0.0
-    # contacts of one face lie on its line to the solver's tolerance on the gap; two faces of
-    # one normal lie far apart (a finger has one gripping face)
-    tol = 1e-3 * length_scale
-    for i in range(count):
-        if not forces[i] > 0.0:
-            continue
-        leader = True
-        for j in range(i):
-            if forces[j] > 0.0 and _same_patch(normals, points, patches, i, j, tol):
-                leader = False
-                break
-        if not leader:
-            continue
-        total = 0.0
-        for k in range(i, count):
-            if forces[k] > 0.0 and (k == i or _same_patch(normals, points, patches, i, k, tol)):
-                total += forces[k]
-        reach = total * half_width * math.sqrt(total)
-        low -= reach
-        high += reach
-    return low, high
-
-
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _same_patch(normals, points, patches, i, j, tol):
     """Contacts i and j share a pressure patch: the same label, or both unlabelled on one
@@ -587,113 +501,19 @@ def _same_normal(normals, i, j):
             and abs(normals[i, 1] - normals[j, 1]) <= 1e-9)
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _arm(points, i, centre_x, centre_y, tx, ty):
-    """Moment arm ``(p_i - C) x tau`` of a unit tangential force at contact i [m]."""
-    return (points[i, 0] - centre_x) * ty - (points[i, 1] - centre_y) * tx
-
-
-@njit(cache=True, error_model="numpy", _nrt=False)
-def holding_of_contacts(normals, points, forces, patches, count, centre_x, centre_y,
-                        length_scale, pin_x, pin_y, pin_moment, payload, half_width, gens, out):
-    """The holding row of a contact list, a pin reaction and a payload.
-
-    Parameters
-    ----------
-    normals, points, forces
-        Contact ``i < count``: unit normal on the object (2,), the point where it acts [m]
-        (2,), and its normal force [N] (>= 0; zero forces are skipped).
-    patches
-        Contact ``i``'s pressure patch (int): :data:`NO_PATCH` where the flat-face rule groups
-        it (one normal on one line), else a label shared by the contacts of one run along the
-        object's contour (:func:`_pressure_shift`). Contacts of one label and one normal are
-        one generator, at their force-weighted arm: the points of one flat flank differ only
-        by the solver's tolerance on the gap (the FEM's penalty), which would otherwise leave
-        generators a hair off parallel and the zonotope a sliver of a facet whose tiny support
-        reads as a huge required friction.
-    centre_x, centre_y
-        The fixed centre ``C`` [m].
-    length_scale
-        ``L`` [m] of the moment row (the object's radius).
-    pin_x, pin_y, pin_moment
-        The reaction of the fixed centre on the object [N, N, N·m].
-    payload
-        The payload ``W`` to carry in every direction of the load set [N], >= 0 (0: the
-        reaction alone).
-    half_width
-        ``c`` [m N^-1/2] of the faces' contact patches, half-width ``c sqrt(F)``
-        (:func:`hertz_half_width` of the object): how far a face's pressure may shift.
-    gens
-        Scratch, (>= count, 3).
-    out
-        The holding row (layout ``H_*``), written.
-    """
-    total = 0.0
-    # np.int64, not a literal 0: numba types the callees' calls before the loop's m += 1 is
-    # seen, and would compile payload_friction (and its callees) once more for Literal[int](0)
-    m = np.int64(0)
-    for i in range(count):
-        f = forces[i]
-        if not f > 0.0:
-            continue
-        total += f
-        tx, ty = -normals[i, 1], normals[i, 0]
-        arm = _arm(points, i, centre_x, centre_y, tx, ty)
-        if patches[i] >= 0:
-            # the patch's contacts of this normal: one generator at their force-weighted arm
-            first = True
-            weight = moment = 0.0
-            for k in range(count):
-                if forces[k] > 0.0 and patches[k] == patches[i] and _same_normal(normals, i, k):
-                    if k < i:
-                        first = False
-                        break
-                    weight += forces[k]
-                    moment += forces[k] * _arm(points, k, centre_x, centre_y, tx, ty)
-            if not first:
-                continue
-            f, arm = weight, moment / weight
-        gens[m, 0] = f * tx
-        gens[m, 1] = f * ty
-        gens[m, 2] = f * arm / length_scale
-        m += 1
-    out[H_PIN_X] = pin_x
-    out[H_PIN_Y] = pin_y
-    out[H_PIN_MOMENT] = pin_moment
-    out[H_PAYLOAD] = payload
-    out[H_GRIP] = total
-    low, high = _pressure_shift(normals, points, forces, patches, count, length_scale,
-                                half_width)
-    scale = max(total, math.sqrt(pin_x * pin_x + pin_y * pin_y))
-    # the tangential forces carry the pin's moment less what the shifted pressure takes over:
-    # anywhere in [pin_moment - high, pin_moment - low], over L
-    middle = (pin_moment - 0.5 * (low + high)) / length_scale
-    payload_friction(gens, m, pin_x, pin_y, middle, 0.5 * (high - low) / length_scale,
-                     payload, SPAN_TOL * scale, out)
-
-
 def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
                 pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
                 patches=None) -> np.ndarray:
-    """:func:`holding_of_contacts` of plain arrays (the FEM's contact list), a row (N_HOLD,);
-    ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no shift);
-    ``patches``: each contact's patch label (default: :data:`NO_PATCH` for all, the flat-face
-    rule)."""
-    normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 2)
-    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
-    forces = np.ascontiguousarray(forces, dtype=np.float64).reshape(-1)
-    count = forces.size
-    labels = (np.full(count, NO_PATCH, dtype=np.int64) if patches is None
-              else np.ascontiguousarray(patches, dtype=np.int64).reshape(-1))
-    if labels.size != count:
-        raise ValueError(f"patches needs one label per contact ({count}), got {labels.size}")
-    gens = np.zeros((max(count, 1), 3))
-    out = np.empty(N_HOLD)
-    holding_of_contacts(normals, points, forces, labels, count, float(centre_m[0]),
-                        float(centre_m[1]), float(length_scale_m), float(pin_force_n[0]),
-                        float(pin_force_n[1]), float(pin_moment_nm), float(payload_n),
-                        float(half_width), gens, out)
-    return out
+    """The holding row (N_HOLD,) of a contact list with its normal forces *as solved*: the
+    former rule, a bound on the freed object's need
+    (:func:`envs.model.loads.loaded_holding_row` with no response), over the load set
+    ``"any"``. ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no
+    shift); ``patches``: each contact's patch label (default: :data:`NO_PATCH` for all, the
+    flat-face rule)."""
+    from .loads import loaded_holding_row
+
+    return loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                              pin_moment_nm, None, payload_n, "any", half_width, patches)
 
 
 # the one-slot fields of a holding row by the names grasp results and batch outputs give them

@@ -228,7 +228,8 @@ def _nelder_mead(prob: _Scaled, time_limit_s: float):
 
 
 def solve(scene: Scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
-          phase_rad: float, method: str, time_limit_s: float, payload_n: float = 0.0):
+          phase_rad: float, method: str, time_limit_s: float, payload_n: float = 0.0,
+          load_set: str = "any"):
     """Run a baseline and return its answer as a checked :class:`GraspResult`."""
     cols = scene.columns(torque_nm)
     prm = pack_params(cols, n_triangles, stiffness_rule, phase_rad)
@@ -248,7 +249,8 @@ def solve(scene: Scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     info[0, I_ITERATIONS] = nit
     sol = checked_solution(cols.rows(), n, prm, x[None, :], lam_face[None],
                            np.zeros((1, 2, N_CORNERS, n)), lam_stop[None], info, elapsed,
-                           np.array([payload_n]))
+                           np.array([payload_n]), load_set)
     # the baseline's own reason where it gave up; otherwise the pipeline's (check, fold)
     message = None if (ok or sol.folded[0]) else msg
-    return grasp_result(sol, 0, torque_nm, method, stiffness_rule, message=message)
+    return grasp_result(sol, 0, torque_nm, method, stiffness_rule, message=message,
+                        load_set=load_set)

@@ -70,6 +70,7 @@ from envs.model.layout import (
     S_WIDTH,
     default_options,
 )
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.model.metrics import (
     M_COMPRESSION,
     M_DISPLACEMENT,
@@ -87,10 +88,11 @@ from envs.model.problem import (
     scene_centre_y_m,
     stiffness_unit,
 )
-from envs.model.rings import HUB_RADIUS, kernel_copy
+from envs.model.rings import HUB_RADIUS, kernel_copy, kernel_copy_into, mesh_band_index
 
 from ..parallel import run_rows
 from . import driver, follow
+from .loaded import response_work
 from .reaction import holding_one, max_contacts
 from .result import GraspResult
 from .status import BLOCKED, CHECK_FAILED, INVERTED, LINESEARCH_FAIL, OK, STATUS_MESSAGES
@@ -389,21 +391,29 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
 @njit(cache=True, error_model="numpy", nogil=True)
 def _finish_rows(start, stop_row, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos,
                  points, interior, face, corner, stop, totals, edges, metrics, ck, verdict,
-                 status, counts, flags, jaw, payload, holding):
+                 status, counts, flags, jaw, payload, load_set, holding):
     """Finish rows ``start .. stop_row - 1``: SI answers, metrics, the check, the public
     status, the pin reaction and required friction (:mod:`envs.solver.reaction`), and the
     per-row columns of :class:`BatchSolution` (``counts`` and ``flags`` one row a column,
     layouts ``C_*`` and ``F_*``; here rather than in numpy: a one-row call paid ~5 us for a
     dozen small array operations)."""
-    # the contact list's scratch, once per block of rows
+    # the contact list's and the loaded grasp's scratch, once per block of rows
     k = max_contacts(n)
     grad5, hess5 = np.empty(5), np.empty((5, 5))
     normals, contact_points = np.empty((k, 2)), np.empty((k, 2))
-    forces, gens = np.empty(k), np.empty((k, 3))
-    patches = np.empty(k, dtype=np.int64)
+    forces = np.empty(k)
+    patches, fingers = np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64)
+    nodes, share = np.empty((k, 2), dtype=np.int64), np.empty(k)
+    groups, cons = np.empty((k, 2), dtype=np.int64), np.empty((k, 2), dtype=np.int64)
+    weights = np.empty((k, 2))
+    kprm = kernel_copy(prm[start], n)
+    bidx = mesh_band_index(n, int(prm[start, P_RINGS]))
+    work = response_work(n, kprm)
     for b in range(start, stop_row):
-        holding_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], payload[b], grad5,
-                    hess5, normals, contact_points, forces, patches, gens, holding[b])
+        kernel_copy_into(prm[b], n, kprm)
+        holding_one(scene[b], prm[b], kprm, n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
+                    payload[b], load_set[b], bidx, work, grad5, hess5, normals, contact_points,
+                    forces, patches, nodes, share, fingers, groups, cons, weights, holding[b])
         st = _finish_one(scene[b], prm[b], n, xs[b], lam_face[b], lam_corner[b], lam_stop[b],
                          infos[b], points[b], interior[b], face[b], corner[b], stop[b],
                          totals[b], edges[b], metrics[b], ck[b], verdict[b])
@@ -424,7 +434,8 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
                   phase_rad: float, x0: np.ndarray | None = None,
                   lam0: np.ndarray | None = None, n_rings: int = 1,
                   element: str = "spring", payload_n: np.ndarray | None = None,
-                  leaders: np.ndarray | None = None) -> BatchSolution:
+                  leaders: np.ndarray | None = None,
+                  load_set: str = DEFAULT_LOAD_SET) -> BatchSolution:
     """Solve and check the grasps of B valid scenes with N fan triangles.
 
     Parameters
@@ -446,6 +457,9 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     payload_n
         The payload ``W`` [N] of each row (B,) that holding judges (:mod:`envs.model.holding`);
         default 0: the reaction of the fixed centre alone.
+    load_set
+        How the gripper picks: the payload's directions that holding checks, ``"top-down"``,
+        ``"side"`` or ``"any"`` (:mod:`envs.model.loads`).
     leaders
         Optional (B,) int: for each row the row of this batch whose answer starts it (its
         *leader*, a scene a few percent away: the same design in another scenario), -1 for
@@ -468,13 +482,13 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     if leaders is None:
         ans = _solve(n, prm, xs, lam_face)
         return checked_solution(scene, n, prm, xs, lam_face, ans.lam_corner, ans.lam_stop,
-                                ans.infos, time.perf_counter() - t0, payload_n)
+                                ans.infos, time.perf_counter() - t0, payload_n, load_set)
     start_x, start_lam = xs.copy(), lam_face.copy()
     ans, fast, slow = _solve_following(n, scene, prm, xs, lam_face, leaders)
     elapsed = time.perf_counter() - t0
     payload = None if payload_n is None else np.broadcast_to(payload_n, (scene.shape[0],))
     sol = checked_solution(scene, n, prm, xs, lam_face, ans.lam_corner, ans.lam_stop, ans.infos,
-                           elapsed, payload)
+                           elapsed, payload, load_set)
     # the fast path's answers stand where the check confirms a stable equilibrium; the rest
     # are solved from their own start, as without a leader
     retry = np.concatenate([slow, fast[~(sol.converged[fast] & sol.stable[fast])]])
@@ -486,14 +500,15 @@ def solve_columns(cols: SceneColumns | np.ndarray, n_triangles: int, *,
     part.infos[:, I_ITERATIONS] += ans.infos[retry, I_ITERATIONS] * np.isin(retry, fast)
     redo = checked_solution(scene[retry], n, prm[retry], x, lam, part.lam_corner,
                             part.lam_stop, part.infos, time.perf_counter() - t0,
-                            None if payload is None else payload[retry])
+                            None if payload is None else payload[retry], load_set)
     return _merge(sol, retry, redo)
 
 
 def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
                      lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
                      infos: np.ndarray, elapsed: float,
-                     payload_n: np.ndarray | None = None) -> BatchSolution:
+                     payload_n: np.ndarray | None = None,
+                     load_set: str = DEFAULT_LOAD_SET) -> BatchSolution:
     """Measure, convert to SI, check and give a public status to solver answers.
 
     Parameters
@@ -509,11 +524,14 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
         Solver time of the batch [s].
     payload_n
         The payload [N] of each row (B,), default 0 (see :func:`solve_columns`).
+    load_set
+        The load set's name (see :func:`solve_columns`).
     """
     b = prm.shape[0]
     # a writable C-contiguous copy: the kernel is compiled for that one array type
     payload = (np.zeros(b) if payload_n is None
                else np.array(np.broadcast_to(payload_n, (b,)), dtype=np.float64, order="C"))
+    loads = np.full(b, load_set_code(load_set), dtype=np.int64)
     points = np.empty((b, n, 2))
     interior = np.empty((b, (xs.shape[1] - 2 * n - 2) // 2, 2))
     face = np.empty((b, 2, n))
@@ -532,7 +550,7 @@ def checked_solution(scene: np.ndarray, n: int, prm: np.ndarray, xs: np.ndarray,
     holding = np.empty((b, N_HOLD))
     run_rows(_finish_rows, b, scene, prm, n, xs, lam_face, lam_corner, lam_stop, infos, points,
              interior, face, corner, stop, totals, edges, metrics, ck, verdict, status, counts,
-             flags, jaw, payload, holding)
+             flags, jaw, payload, loads, holding)
     return BatchSolution(
         status=status, converged=flags[F_CONVERGED], folded=flags[F_FOLDED],
         iterations=counts[C_ITERATIONS], rounds=counts[C_ROUNDS],
@@ -559,7 +577,8 @@ def row_message(sol: BatchSolution, i: int) -> str:
 def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "newton",
                  stiffness_rule: str = "van_gelder", *, message: str | None = None,
                  iterations: int | None = None, solve_time_s: float | None = None,
-                 element: str = "spring", model_scale: float = 1.0) -> GraspResult:
+                 element: str = "spring", model_scale: float = 1.0,
+                 load_set: str = DEFAULT_LOAD_SET) -> GraspResult:
     """Row ``i`` of a batch solution as a :class:`GraspResult`."""
     face = sol.face_forces_n[i]
     return GraspResult(
@@ -592,6 +611,7 @@ def grasp_result(sol: BatchSolution, i: int, torque_nm: float, method: str = "ne
         model_scale=float(model_scale),
         interior_points_m=sol.interior_points_m[i],
         peak_compression=float(sol.peak_compression[i]),
+        load_set=load_set,
         **{**holding_fields(sol.holding[i]),
            "pin_force_n": sol.holding[i, H_PIN_X : H_PIN_Y + 1].copy()},
     )

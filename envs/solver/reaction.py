@@ -9,7 +9,7 @@ centre carries what they leave unbalanced (:mod:`envs.model.holding`).
 
 Jaw grooves need nothing more: a face contact's normal is its gap's gradient on the grooved
 finger too (:func:`envs.model.jaw.jaw_gap`), and a groove's two mouth edges are corners like
-the bar's ends. The pressure shift of :func:`envs.model.holding.holding_of_contacts` groups a
+the bar's ends. The pressure shift of :mod:`envs.model.loads` groups a
 straight finger's contacts that share a normal and a line across it as one face; on a grooved
 finger a run of consecutive pressed contour points (with a mouth edge pressing an edge of the
 run) is one patch, the rule the FEM applies to its runs of rim nodes.
@@ -22,21 +22,26 @@ import math
 import numpy as np
 from numba import njit
 
-from ..model.holding import NO_PATCH, hertz_half_width, holding_of_contacts
+from ..model.holding import NO_PATCH, hertz_half_width
 from ..model.layout import (
     N_BAR_CORNERS,
     N_CORNERS,
+    P_RINGS,
+    S_JOINT_OFFSET,
     S_OFFSET_X,
     S_POISSON,
     S_RADIUS,
     S_SCALE,
     S_THICKNESS,
+    S_TORSION,
     S_YOUNG,
 )
+from ..model.loads import N_RESPONSE, loaded_holding, patch_constraints, patch_response
 from ..model.problem import scene_centre_y_m, stiffness_unit
 from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
+from .loaded import contact_compliance
 
-__all__ = ["max_contacts", "holding_one"]
+__all__ = ["max_contacts", "holding_one", "loaded_contacts"]
 
 
 @njit(cache=True, inline="always")
@@ -75,22 +80,32 @@ def _corner_label(lam_face, j, c, k, k1, n):
     return 2 * n + (j * N_CORNERS + c) * n + k
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
-def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, normals, points,
-                forces, patches, gens, out):
-    """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer.
+@njit(cache=True, error_model="numpy")
+def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, load_set, bidx,
+                work, grad5, hess5, normals, points, forces, patches, nodes, share, fingers,
+                groups, cons, weights, out):
+    """The holding row (layout ``H_*`` of :mod:`envs.model.holding`) of one scaled answer:
+    the fixed centre's reaction, then the free object's grasp over the load set
+    (:func:`envs.model.loads.loaded_holding`, the normal forces moved by the patch-level
+    model with the point-spring model's compliance, :func:`envs.solver.loaded`).
 
     Parameters
     ----------
-    s, prm, n
-        The scene row (SI), its packed parameters and N.
-    x, lam_face, lam_corner
-        The scaled state and the face (2, N) and corner (2, N_CORNERS, N) multipliers.
-    payload
-        The payload ``W`` [N] the grasp must carry in every direction of the load set
-        (:mod:`envs.model.holding`), >= 0.
-    grad5, hess5, normals, points, forces, patches, gens
-        Scratch: (5,), (5, 5), and (max_contacts(n), 2 / 2 / - / - (int) / 3).
+    s, prm, kprm, n
+        The scene row (SI), its packed parameters, the kernels' copy of them
+        (:func:`envs.model.rings.kernel_copy_into`) and N.
+    x, lam_face, lam_corner, lam_stop
+        The scaled state and the face (2, N), corner (2, N_CORNERS, N) and joint-stop (2,)
+        multipliers.
+    payload, load_set
+        The payload ``W`` [N] (>= 0) and the load set's code (``LOAD_*`` of
+        :mod:`envs.model.loads`).
+    bidx, work
+        The band index and :func:`envs.solver.loaded.response_work`'s scratch.
+    grad5, hess5, normals, points, forces, patches, nodes, share, fingers, groups, cons,
+    weights
+        Scratch: (5,), (5, 5), and per contact (max_contacts(n) rows): 2 / 2 / - / - (int) /
+        2 (int) / - / - (int) / 2 (int) / 2 (int) / 2.
     out
         The holding row (layout ``H_*``), written: the pin force on the object [N], its
         moment about the centre [N·m], the required friction [-], the payload and the grip
@@ -106,7 +121,7 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
     xc, yc = s[S_OFFSET_X], scene_centre_y_m(s)
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
-    # np.int64, not a literal 0 (see holding_of_contacts: one compilation of it, not two)
+    # np.int64, not a literal 0: numba would compile the callees once more for Literal[int](0)
     count = np.int64(0)
     fx = fy = moment = 0.0
     for j in range(2):
@@ -123,6 +138,8 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
             points[count, 0], points[count, 1] = px + xc, py + yc
             forces[count] = f
             patches[count] = _run_label(lam_face, j, i, n) if _grooved(j, prm) else NO_PATCH
+            nodes[count, 0], nodes[count, 1], share[count] = i, -1, 1.0
+            fingers[count] = j
             fx += f * nx
             fy += f * ny
             moment += f * (px * ny - py * nx)
@@ -157,10 +174,80 @@ def holding_one(s, prm, n, x, lam_face, lam_corner, payload, grad5, hess5, norma
                 points[count, 0], points[count, 1] = px + xc, py + yc
                 forces[count] = f * size
                 patches[count] = _corner_label(lam_face, j, c, k, k1, n)
+                nodes[count, 0], nodes[count, 1] = k, k1
+                share[count] = wa / (wa + wb)
+                fingers[count] = j
                 count += 1
-    # the centre carries what the contacts leave unbalanced
     # the faces' contact patches with the solved model's stiffness (its scale times E)
     half_width = hertz_half_width(r, s[S_THICKNESS], s[S_SCALE] * s[S_YOUNG], s[S_POISSON])
-    holding_of_contacts(normals, points, forces, patches, count, xc, yc, r, -fx, -fy, -moment,
-                        payload, half_width, gens, out)
+    # how the free object's normal forces move under a load (zero where the body's Hessian or
+    # the patch-level system is singular: the forces as solved)
+    mn, mc = patch_constraints(normals, points, forces, patches, nodes, fingers, count, r,
+                               groups, cons, weights)
+    g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
+                           weights, mc, r, force_unit)
+    locked = (lam_stop[0] > 0.0, lam_stop[1] > 0.0)
+    response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
+    if not (g.shape[0] == mc and patch_response(g, mn, mc, normals, points, fingers, count,
+                                                cons, weights, xc, yc, s[S_JOINT_OFFSET],
+                                                s[S_TORSION], locked, r, force_unit, response,
+                                                coupling)):
+        mc = 0  # the forces as solved
+    # the centre carries what the contacts leave unbalanced
+    loaded_holding(normals, points, forces, patches, (cons, weights, response, coupling), mn,
+                   mc, count, xc, yc, r, -fx, -fy, -moment, payload, load_set, half_width, out)
     return count
+
+
+def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.ndarray,
+                    lam_face: np.ndarray, lam_corner: np.ndarray, lam_stop: np.ndarray,
+                    payload_n: float = 0.0, load_set: int = 2) -> dict:
+    """:func:`holding_one` of one scaled answer as plain arrays (tests, scripts): the contact
+    list (``normals``, ``points`` [m], ``forces`` [N], ``fingers``, ``patches``), its loaded
+    grasp (``model``, a :class:`envs.model.loads.Response`) and each contact's linear
+    ``response`` (k, N_RESPONSE: its normal force's change per unit load on the freed object,
+    a force along x, y [N/N] and a moment [N/(N·m)], before any contact is released), and the
+    holding ``row``."""
+    from ..model.holding import N_HOLD
+    from ..model.loads import Response
+    from ..model.rings import kernel_copy, mesh_band_index
+    from .loaded import response_work
+
+    k = max_contacts(n)
+    prm_row = np.ascontiguousarray(prm_row, dtype=np.float64)
+    scene_row = np.ascontiguousarray(scene_row, dtype=np.float64)
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    kprm = kernel_copy(prm_row, n)
+    normals, points, forces = np.zeros((k, 2)), np.zeros((k, 2)), np.zeros(k)
+    fingers, patches = np.zeros(k, dtype=np.int64), np.zeros(k, dtype=np.int64)
+    nodes, share = np.zeros((k, 2), dtype=np.int64), np.zeros(k)
+    groups, cons, weights = (np.zeros((k, 2), dtype=np.int64),
+                             np.zeros((k, 2), dtype=np.int64), np.zeros((k, 2)))
+    row = np.empty(N_HOLD)
+    bidx = mesh_band_index(n, int(prm_row[P_RINGS]))
+    work = response_work(n, kprm)
+    count = holding_one(
+        scene_row, prm_row, kprm, n, x, np.ascontiguousarray(lam_face),
+        np.ascontiguousarray(lam_corner), np.ascontiguousarray(lam_stop, dtype=np.float64),
+        float(payload_n), int(load_set), bidx, work, np.empty(5), np.empty((5, 5)), normals,
+        points, forces, patches, nodes, share, fingers, groups, cons, weights, row)
+    # the loaded grasp again, kept (holding_one keeps only its row)
+    r, unit = scene_row[S_RADIUS], stiffness_unit(scene_row) * scene_row[S_RADIUS]
+    mn, mc = patch_constraints(normals, points, forces, patches, nodes, fingers, count, r,
+                               groups, cons, weights)
+    g = contact_compliance(kprm, n, x, bidx, work, nodes, share, normals, count, cons,
+                           weights, mc, r, unit)
+    response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
+    ok = g.shape[0] == mc and patch_response(
+        g, mn, mc, normals, points, fingers, count, cons, weights, scene_row[S_OFFSET_X],
+        scene_centre_y_m(scene_row), scene_row[S_JOINT_OFFSET], scene_row[S_TORSION],
+        (lam_stop[0] > 0.0, lam_stop[1] > 0.0), r, unit, response, coupling)
+    model = Response(cons[:count].copy(), weights[:count].copy(), mn, mc if ok else 0,
+                     response, coupling)
+    linear = np.zeros((count, N_RESPONSE))
+    for i in range(count):
+        if ok and cons[i, 0] >= 0:
+            linear[i] = weights[i, 0] * response[cons[i, 0]]
+    return {"normals": normals[:count], "points": points[:count], "forces": forces[:count],
+            "fingers": fingers[:count], "patches": patches[:count], "model": model,
+            "response": linear, "row": row}

@@ -16,6 +16,7 @@ import numpy as np
 from envs.check import KKTReport
 from envs.model.holding import LIMIT_NAMES
 from envs.model.layout import N_CORNERS
+from envs.model.loads import DEFAULT_LOAD_SET
 
 __all__ = ["GraspResult"]
 
@@ -104,9 +105,10 @@ class GraspResult:
         coefficient times its normal force) could carry the pin's force and moment instead [-]
         (:mod:`envs.model.holding`): 0 when nothing is carried, ``inf`` when no friction can
         (one finger touching). A symmetric grasp on the faces at finger angle ``theta`` needs
-        ``tan(theta)``. With a payload (:attr:`payload_n` > 0) the friction must also carry it
-        in every direction of the load set: out of the plane (the object hanging from a
-        horizontal grasp) and in every in-plane direction (the grasp turned any way).
+        ``tan(theta)``. The object is freed of its centre: the reaction, and the payload
+        (:attr:`payload_n` > 0) in every direction of the :attr:`load_set`, are loads the
+        contacts carry, their normal forces moved as the grasp's stiffness decides
+        (:mod:`envs.model.loads`); this is the largest friction over those loads.
     payload_n : float
         The payload ``W = f rho pi r^2 t g`` the required friction includes [N] (0: none).
     grip_force_n : float
@@ -118,6 +120,9 @@ class GraspResult:
     friction_limit_angle_rad : float
         For ``LIMIT_IN_PLANE``: the direction of the payload's pull on the object that needs
         most friction [rad from +x, gripper frame]; NaN otherwise.
+    load_set : str
+        The payload's directions checked (:data:`envs.model.loads.LOAD_SETS`): ``"top-down"``,
+        ``"side"`` or ``"any"``.
     inverted_triangles : int
         Mesh triangles (the fan's: centre, point i, point i+1) turned over in the returned
         state. The
@@ -164,6 +169,7 @@ class GraspResult:
     grip_force_n: float = 0.0
     friction_limit: int = 0
     friction_limit_angle_rad: float = math.nan
+    load_set: str = DEFAULT_LOAD_SET
 
     @property
     def touching(self) -> tuple[bool, bool]:
@@ -238,6 +244,7 @@ class GraspResult:
             "friction_limit_angle_rad": (self.friction_limit_angle_rad
                                          if math.isfinite(self.friction_limit_angle_rad)
                                          else None),
+            "load_set": self.load_set,
             "max_displacement_ratio": self.max_displacement_ratio,
             "n_contacts": list(self.n_contacts),
             "total_force_n": list(self.total_force_n),

@@ -24,6 +24,7 @@ from envs.model.defaults import (
 )
 from envs.model.family import ModelSpec, resolve_model
 from envs.model.layout import S_SCALE
+from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
 from envs.model.problem import pack_params, rest_state, stiffness_unit
 from envs.scene import Scene
 from envs.validation import check_choice, check_range
@@ -42,6 +43,8 @@ WARM_OPENING_RAD = 1e-3
 PROLONG_OPENING_RAD = 1e-6
 NESTED_ABOVE = 160  # meshes finer than this start from a coarser solution
 NESTED_FACTOR = 4
+# the baselines' wall-time budget at most (they take seconds; a larger one is a typo)
+MAX_TIME_LIMIT_S = 3600.0
 CONTINUATION_MAX_N = 500  # finer meshes: continuation costs minutes and does not help
 # turned rest starts: these fractions of a point spacing about the pin, in turn (the smaller one
 # measured: N = 4, M = 4 on paper-r100 at 5.675 N·m converges from 1/8, not from 1/4)
@@ -53,26 +56,29 @@ class _Problem:
 
     def __init__(self, scene: Scene, torque_nm: float, n: int, rule: str, phase_rad: float,
                  m: int = 1, element: str = "spring", model_scale: float = 1.0,
-                 payload_n: float = 0.0):
+                 payload_n: float = 0.0, load_set: str = DEFAULT_LOAD_SET):
         self.scene, self.torque_nm, self.n, self.rule, self.phase, self.m = (
             scene, float(torque_nm), int(n), rule, float(phase_rad), int(m))
         self.element, self.model_scale = element, float(model_scale)
         self.payload_n = float(payload_n)
+        self.load_set = load_set
         self.rows = scene.rows(self.torque_nm)
         # the member's shipped calibration: a factor on the disk's stiffness scale
         self.rows[:, S_SCALE] *= self.model_scale
 
     def at(self, torque_nm: float, n: int | None = None) -> _Problem:
         return _Problem(self.scene, torque_nm, self.n if n is None else n, self.rule,
-                        self.phase, self.m, self.element, self.model_scale, self.payload_n)
+                        self.phase, self.m, self.element, self.model_scale, self.payload_n,
+                        self.load_set)
 
     def solve(self, x0: np.ndarray | None = None, lam0: np.ndarray | None = None
               ) -> tuple[GraspResult, BatchSolution]:
         sol = solve_columns(self.rows, self.n, stiffness_rule=self.rule, phase_rad=self.phase,
                             x0=x0, lam0=lam0, n_rings=self.m, element=self.element,
-                            payload_n=np.array([self.payload_n]))
+                            payload_n=np.array([self.payload_n]), load_set=self.load_set)
         return grasp_result(sol, 0, self.torque_nm, "newton", self.rule,
-                            element=self.element, model_scale=self.model_scale), sol
+                            element=self.element, model_scale=self.model_scale,
+                            load_set=self.load_set), sol
 
 
 def _warm_start(prob: _Problem, prev: GraspResult) -> tuple[np.ndarray, np.ndarray]:
@@ -256,8 +262,8 @@ def _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_li
         raise ValueError(f"scene must be an envs.Scene, got {type(scene).__name__}")
     check_choice("method", method, METHODS)
     check_choice("stiffness_rule", stiffness_rule, STIFFNESS_RULES)
-    check_range("phase_rad", phase_rad)
-    check_range("time_limit_s", time_limit_s, 0.0, math.inf, low_open=True)
+    check_range("phase_rad", phase_rad, -2.0 * math.pi, 2.0 * math.pi)
+    check_range("time_limit_s", time_limit_s, 0.0, MAX_TIME_LIMIT_S, low_open=True)
     if element is None:
         # the baselines solve the paper's fan; Newton the default model
         element = DEFAULT_ELEMENT if method == "newton" else "spring"
@@ -290,6 +296,7 @@ def simulate(
     element: str | None = None,
     calibrated: bool | None = None,
     payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+    load_set: str = DEFAULT_LOAD_SET,
 ) -> GraspResult:
     """Solve the grasp at one actuation torque, starting from the rest configuration.
 
@@ -298,7 +305,10 @@ def simulate(
     scene
         Gripper and disk.
     torque_nm
-        Actuation torque ``T_a`` applied on each finger [N·m], >= 0.
+        Actuation torque ``T_a`` applied on each finger [N·m], >= 0 and plausible: at most
+        :data:`~envs.model.defaults.MAX_TORQUE_UNITS` of the disk's torque unit ``s E t r^2``
+        beyond the joint springs' moment at full closing (:meth:`envs.scene.Scene.check_torque`;
+        10 units squeeze the paper's disk by 75 %).
     n_triangles, n_rings, element, calibrated
         The member of the model family (:func:`envs.model.family.resolve_model`). The defaults
         are the default model (for the baselines, ``method != "newton"``, the paper's fan):
@@ -320,13 +330,20 @@ def simulate(
     stiffness_rule
         ``"van_gelder"`` (default) or ``"cst_fit"``.
     phase_rad
-        Angle of the first contour point [rad]; pi/2 (top) is mirror-symmetric for even N.
+        Angle of the first contour point [rad], in [-2 pi, 2 pi]; pi/2 (top) is
+        mirror-symmetric for even N.
     time_limit_s
-        Wall-time budget for the baselines [s] (the Newton solver needs none).
+        Wall-time budget for the baselines [s], in (0, 3600] (the Newton solver needs none).
     payload_factor
         ``f`` of the payload ``W = f rho pi r^2 t g`` the required friction includes
         (:meth:`envs.scene.SoftDisk.payload_n`), in [0, 100]: default 2 (the weight plus a
         lift at 1 g), 0 for the reaction of the fixed centre alone.
+    load_set
+        How the gripper picks, the payload's directions the friction must carry it in
+        (:mod:`envs.model.loads`): ``"top-down"`` (along the gripper's axis, towards the tips
+        and back), ``"side"`` (out of the plane, both ways) or ``"any"`` (every in-plane
+        direction and out of the plane; default). The freed object's grasp is solved under
+        each load (its normal forces move as the grasp's stiffness decides).
 
     Returns
     -------
@@ -342,16 +359,17 @@ def simulate(
     spec = _check_inputs(scene, n_triangles, method, stiffness_rule, phase_rad, time_limit_s,
                          n_rings, element, calibrated)
     n = spec.n_triangles
-    torque = check_range("torque_nm", torque_nm, 0.0, math.inf)
+    torque = scene.check_torque(torque_nm)
     payload = scene.disk.payload_n(payload_factor)
+    load_set_code(load_set)
     prob = _Problem(scene, torque, n, stiffness_rule, float(phase_rad), spec.n_rings,
-                    spec.element, spec.scale, payload)
+                    spec.element, spec.scale, payload, load_set)
     if method == "newton":
         return _solve_newton(prob)
     from . import baselines
 
     return baselines.solve(scene, torque, n, stiffness_rule, float(phase_rad), method,
-                           float(time_limit_s), payload)
+                           float(time_limit_s), payload, load_set)
 
 
 def simulate_ramp(
@@ -368,6 +386,7 @@ def simulate_ramp(
     calibrated: bool | None = None,
     until_peak_strain: float | None = None,
     payload_factor: float = DEFAULT_PAYLOAD_FACTOR,
+    load_set: str = DEFAULT_LOAD_SET,
 ) -> list[GraspResult]:
     """Follow the grasp along an increasing torque ramp (the paper's Fig. 4 curve).
 
@@ -400,7 +419,7 @@ def simulate_ramp(
     if torques.size == 0:
         raise ValueError("torques_nm must contain at least one torque")
     for i, t in enumerate(torques.tolist()):
-        check_range(f"torques_nm[{i}]", t, 0.0, math.inf)
+        scene.check_torque(t, f"torques_nm[{i}]")
     if np.any(np.diff(torques) < 0):
         raise ValueError("torques_nm must be non-decreasing (a loading ramp)")
     stop = math.inf if until_peak_strain is None else check_range(
@@ -410,10 +429,12 @@ def simulate_ramp(
             raise ValueError(f"until_peak_strain needs method = 'newton', got {method!r}")
         return [simulate(scene, t, n, method, stiffness_rule=stiffness_rule,
                          phase_rad=phase_rad, time_limit_s=time_limit_s, n_rings=1,
-                         element="spring", calibrated=False, payload_factor=payload_factor)
+                         element="spring", calibrated=False, payload_factor=payload_factor,
+                         load_set=load_set)
                 for t in torques]
+    load_set_code(load_set)
     base = _Problem(scene, 0.0, n, stiffness_rule, float(phase_rad), spec.n_rings,
-                    spec.element, spec.scale, scene.disk.payload_n(payload_factor))
+                    spec.element, spec.scale, scene.disk.payload_n(payload_factor), load_set)
     out: list[GraspResult] = []
     prev: GraspResult | None = None
     for t in torques.tolist():

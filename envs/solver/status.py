@@ -35,7 +35,10 @@ STATUS_MESSAGES = {
 NOT_SOLVED = -1  # batch rows that were not solved (invalid at rest)
 CHECK_FAILED = 11  # the solver claimed an equilibrium the independent check rejected
 FEM_FAILED = 12  # evaluate_designs(fidelity="fem"): the finite-element grasp did not converge
+NOT_FINITE = 13  # batch rows with a design value that is not a finite number (not solved)
 STATUS_MESSAGES[NOT_SOLVED] = "not solved: the design is invalid at rest"
 STATUS_MESSAGES[CHECK_FAILED] = "independent equilibrium check failed"
 STATUS_MESSAGES[FEM_FAILED] = "the finite-element grasp did not converge"
+STATUS_MESSAGES[NOT_FINITE] = ("not solved: a design value is not a finite number (NaN or "
+                               "inf)")
 PUBLIC_STATUS = tuple(sorted(set(STATUS_MESSAGES) - {BLOCKED}))

@@ -52,7 +52,7 @@ _HELPER_UNITS = (
 )
 _MAIN_UNITS = (
     ("pipeline", "_finish_rows",
-     "i i f2 f2 i f2 f3 f4 f2 f2 f3 f3 f3 f4 f2 f3 i3 f2 f2 f2 i1 i2 b2 f2 f1 f2"),
+     "i i f2 f2 i f2 f3 f4 f2 f2 f3 f3 f3 f4 f2 f3 i3 f2 f2 f2 i1 i2 b2 f2 f1 i1 f2"),
     ("assembly", "_drop_curvature", "f1 i f1 i1 i1 i1 i i2 f2 f2 i1 f2 f2 f2"),
     ("curvature", "_negative_curvature_step",
      "f1 i f1 i1 i1 i1 i1 i f1 f f2 f2 f2 f2 f2 f1 f1 f1 f1 f1 f1 f1 f1"),

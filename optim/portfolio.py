@@ -1,0 +1,370 @@
+"""The default search: a portfolio of CMA-ES starts racing for one budget.
+
+One CMA-ES run from the box's centre lands in whichever basin it first falls into: on shaped
+jaws under scenarios the reward has cliffs (the strain limit, holding the payload) and tiers
+(a grasp that slips scores below every grasp that holds), and the basins a run can fall into
+differ several-fold in reward. The portfolio spends its budget so that no single basin decides:
+
+1. **Screen**: a scrambled Sobol sample of the box, a quarter of it on straight bars when the
+   jaws are shaped, and the shipped design policy's candidates. By default each design is
+   judged on the nominal scenario alone (``screen="nominal"``): with ``K`` scenarios that is
+   ``K`` times as many designs for the same charge (:meth:`~optim.problem.DesignProblem.screen`),
+   and the nominal reward still tells a promising region from a hopeless one where the worst
+   scenario's does not (most designs fail somewhere, and a failing design says little about
+   its neighbours). The best of them, apart from each other, are then judged as the search
+   judges all (every scenario). :data:`SCREEN_SHARE` of the budget goes to the screen.
+2. **Starts**: the best screened designs that lie apart from each other (:data:`START_SPACING`
+   in the normalized box), and, with shaped jaws, a start confined to straight bars (from the
+   best screened straight bar): the grooved search then never ends below a straight search
+   that had its share. With shaped jaws the search reads the groove's position as an offset
+   from where the object meets the finger (:data:`ALIGN_REACH_R` radii either way), so that a
+   sampled groove lies under the object, not elsewhere on the finger.
+3. **Race**: every live start is a CMA-ES (step :data:`SIGMA0`) asked for a population each
+   round; the rounds' populations are evaluated in one batch. At :data:`HALVING_SHARES` of the
+   budget the worse half of the live starts (by their best reward) stop, so the budget goes to
+   the basins that lead. A start whose CMA-ES converges restarts from the next unused screened
+   design.
+
+The result records each start's best (``extra["starts"]``): the finish re-scores every start's
+best with the finer member beside the run's best distinct designs, and a verdict that nothing
+holds (:func:`optim.verdict.search_verdict`) needs the starts to agree.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .cmaes import _import_cma, default_popsize
+from .problem import DesignProblem, check_budget, check_seed
+from .result import OptimResult
+
+__all__ = ["run_portfolio", "DEFAULT_STARTS", "SCREEN_SHARE", "SIGMA0", "START_SPACING",
+           "HALVING_SHARES"]
+
+DEFAULT_STARTS = 6
+# the share of the budget spent on the screen (at least MIN_SCREEN_PER_VAR points a coordinate)
+SCREEN_SHARE = 0.15
+MIN_SCREEN_PER_VAR = 4
+# the screen's share of straight bars when the jaws are shaped (the groove's depth 0)
+STRAIGHT_SHARE = 0.25
+STRAIGHT_LABEL = "straight bars"
+# CMA-ES's initial step in the normalized box [-1, 1]^n from a screened start
+SIGMA0 = 0.25
+# with shaped jaws the search puts the groove's centre within this many object radii of
+# where the object meets the finger (envs.design_space.DesignBounds.aligned)
+ALIGN_REACH_R = 1.0
+# starts closer than this in every normalized coordinate to a better one are the same basin
+START_SPACING = 0.3
+# the nominal screen (run_portfolio's screen="nominal"): the best this many designs per start,
+# apart from each other, are judged robustly
+POOL_PER_START = 3
+SCREENS = ("robust", "nominal")
+# shares of the budget left after the screen, after which the worse half of the live starts
+# stop (the straight bars' start is spared the first: it converges in its own smaller space)
+HALVING_SHARES = (0.5, 0.75)
+
+
+@dataclass
+class _Start:
+    """One CMA-ES start of the portfolio: its strategy, the coordinates it may move (the
+    others held, e.g. a straight bar's groove) and its best so far."""
+
+    label: str
+    es: Any
+    free: np.ndarray  # bool mask of the coordinates the start searches
+    base: np.ndarray  # the full normalized point; the held coordinates are read from it
+    best_reward: float = -math.inf
+    best_x: np.ndarray | None = None
+    best_feasible: bool = False
+    evaluations: int = 0
+    restarts: int = 0
+    live: bool = True
+    history: list[float] = field(default_factory=list)
+
+    def full(self, xs: list[np.ndarray]) -> np.ndarray:
+        """The start's asked points as full rows of the box."""
+        rows = np.repeat(self.base[None, :], len(xs), axis=0)
+        rows[:, self.free] = np.asarray(xs)
+        return rows
+
+
+def _sobol(n: int, dim: int, seed: int) -> np.ndarray:
+    """``n`` scrambled Sobol points in [-1, 1]^dim (a power of two is not required: the
+    first ``n`` of the sequence)."""
+    from scipy.stats import qmc
+
+    sampler = qmc.Sobol(d=dim, scramble=True, seed=np.random.default_rng(seed))
+    m = max(1, math.ceil(math.log2(max(n, 2))))
+    return 2.0 * sampler.random_base2(m)[:n] - 1.0
+
+
+def _straight_columns(problem: DesignProblem) -> dict[int, float]:
+    """The normalized coordinates that make a design of ``problem`` a straight bar (each
+    groove's depth at its low end, 0) and the values they are held at; empty for straight
+    jaws."""
+    from envs.design_space import JAW_RELATIVE_FIELDS
+
+    depth = JAW_RELATIVE_FIELDS[0]
+    return {k: -1.0 for k, name in enumerate(problem.bounds.fields)
+            if name == depth or name == "left_" + depth}
+
+
+def _screen_size(problem: DesignProblem, budget: int) -> int:
+    """Designs the robust screen judges: :data:`SCREEN_SHARE` of the budget, at least
+    :data:`MIN_SCREEN_PER_VAR` a coordinate, at most the budget."""
+    return min(budget, max(MIN_SCREEN_PER_VAR * problem.n_var, round(SCREEN_SHARE * budget)))
+
+
+def _screen(problem: DesignProblem, n: int, seed: int) -> np.ndarray:
+    """``n`` screen points in search coordinates: Sobol, a :data:`STRAIGHT_SHARE` of them
+    made straight bars when the jaws are shaped."""
+    x = _sobol(n, problem.n_var, seed)
+    straight = _straight_columns(problem)
+    if straight:
+        rows = np.arange(n) % round(1 / STRAIGHT_SHARE) == 0
+        for k, v in straight.items():
+            x[rows, k] = v
+    return x
+
+
+def _apart(x: np.ndarray, order: np.ndarray, spacing: float, count: int,
+           taken: list[np.ndarray]) -> list[int]:
+    """Up to ``count`` rows of ``x`` in the given order, each farther than ``spacing`` (in the
+    max norm) from the others picked and from ``taken``."""
+    picked: list[int] = []
+    for i in order.tolist():
+        if len(picked) == count:
+            break
+        if all(np.max(np.abs(x[i] - t)) > spacing for t in taken) and all(
+                np.max(np.abs(x[i] - x[j])) > spacing for j in picked):
+            picked.append(i)
+    return picked
+
+
+class _Portfolio:
+    """The race: the starts, the screened points left to restart from, and the rounds."""
+
+    def __init__(self, problem: DesignProblem, seed: int, sigma0: float, popsize: int | None):
+        self.problem = problem
+        self.cma = _import_cma()
+        self.rng = np.random.default_rng(seed)
+        self.sigma0 = sigma0
+        self.popsize = popsize
+        self.starts: list[_Start] = []
+        self.spare: list[np.ndarray] = []
+
+    def to_box(self, y: np.ndarray) -> np.ndarray:
+        """The problem's normalized rows of search coordinates ``y``: with shaped jaws the
+        groove's position is searched as an offset from where the object meets the finger
+        (:meth:`envs.design_space.DesignBounds.aligned`, :data:`ALIGN_REACH_R`)."""
+        return self.problem.bounds.aligned(y, ALIGN_REACH_R)
+
+    def add(self, label: str, x0: np.ndarray, free: np.ndarray | None = None) -> None:
+        """A new start at ``x0`` (searching the coordinates ``free``; default all)."""
+        n = self.problem.n_var
+        free = np.ones(n, dtype=bool) if free is None else free
+        dim = int(free.sum())
+        lam = default_popsize(dim) if self.popsize is None else self.popsize
+        es = self.cma.CMAEvolutionStrategy(np.clip(x0[free], -1.0, 1.0), self.sigma0, {
+            "bounds": [-1.0, 1.0], "popsize": lam,
+            "randn": lambda *shape: self.rng.standard_normal(shape),
+            "seed": np.nan, "verbose": -9, "verb_log": 0, "verb_disp": 0,
+            "tolflatfitness": 10,
+        })
+        self.starts.append(_Start(label, es, free, np.asarray(x0, dtype=np.float64).copy()))
+
+    def restart(self, start: _Start) -> None:
+        """Give a converged start a new CMA-ES from the best unused screened point (a uniform
+        point when none is left), with twice the population (IPOP)."""
+        x0 = self.spare.pop(0) if self.spare else self.rng.uniform(-1.0, 1.0, self.problem.n_var)
+        x0 = x0.copy()
+        x0[~start.free] = start.base[~start.free]
+        lam = 2 * start.es.popsize
+        start.es = self.cma.CMAEvolutionStrategy(x0[start.free], self.sigma0, {
+            "bounds": [-1.0, 1.0], "popsize": lam,
+            "randn": lambda *shape: self.rng.standard_normal(shape),
+            "seed": np.nan, "verbose": -9, "verb_log": 0, "verb_disp": 0,
+            "tolflatfitness": 10,
+        })
+        start.restarts += 1
+
+    def round(self) -> bool:
+        """One round: every live start's population in one batch; False when the budget is
+        spent."""
+        problem = self.problem
+        live = [s for s in self.starts if s.live]
+        asked = [(s, s.es.ask()) for s in live]
+        rows = self.to_box(np.concatenate([s.full(xs) for s, xs in asked]))
+        n = min(len(rows), problem.remaining)
+        if n <= 0:
+            return False
+        out = problem.evaluate(rows[:n])
+        feasible = problem.feasible(out)
+        at = 0
+        for s, xs in asked:
+            k = len(xs)
+            got = out["reward"][at:at + k]
+            if len(got):
+                i = int(np.argmax(got))
+                if got[i] > s.best_reward:
+                    s.best_reward, s.best_x = float(got[i]), rows[at + i].copy()
+                    s.best_feasible = bool(feasible[at + i])
+                s.evaluations += len(got)
+            if len(got) == k:
+                s.es.tell(xs, (-got).tolist())
+                if s.es.stop():
+                    self.restart(s)
+            at += k
+            s.history.append(s.best_reward)
+        return n == len(rows) and problem.remaining > 0
+
+    def halve(self, spare_straight: bool) -> None:
+        """Stop the worse half of the live starts (by their best reward; at least one stays);
+        ``spare_straight``: not the straight bars' start."""
+        live = sorted((s for s in self.starts if s.live), key=lambda s: -s.best_reward)
+        for s in live[max(1, math.ceil(len(live) / 2)):]:
+            s.live = spare_straight and s.label == STRAIGHT_LABEL
+
+
+def _screened_pool(problem: DesignProblem, race: _Portfolio, budget: int, seed: int,
+                   screen: str, policy: bool, starts: int) -> tuple[np.ndarray, np.ndarray]:
+    """The screen: designs in search coordinates and their robust rewards, from which the
+    starts are chosen (the shipped policy's candidates first, with ``policy``).
+
+    The nominal screen judges ``K`` times the robust screen's designs on the nominal scenario
+    for the same charge (``K`` scenarios), then robustly the best :data:`POOL_PER_START` per
+    start of them, apart from each other, and as many of its best straight bars."""
+    n = _screen_size(problem, budget)
+    nominal = screen == "nominal" and problem.scenario_count > 1
+    y = _screen(problem, n * problem.scenario_count if nominal else n, seed)
+    if policy:
+        from .rl import policy_starts
+
+        y = np.concatenate([problem.bounds.unaligned(policy_starts(problem), ALIGN_REACH_R),
+                            y])
+    if nominal:
+        pool = POOL_PER_START * (starts + 1)
+        y = y[:problem.scenario_count * max(problem.remaining - pool, 1)]
+        judged = problem.screen(race.to_box(y))["reward"]
+        order = np.argsort(-judged, kind="stable")
+        keep = _apart(y, order, START_SPACING / 2, POOL_PER_START * starts, [])
+        straight = _straight_rows(problem, y)
+        keep += [i for i in order.tolist() if straight[i] and i not in keep][:POOL_PER_START]
+        y = y[sorted(keep)]
+    reward = problem.evaluate(race.to_box(y[:problem.remaining]))["reward"]
+    return y[:len(reward)], reward
+
+
+def _straight_rows(problem: DesignProblem, y: np.ndarray) -> np.ndarray:
+    """Which rows of search coordinates are straight bars (all True for straight jaws)."""
+    straight = _straight_columns(problem)
+    if not straight:
+        return np.ones(len(y), dtype=bool)
+    return np.all([y[:, k] == v for k, v in straight.items()], axis=0)
+
+
+def _seat_starts(problem: DesignProblem, race: _Portfolio, y: np.ndarray, reward: np.ndarray,
+                 starts: int) -> None:
+    """The race's starts from the screened pool: the best straight bar (with shaped jaws,
+    confined to straight bars), then the best designs apart from each other; the rest of the
+    pool, best first, is left for restarts."""
+    order = np.argsort(-reward, kind="stable")
+    straight = _straight_columns(problem)
+    taken: list[int] = []
+    if straight and starts > 1 and len(reward):
+        is_straight = _straight_rows(problem, y)
+        best = [i for i in order.tolist() if is_straight[i]]
+        if best:
+            free = np.ones(problem.n_var, dtype=bool)
+            free[list(straight)] = False
+            race.add(STRAIGHT_LABEL, y[best[0]], free)
+            taken.append(best[0])
+    picked = _apart(y, order, START_SPACING, starts - len(taken), [y[i] for i in taken])
+    for j, i in enumerate(picked):
+        race.add(f"start {j + 1}", y[i])
+    taken += picked
+    race.spare = [y[i] for i in order.tolist() if i not in taken]
+
+
+def run_portfolio(
+    problem: DesignProblem,
+    *,
+    budget: int,
+    seed: int = 0,
+    starts: int = DEFAULT_STARTS,
+    sigma0: float = SIGMA0,
+    popsize: int | None = None,
+    policy: bool = True,
+    screen: str = "nominal",
+) -> OptimResult:
+    """Maximize the reward with a portfolio of CMA-ES starts from a screened sample of the box.
+
+    Parameters
+    ----------
+    problem
+        The design problem.
+    budget
+        Evaluations, >= 1 (a time limit set on the problem ends the run earlier).
+    seed
+        Seed of the screen's scrambling and of every start's sampling.
+    starts
+        Starts raced, in [1, 32] (with shaped jaws one of them is the straight bars').
+    sigma0
+        Each start's initial step in the normalized box, in (0, 2].
+    popsize
+        Each start's population (default pycma's ``4 + floor(3 ln n)``), >= 2.
+    policy
+        Screen the shipped design policy's candidate designs too, where one designs in the
+        problem's box and observes its object (:func:`optim.rl.policy_starts`; a few
+        evaluations): they become starts only when they screen better than the sample.
+    screen
+        ``"nominal"`` (default): the screen judges its designs on the nominal scenario alone,
+        ``K`` times as many for the charge of the robust screen's, then the best
+        :data:`POOL_PER_START` per start of them robustly; ``"robust"``: it judges each design
+        as the search does (every scenario). Without scenarios both are the same.
+
+    Returns
+    -------
+    OptimResult
+        ``extra["starts"]``: each start's label, best reward, whether its best holds within
+        the strain limit (by the search model), its evaluations and restarts;
+        ``extra["start_designs"]``: each start's best design and its reward.
+    """
+    budget, seed = check_budget(budget), check_seed(seed)
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or not (
+            1 <= starts <= 32):
+        raise ValueError(f"starts must be an integer in [1, 32], got {starts!r}")
+    if not (isinstance(sigma0, (int, float)) and 0.0 < sigma0 <= 2.0):
+        raise ValueError(f"sigma0 = {sigma0!r} is outside the allowed range (0, 2]")
+    if popsize is not None and (isinstance(popsize, bool) or int(popsize) != popsize
+                                or popsize < 2):
+        raise ValueError(f"popsize must be None or an integer >= 2, got {popsize!r}")
+    if not isinstance(policy, bool):
+        raise ValueError(f"policy must be True or False, got {policy!r}")
+    if screen not in SCREENS:
+        raise ValueError(f"screen must be one of {SCREENS}, got {screen!r}")
+    problem.start(budget)
+    race = _Portfolio(problem, seed, float(sigma0), popsize)
+    y, reward = _screened_pool(problem, race, budget, seed, screen, policy, starts)
+    _seat_starts(problem, race, y, reward, starts)
+    screened = problem.n_evaluations
+    checkpoints = [screened + (budget - screened) * share for share in HALVING_SHARES]
+    while race.starts and race.round():
+        while checkpoints and problem.n_evaluations >= checkpoints[0]:
+            race.halve(spare_straight=len(checkpoints) == len(HALVING_SHARES))
+            checkpoints.pop(0)
+    return problem.result(
+        "portfolio", seed,
+        options={"starts": int(starts), "sigma0": float(sigma0), "popsize": popsize,
+                 "policy": bool(policy), "screen": screen},
+        extra={"screened": int(len(reward)), "screen": screen,
+               "starts": [{"label": s.label, "best_reward": s.best_reward,
+                           "holds": s.best_feasible, "evaluations": s.evaluations,
+                           "restarts": s.restarts} for s in race.starts],
+               "start_designs": [{"design": problem.design_dict(s.best_x),
+                                  "reward": s.best_reward}
+                                 for s in race.starts if s.best_x is not None]})
