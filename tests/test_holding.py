@@ -13,8 +13,9 @@ from scipy.optimize import linprog
 
 from envs import DesignBounds, Scene, evaluate_designs, simulate
 from envs.model.family import resolve_model
-from envs.model.holding import H_MU, hertz_half_width, holding_row
+from envs.model.holding import H_MU, hertz_half_width
 from envs.model.layout import S_DISTANCE, S_POISSON, S_RADIUS, S_SCALE, S_THICKNESS, S_YOUNG
+from envs.model.loads import holding_row
 from envs.model.problem import pack_params
 from envs.scene import Design
 from envs.solver.pipeline import solve_columns

@@ -25,8 +25,9 @@ from envs.model.contact_width import (
     segment_hertz_cap,
 )
 from envs.model.geometry import closed_angle_rad, finger_frame
-from envs.model.holding import H_MU, NO_PATCH, hertz_half_width, holding_row
+from envs.model.holding import H_MU, NO_PATCH, hertz_half_width
 from envs.model.jaw import STRAIGHT, JawProfile
+from envs.model.loads import holding_row
 from envs.scene import Scene
 from tests.test_fem import solve_spied
 

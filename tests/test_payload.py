@@ -26,9 +26,9 @@ from envs.model.holding import (
     LIMIT_REACTION,
     SPAN_TOL,
     _merge,
-    holding_row,
     lift_friction,
 )
+from envs.model.loads import holding_row
 from envs.object_file import parse_object
 from envs.scene import SoftDisk
 from envs.validation import UnitSlipWarning

@@ -253,7 +253,7 @@ class _System:
         (its normal the direction of the force it puts on the rim nodes it presses, at the
         corner's point of contact); the net force and moment sum the forces on the rim nodes
         (the hub carries their opposite at equilibrium). With ``with_patches``, a sixth array
-        (k,) of each contact's pressure-patch label (:func:`envs.model.holding.holding_row`):
+        (k,) of each contact's pressure-patch label (:func:`envs.model.loads.holding_row`):
         on a grooved jaw the run of consecutive loaded rim nodes it belongs to (a groove's
         rounded mouth edge joins the run of a node it presses), else
         :data:`envs.model.holding.NO_PATCH`. ``carriers``, a list, gets one ``(finger, nodes,

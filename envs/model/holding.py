@@ -42,17 +42,17 @@ faces push the object away from the joints with ``(N_R + N_L) sin theta``, and t
 forces along the finger axes can hold it with ``mu = tan theta``.
 
 The freed object's loaded grasp (:mod:`envs.model.loads`) moves the normal forces under each
-load and calls these kernels on them; :func:`holding_row` keeps them as solved (the former rule,
-a bound). One implementation for both fidelities: :mod:`envs.solver.reaction` (the point-spring
-model's contacts, in the solver's own contact geometry) and :mod:`envs.fem.loaded` (the FEM's
-rim nodes and tip corners) build the contact list.
+load and calls these kernels on them; :func:`envs.model.loads.holding_row` keeps them as
+solved (the former rule, a bound). One implementation for both fidelities:
+:mod:`envs.solver.reaction` (the point-spring model's contacts, in the solver's own contact
+geometry) and :mod:`envs.fem.loaded` (the FEM's rim nodes and tip corners) build the contact
+list.
 """
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from .contact_width import hertz_arc_coefficient
@@ -76,7 +76,6 @@ __all__ = [
     "NO_PATCH",
     "in_plane_friction",
     "lift_friction",
-    "holding_row",
     "HOLDING_SCALARS",
     "holding_fields",
 ]
@@ -499,21 +498,6 @@ def _same_normal(normals, i, j):
     """Contacts i and j share a normal (to rounding)."""
     return (abs(normals[i, 0] - normals[j, 0]) <= 1e-9
             and abs(normals[i, 1] - normals[j, 1]) <= 1e-9)
-
-
-def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
-                patches=None) -> np.ndarray:
-    """The holding row (N_HOLD,) of a contact list with its normal forces *as solved*: the
-    former rule, a bound on the freed object's need
-    (:func:`envs.model.loads.loaded_holding_row` with no response), over the load set
-    ``"any"``. ``half_width``: the patches' ``c`` [m N^-1/2] (:func:`hertz_half_width`; 0: no
-    shift); ``patches``: each contact's patch label (default: :data:`NO_PATCH` for all, the
-    flat-face rule)."""
-    from .loads import loaded_holding_row
-
-    return loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                              pin_moment_nm, None, payload_n, "any", half_width, patches)
 
 
 # the one-slot fields of a holding row by the names grasp results and batch outputs give them

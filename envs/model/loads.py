@@ -77,6 +77,7 @@ __all__ = [
     "Response",
     "loaded_holding",
     "loaded_holding_row",
+    "holding_row",
     "friction_under_load",
     "patch_constraints",
     "patch_response",
@@ -136,7 +137,7 @@ class Response(NamedTuple):
     normal group and patch, and its share of their force; ``mn`` normal constraints of ``mc``)
     and what :func:`patch_response` makes of them (``response``: each constraint's change of
     force per unit load; ``coupling``: the release of constraints). ``mc = 0``: the normal
-    forces as solved (the bound :func:`envs.model.holding.holding_row` gives)."""
+    forces as solved (the bound :func:`holding_row` gives)."""
 
     cons: np.ndarray
     weights: np.ndarray
@@ -307,7 +308,7 @@ def loaded_holding(normals, points, forces, patches, model, mn, mc, count, centr
     model, mn, mc
         The loaded grasp, ``(cons, weights, response, coupling)`` and the constraint counts
         of a :class:`Response` (``mc = 0``: the normal forces as solved, the bound of
-        :func:`envs.model.holding.holding_row`).
+        :func:`holding_row`).
     pin_x, pin_y, pin_moment
         The fixed centre's reaction on the object [N, N, N·m], released here.
     payload
@@ -441,6 +442,20 @@ def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_fo
                    float(pin_moment_nm), float(payload_n), load_set_code(load_set),
                    float(half_width), out)
     return out
+
+
+def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
+                patches=None) -> np.ndarray:
+    """The holding row (N_HOLD,) of a contact list with its normal forces *as solved*: the
+    former rule, a bound on the freed object's need
+    (:func:`loaded_holding_row` with no response), over the load set
+    ``"any"``. ``half_width``: the patches' ``c`` [m N^-1/2]
+    (:func:`envs.model.holding.hertz_half_width`; 0: no shift); ``patches``: each contact's
+    patch label (default: :data:`~envs.model.holding.NO_PATCH` for all, the flat-face rule).
+    (Here, not in :mod:`envs.model.holding`: this module imports that one's kernels.)"""
+    return loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                              pin_moment_nm, None, payload_n, "any", half_width, patches)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
