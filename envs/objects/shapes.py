@@ -115,8 +115,8 @@ class Outline:
 
     def scan(self, orientation_rad: float = 0.0) -> np.ndarray:
         """The outline's dense scan, turned by ``orientation_rad`` [r_eq], (P, 2): the points
-        at the body angles the rest check scans (:func:`envs.model.problem.
-        outline_clearance_m`), read-only."""
+        at the body angles the rest check scans
+        (:func:`envs.model.problem.outline_clearance_m`), read-only."""
         return _scan(self, float(orientation_rad))
 
     def face_support(self, rest_angle_rad, orientation_rad: float = 0.0) -> np.ndarray:
