@@ -276,16 +276,22 @@ def test_the_point_spring_model_carries_the_load_as_the_fem_does():
     any, within 5 % (median) of the FEM's on a 6-ring mesh (measured: ~1 %; the accuracy page's
     figure, scripts/loaded_accuracy.py, has more)."""
     disk = SoftDisk(R070.disk.radius_m, 0.0, density_kg_m3=1000.0)
-    designs = DesignBounds().sample(np.random.default_rng(5), 8, disk)
-    psm = evaluate_designs(designs, disk, friction_coefficients=1.0)
-    fem = evaluate_designs(designs, disk, friction_coefficients=1.0, fidelity="fem",
-                           fem_rings=6)
+    mu_p, mu_f = required_friction_both(disk, 8)
+    assert mu_p.size >= 5
+    assert np.median(np.abs(mu_p - mu_f) / mu_f) <= 0.05
+
+
+def required_friction_both(disk: SoftDisk, designs: int) -> tuple[np.ndarray, np.ndarray]:
+    """The required friction under the payload (load set any, friction 1) of ``designs``
+    random designs (seed 5) by the default model and by the FEM on 6 rings, over the designs
+    that converged, touch with both fingers and need a finite friction at both."""
+    rows = DesignBounds().sample(np.random.default_rng(5), designs, disk)
+    psm = evaluate_designs(rows, disk, friction_coefficients=1.0)
+    fem = evaluate_designs(rows, disk, friction_coefficients=1.0, fidelity="fem", fem_rings=6)
     both = (psm["converged"] & fem["converged"] & psm["touching"].all(axis=1)
             & fem["touching"].all(axis=1) & np.isfinite(psm["required_friction"])
             & np.isfinite(fem["required_friction"]))
-    assert both.sum() >= 5
-    mu_p, mu_f = psm["required_friction"][both], fem["required_friction"][both]
-    assert np.median(np.abs(mu_p - mu_f) / mu_f) <= 0.05
+    return psm["required_friction"][both], fem["required_friction"][both]
 
 
 def test_the_grape_needs_no_more_friction_for_what_its_normals_carry():

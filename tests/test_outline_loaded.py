@@ -15,7 +15,12 @@ from envs.model.loads import LOAD_SETS
 from envs.objects import Ellipse, as_object
 from envs.scene import Scene, SoftDisk
 
-from .test_loaded import _loaded, check_across_load, check_axial_load
+from .test_loaded import (
+    _loaded,
+    check_across_load,
+    check_axial_load,
+    required_friction_both,
+)
 
 PAPER = Scene.preset("paper-r070")
 # a water-dense object of the paper disk's area: its payload (the lift at 1 g) a real load
@@ -45,7 +50,8 @@ def test_a_symmetric_outline_carries_a_load_as_statics_says(aspect, psi):
 def test_a_turned_outline_under_load_is_its_mirror_image():
     """An ellipse turned by +psi is the mirror image (x -> -x) of one turned by -psi: under every
     load set (each mirror-symmetric) the two need the same friction and carry the same
-    payload, though neither grasp is symmetric (the fingers close differently)."""
+    payload (the outline's area's), though neither grasp is symmetric (the fingers close
+    differently)."""
     designs = DesignBounds().sample(np.random.default_rng(2), 6, WATER)
     mirrored = designs.copy()
     for name in LOAD_SETS:
@@ -60,7 +66,10 @@ def test_a_turned_outline_under_load_is_its_mirror_image():
         assert np.abs(np.diff(a["jaw_angles_rad"][ok], axis=1)).max() > 1e-3
         np.testing.assert_allclose(b["required_friction"][ok], a["required_friction"][ok],
                                    rtol=1e-6, err_msg=name)
-        np.testing.assert_allclose(b["payload_n"], a["payload_n"], rtol=1e-12)
+        # the payload of the outline's area (the disk's, r_eq = 70 mm): weight and lift at 1 g
+        np.testing.assert_allclose(a["payload_n"][ok], b["payload_n"][ok], rtol=1e-12)
+        assert a["payload_n"][ok] == pytest.approx(2 * 9.81 * 1000 * math.pi * 0.07 ** 2 * 0.01,
+                                                   rel=1e-9)
 
 
 def test_the_point_spring_model_carries_an_outline_as_the_fem_does():
@@ -70,16 +79,6 @@ def test_the_point_spring_model_carries_an_outline_as_the_fem_does():
     the FEM's on a 6-ring mesh (measured: 0.6 % on the 5 designs that touch with both fingers;
     the accuracy page has more: scripts/loaded_accuracy.py --outlines)."""
     obj = _ellipse(2.0, math.pi / 2 + 1e-3, WATER, 0.0)
-    designs = DesignBounds().sample(np.random.default_rng(5), 8, obj)
-    psm = evaluate_designs(designs, obj, friction_coefficients=1.0)
-    fem = evaluate_designs(designs, obj, friction_coefficients=1.0, fidelity="fem",
-                           fem_rings=6)
-    both = (psm["converged"] & fem["converged"] & psm["touching"].all(axis=1)
-            & fem["touching"].all(axis=1) & np.isfinite(psm["required_friction"])
-            & np.isfinite(fem["required_friction"]))
-    assert both.sum() >= 4
-    # the payload of the outline's area: the weight and a lift at 1 g (factor 2)
-    assert psm["payload_n"][0] == pytest.approx(2 * 9.81 * 1000 * math.pi * 0.07 ** 2 * 0.01,
-                                                rel=1e-9)
-    mu_p, mu_f = psm["required_friction"][both], fem["required_friction"][both]
+    mu_p, mu_f = required_friction_both(obj, 8)
+    assert mu_p.size >= 4
     assert np.median(np.abs(mu_p - mu_f) / mu_f) <= 0.05
