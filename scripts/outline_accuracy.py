@@ -19,7 +19,8 @@ onto the outline, :mod:`envs.fem`) on held-out outlines:
    Spearman rank correlation of the rewards (valid designs converged at both), the best
    design's FEM rank and the reward error.
 
-Writes ``out/outline_accuracy.json`` and ``out/outline_accuracy.png``.
+Writes ``out/outline_accuracy.json``, ``out/outline_accuracy.png`` (closing angles) and
+``out/outline_ranking.png`` (reward ranking).
 
 Usage::
 
@@ -235,19 +236,17 @@ def run_ranking(n: int, seed: int, executor) -> dict:
     return out
 
 
-def chart(result: dict, path: Path) -> None:
+def chart(result: dict, out: Path) -> list[Path]:
+    """The closing angles in ``out/outline_accuracy.png`` and the reward ranking in
+    ``out/outline_ranking.png``, each where its part ran: the files written."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    panels = (1 if "angles" in result else 0) + len(result.get("ranking", {}))
-    fig, axes = plt.subplots(1, max(panels, 1), figsize=(4.6 * max(panels, 1), 4.2),
-                             squeeze=False)
-    k = 0
+    written = []
     if "angles" in result:
-        ax = axes[0][k]
-        k += 1
+        fig, ax = plt.subplots(figsize=(5.2, 4.2))
         cases = result["angles"]["cases"]
         labels = list(cases)
         members = [m for m in MEMBERS if m in cases[labels[0]]]
@@ -263,27 +262,38 @@ def chart(result: dict, path: Path) -> None:
         ax.set_xlabel("closing-angle error vs FEM [%]")
         ax.set_title("closing angle on held-out outlines", fontsize=9)
         ax.legend(fontsize=7)
-    for name, entry in result.get("ranking", {}).items():
-        ax = axes[0][k]
-        k += 1
-        title = []
-        for j, label in enumerate(m for m in MEMBERS if m in entry):
-            rows = np.asarray(entry[label]["rows"], dtype=int)
-            fem = np.asarray(entry["fem_reward"])[rows]
-            psm = np.asarray(entry[label]["psm_reward"])[rows]
-            ax.scatter(fem, psm, s=12, color=f"C{j}", label=label)
-            if rows.size:
-                lo, hi = min(fem.min(), psm.min()), max(fem.max(), psm.max())
-                ax.plot([lo, hi], [lo, hi], color="0.6", lw=0.8)
-            rho = entry[label].get("spearman_reward")
-            title.append(f"{label} {rho:.3f}" if rho is not None else label)
-        ax.legend(fontsize=7)
-        ax.set_title(f"{name}: Spearman " + ", ".join(title), fontsize=8)
-        ax.set_xlabel("FEM reward")
-        ax.set_ylabel("PSM reward")
+        written.append(_save(fig, out / "outline_accuracy.png"))
+    ranking = result.get("ranking", {})
+    if ranking:
+        fig, axes = plt.subplots(1, len(ranking), figsize=(4.6 * len(ranking), 4.2),
+                                 squeeze=False)
+        for ax, (name, entry) in zip(axes[0], ranking.items(), strict=True):
+            title = []
+            for j, label in enumerate(m for m in MEMBERS if m in entry):
+                rows = np.asarray(entry[label]["rows"], dtype=int)
+                fem = np.asarray(entry["fem_reward"])[rows]
+                psm = np.asarray(entry[label]["psm_reward"])[rows]
+                ax.scatter(fem, psm, s=12, color=f"C{j}", label=label)
+                if rows.size:
+                    lo, hi = min(fem.min(), psm.min()), max(fem.max(), psm.max())
+                    ax.plot([lo, hi], [lo, hi], color="0.6", lw=0.8)
+                rho = entry[label].get("spearman_reward")
+                title.append(f"{label} {rho:.3f}" if rho is not None else label)
+            ax.legend(fontsize=7)
+            ax.set_title(f"{name}: Spearman " + ", ".join(title), fontsize=8)
+            ax.set_xlabel("FEM reward")
+            ax.set_ylabel("PSM reward")
+        written.append(_save(fig, out / "outline_ranking.png"))
+    return written
+
+
+def _save(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+    return path
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -318,8 +328,8 @@ def main(argv: list[str] | None = None) -> int:
             if executor is not None:
                 executor.close()
     (out / "outline_accuracy.json").write_text(json.dumps(result, indent=1) + "\n")
-    chart(result, out / "outline_accuracy.png")
-    print(f"wrote {out / 'outline_accuracy.json'} and {out / 'outline_accuracy.png'}")
+    figures = chart(result, out)
+    print(f"wrote {out / 'outline_accuracy.json'} and " + ", ".join(map(str, figures)))
     return 0
 
 
