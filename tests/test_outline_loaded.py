@@ -85,8 +85,8 @@ def test_the_point_spring_model_carries_an_outline_as_the_fem_does():
 
 
 def test_an_outline_turned_and_built_within_tolerances_under_a_load_set(tmp_path):
-    """An ellipse along the jaws that the feeder turns by +-15 deg, a gripper built within
-    +-0.1 mm and +-0.5 deg, picked from above (load set top-down), through optimize: the
+    """An ellipse along the jaws that the feeder turns by +-15 deg, a gripper whose rest angle
+    is built within +-0.5 deg, picked from above (load set top-down), through optimize: the
     orientation and the build are scenario dimensions together, each scenario turned by +psi
     grasps as its mirror image turned by -psi built alike (the same reward, the build being
     symmetric), and the sheet states the outline, the orientation tolerance, the build
@@ -101,10 +101,9 @@ def test_an_outline_turned_and_built_within_tolerances_under_a_load_set(tmp_path
                     "orientation_deg = 90\norientation_tolerance_deg = 15\n"
                     "youngs_modulus_pa = 2e5\npoisson_ratio = 0.45\nthickness_m = 0.02\n"
                     "density_kg_m3 = 1000\nfriction_coefficient = 0.6\nstrain_limit = 0.08\n"
-                    'load_set = "top-down"\n\n[gripper.tolerances]\nlength_mm = 0.1\n'
-                    "angle_deg = 0.5\n")
+                    'load_set = "top-down"\n\n[gripper.tolerances]\nangle_deg = 0.5\n')
     spec = load_object(path)
-    assert spec.scenarios.varied[0] == "dpsi_rad" and len(spec.scenarios.varied) == 5
+    assert spec.scenarios.varied[0] == "dpsi_rad" and len(spec.scenarios.varied) == 2
     code = main(["optimize", "--object", str(path), "--method", "cmaes", "--budget", "40",
                  "--no-finish", "--no-progress", "--out", str(tmp_path / "run")])
     assert code in (0, 3)  # a short run need not find a grasp; its sheet is written either way
@@ -112,7 +111,7 @@ def test_an_outline_turned_and_built_within_tolerances_under_a_load_set(tmp_path
     assert result["object"]["load_set"] == "top-down" and result["object"]["shape"] == "ellipse"
     reward = {r["scenario"]["label"]: r["reward"] for r in result["extra"]["scenario_rows"]}
     turned = [label for label in reward if "dpsi_rad+" in label]
-    assert len(turned) >= 8
+    assert len(turned) == 3  # turned alone, and with the rest angle built +- 0.5 deg
     assert abs(reward["dpsi_rad+"] - reward["nominal"]) > 1e-4  # turning it changes the grasp
     for label in turned:
         assert reward[label] == pytest.approx(reward[label.replace("dpsi_rad+", "dpsi_rad-")],
@@ -121,5 +120,5 @@ def test_an_outline_turned_and_built_within_tolerances_under_a_load_set(tmp_path
     assert sheet["object_shape"]["orientation_deg"] == pytest.approx(90.0)
     assert sheet["tolerances"]["orientation_deg"] == pytest.approx(15.0)
     assert sheet["checked"]["load_set"] == "top-down"
-    assert sheet["checked"]["tolerances"]["length_mm"] == pytest.approx(0.1)
+    assert sheet["checked"]["tolerances"]["angle_deg"] == pytest.approx(0.5)
     assert sheet["part_rows"]
