@@ -322,7 +322,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    help=f"evaluations (designs, each judged in every scenario), in [1, "
                    f"{MAX_BUDGET:,}] (default: with --time, as many as it allows; else "
                    f"{DEFAULT_GRASP_BUDGET:,} grasps over the scenario count, within "
-                   f"{DEFAULT_BUDGET_RANGE[0]:,}-{DEFAULT_BUDGET_RANGE[1]:,}: 6,000 with 9 "
+                   f"{DEFAULT_BUDGET_RANGE[0]:,}-{DEFAULT_BUDGET_RANGE[1]:,}: 3,600 with 9 "
                    "scenarios)")
     p.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="wall seconds the search may take, beside --budget: it stops at "

@@ -418,7 +418,7 @@ def run_optimize(
 
     ``budget``: evaluations (designs judged under every scenario); ``None`` (default): with
     ``time_s`` as many as the time allows, else :func:`optim.problem.default_budget` of the
-    problem's scenario count (6,000 designs with 9 scenarios). ``time_s``: the search's
+    problem's scenario count (3,600 designs with 9 scenarios). ``time_s``: the search's
     wall-time limit [s] beside the budget (whichever ends first; the finish, the charts and the
     files come after it).
 

@@ -239,7 +239,7 @@ def test_nominal_screen_is_the_nominal_scenario_at_its_share_of_the_cost():
     assert problem.n_evaluations == 3  # ceil(20 / 9)
     assert problem.top_designs() == [] and problem.best_reward == -math.inf
     robust = problem.evaluate(x)
-    # the nominal scenario of the robust table (the screen judges the payload as the search)
+    # the same payload on both: the nominal scenario of the robust table
     table = problem.evaluate_scenarios(problem.to_physical(x))
     np.testing.assert_allclose(out["reward"], table.per_scenario["reward"][:, 0], atol=1e-12)
     assert np.all(robust["reward"] <= out["reward"] + 1e-12)

@@ -118,3 +118,33 @@ def test_the_scenario_profile_breaks_an_object_batch_down(tmp_path):
     # grooved designs lead no scenario; straight ones do
     assert per_jaw["any"]["followers_tried"] == 0 and per_jaw["straight"]["followers_tried"] > 0
     assert per_jaw["straight"]["cpu_over_straight"] == 1.0
+
+
+def test_the_default_search_script_reads_runs_as_a_user_does(tmp_path, capsys):
+    default_search = _script("default_search")
+    puck = ROOT / "examples" / "objects" / "silicone_puck.toml"
+    default_search.main([str(puck), "--seeds", "1", "--out", str(tmp_path), "--",
+                         "--method", "random", "--budget", "16"])
+    runs = json.loads((tmp_path / "default_search.json").read_text())["runs"]
+    assert [(r["jaw"], r["seed"], r["method"], r["evaluations"]) for r in runs] == [
+        ("any", 0, "random", 16), ("straight", 0, "random", 16)]
+    assert all(r["wall_s"] >= r["search_s"] > 0 and r["cpu_s"] > 0 for r in runs)
+    # the best known is the best run of either jaw: the shaped jaws' run is within reach
+    # when it is not more than the gap below the straight bars' one
+    reward = {r["jaw"]: r["reward"] for r in runs}
+    reach = int(reward["any"] >= max(reward.values()) - default_search.GAP)
+    assert f"within 0.01 of the best known: {reach} of 1 runs" in capsys.readouterr().out
+
+
+def test_the_default_search_summary_flags_shaped_jaws_below_straight_bars():
+    default_search = _script("default_search")
+    rows = [{"object": "o", "jaw": jaw, "seed": seed, "reward": reward, "holds": True,
+             "wall_s": 1.0, "cpu_s": 2.0}
+            for jaw, seed, reward in (("any", 0, 0.30), ("straight", 0, 0.10),
+                                      ("any", 1, 0.05), ("straight", 1, 0.10))]
+    best = default_search.best_known(rows, {"o-any": 0.305})
+    assert best == {"o": 0.305}
+    text = "\n".join(default_search.summary(rows, best, 0.01))
+    assert "| o | any | 0.3050 | 0.1750 (0.0500 - 0.3000) | 1 of 2 |" in text
+    assert "--jaw any >= --jaw straight on 1 of 2 (object, seed) pairs: below on o seed 1" in text
+    assert "within 0.01 of the best known: 1 of 2 runs (50 %)" in text

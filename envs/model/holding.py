@@ -45,8 +45,8 @@ The freed object's loaded grasp (:mod:`envs.model.loads`) moves the normal force
 load and calls these kernels on them; :func:`envs.model.loads.holding_row` keeps them as
 solved (the former rule, a bound). One implementation for both fidelities:
 :mod:`envs.solver.reaction` (the point-spring model's contacts, in the solver's own contact
-geometry) and :mod:`envs.fem.loaded` (the FEM's rim nodes and tip corners) build the contact
-list.
+geometry) and :mod:`envs.fem.loaded` (the FEM's
+rim nodes and tip corners) build the contact list.
 """
 
 from __future__ import annotations

@@ -444,20 +444,6 @@ def loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_fo
     return out
 
 
-def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
-                patches=None) -> np.ndarray:
-    """The holding row (N_HOLD,) of a contact list with its normal forces *as solved*: the
-    former rule, a bound on the freed object's need
-    (:func:`loaded_holding_row` with no response), over the load set
-    ``"any"``. ``half_width``: the patches' ``c`` [m N^-1/2]
-    (:func:`envs.model.holding.hertz_half_width`; 0: no shift); ``patches``: each contact's
-    patch label (default: :data:`~envs.model.holding.NO_PATCH` for all, the flat-face rule).
-    (Here, not in :mod:`envs.model.holding`: this module imports that one's kernels.)"""
-    return loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
-                              pin_moment_nm, None, payload_n, "any", half_width, patches)
-
-
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _root(parent, i):
     """The root of contact i's set (union-find), compressing the path."""
@@ -736,3 +722,15 @@ def friction_under_load(normals, points, forces, centre_m, length_scale_m, pin_f
                      float(length_scale_m), -float(pin_force_n[0]) + wx,
                      -float(pin_force_n[1]) + wy, -float(pin_moment_nm), float(half_width),
                      work, SPAN_TOL, 0.0)[0]
+
+
+def holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                pin_moment_nm, payload_n: float = 0.0, half_width: float = 0.0,
+                patches=None) -> np.ndarray:
+    """The holding row (N_HOLD,) of a contact list with its normal forces *as solved*: the
+    former rule, a bound on the freed object's need (:func:`loaded_holding_row` with no
+    response), over the load set ``"any"``. ``half_width``: the patches' ``c`` [m N^-1/2]
+    (:func:`envs.model.holding.hertz_half_width`; 0: no shift); ``patches``: each contact's
+    patch label (default: :data:`envs.model.holding.NO_PATCH` for all, the flat-face rule)."""
+    return loaded_holding_row(normals, points, forces, centre_m, length_scale_m, pin_force_n,
+                              pin_moment_nm, None, payload_n, "any", half_width, patches)
