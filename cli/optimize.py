@@ -216,6 +216,10 @@ def _check_same_object(object_file: str, recorded: dict, result_path) -> None:
         raise ValueError(f"--object {object_file!r}: the run in {str(result_path)!r} was for "
                          f"another object ({differ[0]} {recorded.get(differ[0])!r}, the file's "
                          f"{spec.info()[differ[0]]!r})")
+    for key in ("shape", "orientation_rad", "outline_coefficients"):  # an outline's
+        if spec.info().get(key) != recorded.get(key):
+            raise ValueError(f"--object {object_file!r}: the run in {str(result_path)!r} was "
+                             f"for another object (its {key} differs from the file's)")
 
 
 def _check_same_jaws(jaw: str | None, per_finger: bool | None, extra: dict,

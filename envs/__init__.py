@@ -1,7 +1,9 @@
 """Point-spring model of a soft disk grasped by an angular gripper, and its design environment.
 
-Importing the package registers ``GripperDesign-v2`` and ``GripperJawDesign-v0`` (the same task
-with shaped jaws in the action: a separate id, not a later version of v2) with Gymnasium::
+Importing the package registers ``GripperDesign-v2``, ``GripperJawDesign-v0`` (the same task
+with shaped jaws in the action: a separate id, not a later version of v2) and
+``GripperShapeDesign-v0`` (v2's task with objects that are not disks: ellipses at any
+orientation, their shape observed; a separate id too) with Gymnasium::
 
     import gymnasium as gym
     import envs
@@ -44,11 +46,13 @@ __all__ = [
     "GripperDesignVectorEnv",
     "ENV_ID",
     "JAW_ENV_ID",
+    "SHAPE_ENV_ID",
     "sb3_vec_env",
 ]
 
 ENV_ID = "GripperDesign-v2"
 JAW_ENV_ID = "GripperJawDesign-v0"  # with shaped jaws (envs.design_env.make_vector_env_v3)
+SHAPE_ENV_ID = "GripperShapeDesign-v0"  # ellipses at any orientation, their shape observed
 
 
 def sb3_vec_env(num_envs: int, seed: int | None = None, **env_kwargs):
@@ -87,4 +91,13 @@ if JAW_ENV_ID not in gymnasium.registry:
         entry_point="envs.reset_check:make_env_v3",
         disable_env_checker=True,
         vector_entry_point="envs.design_env:make_vector_env_v3",
+    )
+
+if SHAPE_ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        id=SHAPE_ENV_ID,
+        # as v2; every object an ellipse at some orientation, its shape observed
+        entry_point="envs.reset_check:make_env_v4",
+        disable_env_checker=True,
+        vector_entry_point="envs.design_env:make_vector_env_v4",
     )

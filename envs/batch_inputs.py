@@ -16,6 +16,7 @@ from .model.defaults import (
     PLAUSIBLE_RANGES,
 )
 from .model.jaw import DESIGN_WIDTHS, JAW_FIELDS, LEFT_JAW_FIELDS
+from .model.layout import N_OUTLINE
 from .scene import (
     DESIGN_FIELDS,
     N_DESIGN,
@@ -56,10 +57,12 @@ def nonfinite_rows(des: np.ndarray) -> np.ndarray:
     return np.flatnonzero(~np.isfinite(des).all(axis=1))
 
 
-# columns of :func:`_disk_table`
+# columns of :func:`_disk_table`; then the object's shape (SHAPE_* of envs.model.layout),
+# an outline's orientation [rad] and its N_OUTLINE B-spline coefficients (a disk: zeros)
 (DISK_RADIUS, DISK_YOUNG, DISK_POISSON, DISK_THICKNESS, DISK_SCALE, DISK_RATIO, DISK_AREA,
  DISK_OFFSET_X) = range(8)
-N_DISK = 8
+DISK_SHAPE, DISK_ORIENT, DISK_OUTLINE = 8, 9, 10
+N_DISK = DISK_OUTLINE + N_OUTLINE
 # columns of the objects' requirements: strain limit, friction coefficient, payload [N]
 NEED_STRAIN, NEED_FRICTION, NEED_PAYLOAD = range(3)
 N_NEEDS = 3
@@ -67,7 +70,8 @@ N_NEEDS = 3
 
 def _disk_table(disks, batch: int) -> np.ndarray:
     """Columns (``DISK_*``): radius, Young's modulus, Poisson ratio, thickness, stiffness scale,
-    contour stiffness ratio, area stiffness scale, the centre's lateral offset."""
+    contour stiffness ratio, area stiffness scale, the centre's lateral offset, then the
+    object's shape, orientation and outline coefficients (zeros for a disk)."""
     if isinstance(disks, SoftDisk):
         disks = [disks] * batch
     elif not isinstance(disks, Sequence) or len(disks) != batch:
@@ -79,7 +83,14 @@ def _disk_table(disks, batch: int) -> np.ndarray:
         rows.append((d.radius_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                      d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
                      d.offset_x_m))
-    return np.array(rows, dtype=np.float64).reshape(batch, N_DISK)
+    table = np.zeros((batch, N_DISK))
+    table[:, :DISK_SHAPE] = np.array(rows, dtype=np.float64).reshape(batch, DISK_SHAPE)
+    for i, d in enumerate(disks):
+        if d.outline is not None:
+            shape, orientation, outline = d.outline_columns()
+            table[i, DISK_SHAPE], table[i, DISK_ORIENT] = shape, orientation
+            table[i, DISK_OUTLINE:] = outline
+    return table
 
 
 def _payloads(disks, batch: int, factors) -> np.ndarray:

@@ -9,7 +9,16 @@ import math
 
 import numpy as np
 
-from .batch_inputs import DISK_OFFSET_X, DISK_POISSON, DISK_RADIUS, DISK_THICKNESS, DISK_YOUNG
+from .batch_inputs import (
+    DISK_OFFSET_X,
+    DISK_ORIENT,
+    DISK_OUTLINE,
+    DISK_POISSON,
+    DISK_RADIUS,
+    DISK_SHAPE,
+    DISK_THICKNESS,
+    DISK_YOUNG,
+)
 from .model.contact_width import (
     FLAT_FACE_CURVATURE_PER_M,
     contact_share,
@@ -27,8 +36,10 @@ from .model.holding import (
     N_HOLD,
 )
 from .model.jaw import JAW_FIELDS, pack_groove
-from .model.layout import G_DEPTH, N_GROOVE
-from .model.problem import SceneColumns, _clearance
+from .model.layout import G_DEPTH, N_GROOVE, S_OFFSET_X, SHAPE_DISK
+from .model.outline import outline_contact_geometry
+from .model.problem import SceneColumns, _clearance, outline_bar_distance_m
+from .objects import SplineOutline, as_object
 from .scene import DESIGN_FIELDS, N_DESIGN, Design, SoftDisk
 from .scoring import grip_share_rows, psm_metrics_rows
 from .solver.pipeline import BatchSolution
@@ -90,9 +101,13 @@ def _columns(des: np.ndarray, disk: np.ndarray, kf: np.ndarray) -> SceneColumns:
     then the left one's) as the (B, 2) jaw columns; 6 wide, straight bars (``None``)."""
     ln, th0, d3, w, torque, d1 = (np.ascontiguousarray(c) for c in des[:, :N_DESIGN].T)
     radius, young, nu, thick, scale, ratio, area, offset = (np.ascontiguousarray(c)
-                                                            for c in disk.T)
+                                                            for c in disk[:, :DISK_SHAPE].T)
+    outline = ((None,) * 3 if not np.any(disk[:, DISK_SHAPE] != SHAPE_DISK) else
+               (np.ascontiguousarray(disk[:, DISK_SHAPE]),
+                np.ascontiguousarray(disk[:, DISK_ORIENT]),
+                np.ascontiguousarray(disk[:, DISK_OUTLINE:])))
     return SceneColumns(ln, th0, d3, w, kf, radius, d1, young, nu, thick, scale, ratio, area,
-                        torque, offset, *_jaw_columns(des))
+                        torque, offset, *_jaw_columns(des), *outline)
 
 
 def _jaw_columns(des: np.ndarray) -> tuple[np.ndarray | None, ...]:
@@ -154,7 +169,10 @@ def _fill_group(out: dict[str, np.ndarray], rows: np.ndarray, sol: BatchSolution
         cols.finger_length_m, cols.joint_offset_m, cols.finger_width_m, cols.radius_m,
         cols.thickness_m, cols.youngs_modulus_pa, cols.poisson_ratio,
         material_scale, cols.torque_nm, cols.torsion_stiffness_nm_per_rad,
-        cols.rest_angle_rad, grooves, rounding, out["status"], out["converged"],
+        cols.rest_angle_rad, grooves, rounding,
+        *outline_contact_geometry(cols.shape, cols.orientation_rad, cols.outline, cols.radius_m,
+                                  n),
+        out["status"], out["converged"],
         out["iterations"], out["stable"],
         out["jaw_angles_rad"], out["n_contacts"], out["touching"], out["total_force_n"],
         out["contact_score"], out["grip_share"], out["peak_strain"], out["peak_log_strain"],
@@ -257,10 +275,31 @@ def finger_gaps_m(des: np.ndarray, radius_m: np.ndarray, jaw_angles_rad: np.ndar
     return out
 
 
+def outline_finger_gaps_m(cols: SceneColumns, jaw_angles_rad: np.ndarray, gaps: np.ndarray
+                          ) -> np.ndarray:
+    """``gaps`` (:func:`finger_gaps_m`, (B, 2)) with the rows whose object is an outline
+    replaced by the distance from each finger bar to the undeformed outline at the given jaw
+    angles [m] (0 where a bar reaches into it; a groove is not taken off the bar)."""
+    if not cols.has_outlines:
+        return gaps
+    out = np.array(gaps, dtype=np.float64, copy=True)
+    table = cols.rows()
+    for i in np.flatnonzero(cols.shape != SHAPE_DISK):
+        for side, sign in ((0, 1.0), (1, -1.0)):
+            out[i, side] = max(0.0, outline_bar_distance_m(
+                table[i], sign, float(table[i, S_OFFSET_X]), float(jaw_angles_rad[i, side])))
+    return out
+
+
 def _soft_disk(row: np.ndarray) -> SoftDisk:
-    """The disk of a row of :func:`_disk_table` (its distance ``d_1`` comes from the design)."""
-    radius, young, nu, thick, scale, ratio, area, offset = row.tolist()
-    return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
+    """The disk of a row of :func:`_disk_table` (its distance ``d_1`` comes from the design;
+    an outline as the model's spline, :class:`~envs.objects.SplineOutline`)."""
+    radius, young, nu, thick, scale, ratio, area, offset = row[:DISK_SHAPE].tolist()
+    if row[DISK_SHAPE] == SHAPE_DISK:
+        return SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area, offset_x_m=offset)
+    return as_object(SoftDisk(radius, 0.0, young, nu, thick, scale, ratio, area,
+                              offset_x_m=offset),
+                     SplineOutline(tuple(row[DISK_OUTLINE:].tolist())), float(row[DISK_ORIENT]))
 
 
 def _fill_fem(out: dict[str, np.ndarray], rows: np.ndarray, des: np.ndarray, disk: np.ndarray,

@@ -41,6 +41,9 @@ offset              meaning                                                     
 ``CK_JAW0/1``       each finger's jaw groove (right, left): ``JW_*`` slots of    m, rad
                     depth, bottom radius, full opening angle and position from
                     the joint; depth 0 is the straight bar
+``CK_SHAPE``        0 for a disk, else an outline (``CK_RADIUS`` its ``r_eq``;  -
+                    its coefficients an argument of :func:`check_mesh_one`)
+``CK_ORIENT``       the outline's orientation ``psi``                           rad
 ==================  ===========================================================  =====
 
 A grooved finger's solid is the bar minus its groove with every convex edge rounded by
@@ -66,6 +69,10 @@ import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
+
+# the outline is the model's definition of the object (like the stiffness rule), not how the
+# grasp is solved: its contour points are the model's own
+from .model.outline import outline_contour_into
 
 __all__ = [
     "KKTReport",
@@ -151,7 +158,12 @@ CK_SPACING = 24  # ring radii: 0 geometric from the hub, 1 evenly spaced
 JW_DEPTH, JW_BOTTOM_RADIUS, JW_OPENING, JW_POSITION = range(4)
 CK_JAW0 = 25
 CK_JAW1 = 29
-N_CK = 33
+# the object's outline (0: a disk; CK_RADIUS is then its equivalent radius) and its
+# orientation [rad]; its B-spline coefficients of r(phi) / r (envs.model.outline) are an
+# argument of check_mesh_one
+CK_SHAPE = 33
+CK_ORIENT = 34
+N_CK = 35
 
 # output vector layout
 OUT_PASSED = 0
@@ -816,7 +828,7 @@ def _ring_radius(prm, k):
 
 
 @njit(**_FLAGS)
-def _ring_corner(prm, points, interior, k, i, rest):
+def _ring_corner(prm, points, interior, rest_rim, k, i, rest):
     """Point ``(k, i)`` of a ring mesh (N points a ring, ring M the contour, ring 0 the fixed
     hub): its rest or current position [m], and its row in the force array (-1: fixed)."""
     n = points.shape[0]
@@ -825,8 +837,12 @@ def _ring_corner(prm, points, interior, k, i, rest):
     ang = prm[CK_PHASE] + 2 * math.pi * i / n
     rho = _ring_radius(prm, k)
     if rest or k == 0:
-        return (prm[CK_CENTRE_X] + rho * math.cos(ang), prm[CK_CENTRE_Y] + rho * math.sin(ang),
-                -1 if k == 0 else (i if k == m else n + (k - 1) * n + i))
+        row = -1 if k == 0 else (i if k == m else n + (k - 1) * n + i)
+        cx, cy = prm[CK_CENTRE_X], prm[CK_CENTRE_Y]
+        if prm[CK_SHAPE] != 0.0:
+            # an outline: the mesh scaled about the centroid onto its contour point i
+            return cx + rho * rest_rim[i, 0], cy + rho * rest_rim[i, 1], row
+        return cx + rho * math.cos(ang), cy + rho * math.sin(ang), row
     if k == m:
         return points[i, 0], points[i, 1], i
     row = (k - 1) * n + i
@@ -899,18 +915,18 @@ def _cst_forces(prm, force, q, p, ra, rb, rc, a0):
 
 
 @njit(**_FLAGS)
-def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
+def _mesh_triangle(prm, points, interior, rest_rim, ka, ia, kb, ib, kc, ic, force):
     """Forces of one triangle (corners (ring, index) counter-clockwise) of a ring mesh: its
     share of its three edges' springs and its area energy. Returns the largest force [N]."""
     m = int(prm[CK_RINGS])
     # rest/current as runtime flags, not literals: _ring_corner then compiles once
     rest, now = m > 0, m < 0
-    qax, qay, _ = _ring_corner(prm, points, interior, ka, ia, rest)
-    qbx, qby, _ = _ring_corner(prm, points, interior, kb, ib, rest)
-    qcx, qcy, _ = _ring_corner(prm, points, interior, kc, ic, rest)
-    pax, pay, ra = _ring_corner(prm, points, interior, ka, ia, now)
-    pbx, pby, rb = _ring_corner(prm, points, interior, kb, ib, now)
-    pcx, pcy, rc = _ring_corner(prm, points, interior, kc, ic, now)
+    qax, qay, _ = _ring_corner(prm, points, interior, rest_rim, ka, ia, rest)
+    qbx, qby, _ = _ring_corner(prm, points, interior, rest_rim, kb, ib, rest)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, rest_rim, kc, ic, rest)
+    pax, pay, ra = _ring_corner(prm, points, interior, rest_rim, ka, ia, now)
+    pbx, pby, rb = _ring_corner(prm, points, interior, rest_rim, kb, ib, now)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, rest_rim, kc, ic, now)
     a0 = 0.5 * ((qbx - qax) * (qcy - qay) - (qcx - qax) * (qby - qay))
     if prm[CK_MU] > 0.0:
         return _cst_forces(prm, force, (qax, qay, qbx, qby, qcx, qcy),
@@ -932,21 +948,21 @@ def _mesh_triangle(prm, points, interior, ka, ia, kb, ib, kc, ic, force):
 
 
 @njit(**_FLAGS)
-def _quad_forces(prm, points, interior, k, i, force):
+def _quad_forces(prm, points, interior, rest_rim, k, i, force):
     """Forces of the volumetric energy ``kappa A0 / 2 (ln(A / A0))^2`` of the quad between
     rings k - 1 and k and angles i, i + 1 (the nh-quad element), ``kappa = prm[CK_QUAD]``. Its
     corners counter-clockwise are a = (k - 1, i), b = (k, i), c = (k, i + 1), d = (k - 1, i + 1)
     and its area the shoelace sum, whose gradient over a corner is (y_next - y_prev,
     x_prev - x_next) / 2. Returns the largest force [N]."""
     rest, now = k > 0, k < 0  # runtime flags (see _mesh_triangle)
-    qax, qay, _ = _ring_corner(prm, points, interior, k - 1, i, rest)
-    qbx, qby, _ = _ring_corner(prm, points, interior, k, i, rest)
-    qcx, qcy, _ = _ring_corner(prm, points, interior, k, i + 1, rest)
-    qdx, qdy, _ = _ring_corner(prm, points, interior, k - 1, i + 1, rest)
-    pax, pay, ra = _ring_corner(prm, points, interior, k - 1, i, now)
-    pbx, pby, rb = _ring_corner(prm, points, interior, k, i, now)
-    pcx, pcy, rc = _ring_corner(prm, points, interior, k, i + 1, now)
-    pdx, pdy, rd = _ring_corner(prm, points, interior, k - 1, i + 1, now)
+    qax, qay, _ = _ring_corner(prm, points, interior, rest_rim, k - 1, i, rest)
+    qbx, qby, _ = _ring_corner(prm, points, interior, rest_rim, k, i, rest)
+    qcx, qcy, _ = _ring_corner(prm, points, interior, rest_rim, k, i + 1, rest)
+    qdx, qdy, _ = _ring_corner(prm, points, interior, rest_rim, k - 1, i + 1, rest)
+    pax, pay, ra = _ring_corner(prm, points, interior, rest_rim, k - 1, i, now)
+    pbx, pby, rb = _ring_corner(prm, points, interior, rest_rim, k, i, now)
+    pcx, pcy, rc = _ring_corner(prm, points, interior, rest_rim, k, i + 1, now)
+    pdx, pdy, rd = _ring_corner(prm, points, interior, rest_rim, k - 1, i + 1, now)
     a0 = 0.5 * ((qax * qby - qbx * qay) + (qbx * qcy - qcx * qby) + (qcx * qdy - qdx * qcy)
                 + (qdx * qay - qax * qdy))
     area = 0.5 * ((pax * pby - pbx * pay) + (pbx * pcy - pcx * pby) + (pcx * pdy - pdx * pcy)
@@ -959,7 +975,7 @@ def _quad_forces(prm, points, interior, k, i, force):
 
 
 @njit(**_FLAGS)
-def _ring_forces(prm, points, interior, force):
+def _ring_forces(prm, points, interior, rest_rim, force):
     """Spring and area forces of a ring mesh: between rings k - 1 and k each quad (i, i + 1)
     is cut by the diagonal (k - 1, i) - (k, i + 1) for even i and (k - 1, i + 1) - (k, i) for
     odd i. Returns the largest force on a point [N]."""
@@ -971,32 +987,34 @@ def _ring_forces(prm, points, interior, force):
         # 0 or 1 would compile _mesh_triangle again)
         centre, rim = m - 1, m
         for i in range(n):
-            big = _npmax(big, _mesh_triangle(prm, points, interior, centre, i, rim, i, rim,
-                                             i + 1, force))
+            big = _npmax(big, _mesh_triangle(prm, points, interior, rest_rim, centre, i, rim,
+                                             i, rim, i + 1, force))
         return big
     for k in range(1, m + 1):
         for i in range(n):
             if i % 2 == 0:
-                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i, k, i + 1,
-                                                 force))
-                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i + 1,
-                                                 k - 1, i + 1, force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, rest_rim, k - 1, i, k,
+                                                 i, k, i + 1, force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, rest_rim, k - 1, i, k,
+                                                 i + 1, k - 1, i + 1, force))
             else:
-                big = _npmax(big, _mesh_triangle(prm, points, interior, k - 1, i, k, i,
-                                                 k - 1, i + 1, force))
-                big = _npmax(big, _mesh_triangle(prm, points, interior, k, i, k, i + 1,
-                                                 k - 1, i + 1, force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, rest_rim, k - 1, i, k,
+                                                 i, k - 1, i + 1, force))
+                big = _npmax(big, _mesh_triangle(prm, points, interior, rest_rim, k, i, k,
+                                                 i + 1, k - 1, i + 1, force))
             if prm[CK_QUAD] > 0.0:
-                big = _npmax(big, _quad_forces(prm, points, interior, k, i, force))
+                big = _npmax(big, _quad_forces(prm, points, interior, rest_rim, k, i, force))
     return big
 
 
 @njit(cache=True, error_model="numpy")
-def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
+def check_mesh_one(prm, points, interior, angles, face, corner, stop, out, outline):
     """:func:`check_one` for a ring mesh (``prm[CK_RINGS] >= 2``) or constant-strain triangles
     (``prm[CK_MU] > 0``): equilibrium of every free point, the contour's contacts as for the
     fan. ``interior``: the interior points [m], ``((M - 1) N, 2)``, ring by ring from the hub
-    out (empty for the fan)."""
+    out (empty for the fan). ``outline``: where ``prm[CK_SHAPE]`` is not 0, the object's
+    B-spline coefficients of ``r(phi) / r`` (:mod:`envs.model.outline`; read for an outline
+    only)."""
     n = points.shape[0]
     if face.shape[1] != n or corner.shape[2] != n or not _corner_count_ok(corner.shape[1]):
         raise ValueError("check_mesh_one: face must be (2, N) and corner (2, 4 or 6, N)")
@@ -1005,7 +1023,16 @@ def check_mesh_one(prm, points, interior, angles, face, corner, stop, out):
     force = np.zeros((n + interior.shape[0], 2))
     acc = np.zeros(_N_ACC)
     acc[_ACC_FMIN] = math.inf
-    spring_max = _ring_forces(prm, points, interior, force)
+    # an outline's contour points at rest, per unit of ring radius (the model's definition of
+    # the outline: evenly spaced by arc length, envs.model.outline)
+    rest_rim = np.zeros((n, 2))
+    if prm[CK_SHAPE] != 0.0:
+        flat = np.empty(2 * n)
+        outline_contour_into(outline, 0, prm[CK_ORIENT], n, flat, 0)
+        for i in range(n):
+            rest_rim[i, 0] = flat[2 * i]
+            rest_rim[i, 1] = flat[2 * i + 1]
+    spring_max = _ring_forces(prm, points, interior, rest_rim, force)
     contour = force[:n]
     for j in range(2):
         _finger(prm, points, angles[j], j, face, corner, stop, contour, acc)
@@ -1091,6 +1118,10 @@ def check_params(scene, torque_nm: float, n_triangles: int, stiffness_rule: str,
     bulk = d.youngs_modulus_pa / (2 * (1 + nu) * (1 - 2 * nu))
     vals[CK_AREA_STIFF] = getattr(d, "area_stiffness_scale", 0.0) * bulk * d.thickness_m
     vals[CK_REST_AREA] = 0.5 * r * r * math.sin(2 * math.pi / n)
+    if getattr(d, "outline", None) is not None:
+        vals[CK_CENTRE_Y] = float(d.center_m[1])
+        vals[CK_SHAPE] = 1.0
+        vals[CK_ORIENT] = float(d.orientation_rad)
     vals[CK_RINGS] = float(n_rings)
     vals[CK_HUB] = 0.1 * r  # the ring meshes' rigid hub (envs.model.rings.HUB_RADIUS)
     vals[CK_UNIT] = k_unit

@@ -1,9 +1,11 @@
-"""GripperDesign-v2 and -v3: one step designs a gripper for a soft disk; a thin adapter over
-physics.
+"""GripperDesign-v2, -v3 and -v4: one step designs a gripper for a soft object; a thin
+adapter over physics.
 
 The physics and the reward live in :func:`envs.evaluate.evaluate_designs`; this module only maps
 actions to designs, draws objects, builds observations and ``info``, and renders. v3 designs
-shaped jaws too (:func:`make_vector_env_v3`; its single env: :func:`envs.reset_check.make_env_v3`).
+shaped jaws too (:func:`make_vector_env_v3`; its single env: :func:`envs.reset_check.make_env_v3`);
+v4 draws objects that are not disks (ellipses at any orientation) and observes their shape
+(:func:`make_vector_env_v4`, :func:`envs.reset_check.make_env_v4`).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from .model.defaults import (
 )
 from .model.family import ModelSpec, resolve_model
 from .model.loads import DEFAULT_LOAD_SET, load_set_code
+from .objects import Ellipse, SoftObject
 from .scenarios import Scenarios, nominal_leaders, place
 from .scene import Design, SoftDisk, joint_spring_kwargs
 from .validation import (
@@ -57,6 +60,9 @@ __all__ = [
     "GripperDesignEnv",
     "GripperDesignVectorEnv",
     "check_reset_arguments",
+    "SHAPE_OBS_FIELDS",
+    "shape_observation",
+    "make_vector_env_v4",
 ]
 
 # (name, transform, low, high): the observation is the transformed value mapped linearly from
@@ -73,6 +79,13 @@ OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
     ("stiffness_scale", "log10", -2.0, 1.0),
     ("payload_ratio", "log10", -8.0, 1.0),
     ("placement_tolerance_rel", "linear", 0.0, 0.5),
+)
+# GripperShapeDesign-v0 observes the object's shape after these: an ellipse's aspect ratio and its
+# orientation as cos(2 psi) (the grasp of an ellipse repeats when it turns by pi, and mirrors
+# when psi changes sign: -psi is the mirror image of psi across the gripper's axis)
+SHAPE_OBS_FIELDS: tuple[tuple[str, str, float, float], ...] = (
+    ("aspect_ratio", "linear", 1.0, 4.0),
+    ("orientation_cos2", "linear", -1.0, 1.0),
 )
 # a payload ratio below the observable range is observed at its lower end: a payload that
 # small changes no grasp (it is 1e-8 of the force unit)
@@ -138,6 +151,15 @@ class ObjectDistribution:
     placement_tolerance_range_rel
         Placement tolerance over the radius [-], inside [0, 0.5] (the observable range): the
         object's centre may lie anywhere within ``+-`` it along and across the gripper's axis.
+    aspect_ratio_range
+        An ellipse's aspect ratio ``a / b`` [-], inside [1, 4] (the observable range of
+        ``GripperShapeDesign-v0``): with either range below not a single point, every object is an
+        ellipse (:class:`envs.objects.Ellipse`) of the drawn radius as its area-equivalent
+        radius. Default ``(1, 1)`` with ``orientation_range_rad`` ``(0, 0)``: disks, drawn as
+        before (the same random stream).
+    orientation_range_rad
+        An ellipse's orientation ``psi`` [rad] (its long axis from +x, across the jaws),
+        inside [-pi, pi].
 
     The largest payload ratio of the ranges (:func:`payload_ratio`) must be observable (at
     most 10).
@@ -153,6 +175,8 @@ class ObjectDistribution:
     density_range_kg_m3: tuple[float, float] = (20.0, 1200.0)
     payload_factor_range: tuple[float, float] = (0.0, DEFAULT_PAYLOAD_FACTOR)
     placement_tolerance_range_rel: tuple[float, float] = (0.0, 0.25)
+    aspect_ratio_range: tuple[float, float] = (1.0, 1.0)
+    orientation_range_rad: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         for name, low, high, low_open, high_open in (
@@ -164,7 +188,9 @@ class ObjectDistribution:
                 ("friction_range", 0.0, 2.0, True, False),
                 ("density_range_kg_m3", 0.0, math.inf, True, False),
                 ("payload_factor_range", 0.0, MAX_PAYLOAD_FACTOR, False, False),
-                ("placement_tolerance_range_rel", 0.0, 0.5, False, False)):
+                ("placement_tolerance_range_rel", 0.0, 0.5, False, False),
+                ("aspect_ratio_range", 1.0, 4.0, False, False),
+                ("orientation_range_rad", -math.pi, math.pi, False, False)):
             object.__setattr__(self, name, _pair(name, getattr(self, name), low, high,
                                                  low_open=low_open, high_open=high_open))
         scale = check_range("stiffness_scale", self.stiffness_scale, 10.0**-2, 10.0)
@@ -190,18 +216,26 @@ class ObjectDistribution:
             self.poisson_ratio_range[0], self.thickness_range_m[0], scale,
             density_kg_m3=self.density_range_kg_m3[0]))
 
+    @property
+    def has_shapes(self) -> bool:
+        """Whether the objects drawn are ellipses (an aspect ratio or orientation range)."""
+        return (self.aspect_ratio_range != (1.0, 1.0)
+                or self.orientation_range_rad[0] != self.orientation_range_rad[1]
+                or self.orientation_range_rad[0] != 0.0)
+
     def sample(self, rng: np.random.Generator
                ) -> tuple[SoftDisk, float, float, float, float]:
         """Draw an object and what a design must respect (:data:`NEED_KEYS`): the disk, its
         strain limit, friction coefficient, payload factor and placement tolerance over the
         radius; nine uniform numbers of ``rng`` in one call (radius, modulus, Poisson ratio,
-        thickness, strain limit, friction, density, payload factor, tolerance, in this order).
+        thickness, strain limit, friction, density, payload factor, tolerance, in this order),
+        eleven with shapes (:attr:`has_shapes`: then the aspect ratio and the orientation).
 
         The disk's ``distance_m`` is 0: the design's ``distance_m`` replaces it.
         """
         # one call, not nine: a vector env draws hundreds of objects per step and each call of
         # a Generator costs about a microsecond
-        u = rng.random(9).tolist()
+        u = rng.random(11 if self.has_shapes else 9).tolist()
 
         def log_uniform(pair, x):
             return math.exp(math.log(pair[0]) + x * (math.log(pair[1]) - math.log(pair[0])))
@@ -221,12 +255,22 @@ class ObjectDistribution:
                             ("thickness_m", log_uniform(self.thickness_range_m, u[3])),
                             ("density_kg_m3", log_uniform(self.density_range_kg_m3, u[6]))):
             object.__setattr__(disk, name, value)
+        if self.has_shapes:
+            # the same copy as a SoftObject, its drawn ellipse and orientation in it
+            shaped = object.__new__(SoftObject)
+            shaped.__dict__.update(disk.__dict__)
+            object.__setattr__(shaped, "outline", Ellipse(uniform(self.aspect_ratio_range,
+                                                                  u[9])))
+            object.__setattr__(shaped, "orientation_rad", uniform(self.orientation_range_rad,
+                                                                  u[10]))
+            disk = shaped
         return (disk, uniform(self.strain_limit_range, u[4]),
                 uniform(self.friction_range, u[5]), uniform(self.payload_factor_range, u[7]),
                 uniform(self.placement_tolerance_range_rel, u[8]))
 
 
 _OBS_RANGE = {name: (low, high) for name, _, low, high in OBS_FIELDS}
+_SHAPE_OBS_RANGE = {name: (low, high) for name, _, low, high in SHAPE_OBS_FIELDS}
 
 
 def payload_ratio(disk: SoftDisk, payload_factor: float) -> float:
@@ -312,6 +356,26 @@ def _object_table(disks: list[SoftDisk]) -> np.ndarray:
     """The disks' fields, float (B, 6), columns as :data:`DISK_INFO_KEYS`."""
     return np.array([_DISK_FIELDS(d) for d in disks],
                     dtype=float).reshape(len(disks), len(DISK_INFO_KEYS))
+
+
+def shape_observation(disks: list[SoftDisk]) -> np.ndarray:
+    """The shape part of ``GripperShapeDesign-v0``'s observation, float32 (B, 2) in [-1, 1]
+    (:data:`SHAPE_OBS_FIELDS`): an ellipse's aspect ratio and ``cos(2 psi)`` (a disk: aspect
+    1, ``cos 0``); ``ValueError`` for an outline that is not an ellipse or an aspect ratio
+    outside [1, 4]."""
+    obs = np.empty((len(disks), len(SHAPE_OBS_FIELDS)), dtype=np.float32)
+    for i, d in enumerate(disks):
+        if d.outline is not None and not isinstance(d.outline, Ellipse):
+            raise ValueError(f"GripperShapeDesign-v0 observes ellipses and disks, got a "
+                             f"{d.shape} (row {i})")
+        aspect = 1.0 if d.outline is None else d.outline.aspect_ratio
+        low, high = _SHAPE_OBS_RANGE["aspect_ratio"]
+        if not low <= aspect <= high:
+            raise ValueError(f"aspect_ratio = {aspect!r} (row {i}) is outside the observable "
+                             f"range [{low:g}, {high:g}]")
+        obs[i] = (2.0 * (aspect - low) / (high - low) - 1.0,
+                  math.cos(2.0 * (0.0 if d.outline is None else d.orientation_rad)))
+    return obs
 
 
 def _observe_table(table: np.ndarray, needs: np.ndarray) -> np.ndarray:
@@ -443,9 +507,13 @@ def _draw(rng: np.random.Generator, distribution: ObjectDistribution,
 
 
 def _draw_object(rng: np.random.Generator, distribution: ObjectDistribution,
-                 options: dict[str, Any]) -> tuple[SoftDisk, np.ndarray, np.ndarray]:
+                 options: dict[str, Any], shapes: bool = False
+                 ) -> tuple[SoftDisk, np.ndarray, np.ndarray]:
     disk, needs = _draw(rng, distribution, options)
-    return disk, needs, observe(disk, *needs)
+    obs = observe(disk, *needs)
+    if shapes:
+        obs = np.concatenate([obs, shape_observation([disk])[0]])
+    return disk, needs, obs
 
 
 def evaluate_objects(designs: np.ndarray, disks: list[SoftDisk], needs: np.ndarray,
@@ -526,12 +594,34 @@ def _check_settings(bounds, distribution, weights, n_triangles, n_rings, element
                                     DEFAULT_ELEMENT if element is None else element, calibrated))
 
 
-def _spaces(bounds: DesignBounds) -> tuple[spaces.Box, spaces.Box]:
+def _spaces(bounds: DesignBounds, shapes: bool = False) -> tuple[spaces.Box, spaces.Box]:
     """The action space (one coordinate per column of the bounds: 6, plus the jaw columns)
     and the observation space."""
     action = spaces.Box(-1.0, 1.0, shape=(bounds.n_var,), dtype=np.float32)
-    obs = spaces.Box(-1.0, 1.0, shape=(len(OBS_FIELDS),), dtype=np.float32)
+    obs = spaces.Box(-1.0, 1.0, shape=(_n_obs(shapes),), dtype=np.float32)
     return action, obs
+
+
+def _n_obs(shapes: bool) -> int:
+    """Length of an observation: :data:`OBS_FIELDS`, and with shapes (v4)
+    :data:`SHAPE_OBS_FIELDS`."""
+    return len(OBS_FIELDS) + (len(SHAPE_OBS_FIELDS) if shapes else 0)
+
+
+#: The default objects of ``GripperShapeDesign-v0``: v2's, each an ellipse of aspect ratio 1 to 3
+#: at any orientation (0 to pi/2 covers them all: the grasp of psi + pi is that of psi, and
+#: that of -psi its mirror image)
+SHAPE_DISTRIBUTION = dict(aspect_ratio_range=(1.0, 3.0), orientation_range_rad=(0.0,
+                                                                                  math.pi / 2))
+
+
+def _shape_settings(distribution, observe_shapes) -> tuple[ObjectDistribution | None, bool]:
+    """``observe_shapes`` validated, and the distribution (v4's default with shapes)."""
+    if not isinstance(observe_shapes, bool):
+        raise ValueError(f"observe_shapes must be True or False, got {observe_shapes!r}")
+    if observe_shapes and distribution is None:
+        distribution = ObjectDistribution(**SHAPE_DISTRIBUTION)
+    return distribution, observe_shapes
 
 
 def _info_value(v: np.ndarray):
@@ -553,7 +643,7 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
         # the centre of the default box, at the object's scale
         draw_design(fig.add_subplot(), DesignBounds().scale(np.zeros(N_DESIGN), disk),
-                    disk.radius_m, title="no design yet: call step()")
+                    disk.radius_m, title="no design yet: call step()", disk=disk)
         return figure_rgb_array(fig)
     chosen = Design.from_array(design)
     try:
@@ -562,7 +652,8 @@ def _render_frame(design: np.ndarray | None, disk: SoftDisk, strain_limit: float
     except ValueError as exc:
         fig = Figure(figsize=(5.0, 5.0), dpi=80)
         draw_design(fig.add_subplot(), design, disk.radius_m,
-                    title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60))
+                    title="invalid design:\n" + textwrap.fill(str(exc).split(":")[0], 60),
+                    disk=disk)
         return figure_rgb_array(fig)
     key = (tuple(design.tolist()), disk, model, tuple(spring.items()))
     if cache.get("key") != key:
@@ -728,6 +819,15 @@ class GripperDesignEnv(gym.Env):
 
     ## Version History
 
+    * ``GripperShapeDesign-v0`` (an id of its own beside v2): objects that are not disks.
+      Every object is an ellipse
+      (:class:`envs.objects.Ellipse`, the drawn radius its area-equivalent radius ``r_eq``) of
+      aspect ratio 1 to 3 at an orientation of 0 to 90 degrees (:data:`SHAPE_DISTRIBUTION`;
+      ``ObjectDistribution.aspect_ratio_range`` and ``orientation_range_rad``), placed with
+      its lowest point ``d_1`` above the joints' line and the faces clearing it by the
+      action's clearance; the observation gains its aspect ratio (linear, 1 to 4) and
+      ``cos(2 psi)`` (shape 8). Actions, rewards and the placements are v2's
+      (``gym.make("GripperShapeDesign-v0")``, ``observe_shapes=True``).
     * v3: shaped jaws. The action gains the jaw columns of the design space
       (:class:`~envs.evaluate.DesignBounds` ``jaw``, ``jaw_per_finger``): a groove cut into the
       gripping faces, chosen at make, `gym.make("GripperJawDesign-v0", jaw="cradle")` (default
@@ -766,6 +866,7 @@ class GripperDesignEnv(gym.Env):
         n_rings: int | None = None,
         element: str | None = None,
         calibrated: bool | None = None,
+        observe_shapes: bool = False,
         load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
         load_set_code(load_set)  # (a bad setting at construction, not at the first step)
@@ -773,15 +874,16 @@ class GripperDesignEnv(gym.Env):
             raise ValueError(f"render_mode {render_mode!r} is not one of "
                              f"{self.metadata['render_modes']}")
         self.render_mode = render_mode
+        distribution, self.observe_shapes = _shape_settings(distribution, observe_shapes)
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.load_set = load_set
-        self.action_space, self.observation_space = _spaces(self.bounds)
+        self.action_space, self.observation_space = _spaces(self.bounds, self.observe_shapes)
         self._disk: SoftDisk | None = None
         self._terminated = 0  # steps since the episode ended (it ends with its first)
         self._needs = np.zeros(len(NEED_KEYS))  # NEED_KEYS order
-        self._obs = np.zeros(len(OBS_FIELDS), dtype=np.float32)
+        self._obs = np.zeros(_n_obs(self.observe_shapes), dtype=np.float32)
         self._last_design: np.ndarray | None = None
         self._render_cache: dict = {}
         self._figure = None
@@ -800,7 +902,7 @@ class GripperDesignEnv(gym.Env):
         opts = check_reset_arguments(seed, options)  # before anything changes
         super().reset(seed=None if seed is None else int(seed))
         self._disk, self._needs, self._obs = _draw_object(
-            self.np_random, self.distribution, opts)
+            self.np_random, self.distribution, opts, self.observe_shapes)
         self._last_design = None
         self._terminated = 0
         if self.render_mode == "human":
@@ -925,6 +1027,7 @@ class GripperDesignVectorEnv(VectorEnv):
         calibrated: bool | None = None,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.SAME_STEP,
+        observe_shapes: bool = False,
         load_set: str = DEFAULT_LOAD_SET,
     ) -> None:
         load_set_code(load_set)
@@ -939,12 +1042,14 @@ class GripperDesignVectorEnv(VectorEnv):
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
+        distribution, self.observe_shapes = _shape_settings(distribution, observe_shapes)
         self.bounds, self.distribution, self.weights, self.model = _check_settings(
             bounds, distribution, weights, n_triangles, n_rings, element, calibrated)
         self.joint_spring = joint_spring_kwargs(torsion_stiffness_rel, torsion_stiffness_nm_per_rad)
         self.load_set = load_set
         self.max_episode_steps = max_episode_steps
-        self.single_action_space, self.single_observation_space = _spaces(self.bounds)
+        self.single_action_space, self.single_observation_space = _spaces(
+            self.bounds, self.observe_shapes)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         n = self.num_envs
@@ -952,7 +1057,7 @@ class GripperDesignVectorEnv(VectorEnv):
         self._disks: list[SoftDisk | None] = [None] * n
         self._needs = np.zeros((n, len(NEED_KEYS)))  # NEED_KEYS order
         self._objects = np.zeros((n, len(OBJECT_INFO_KEYS)))
-        self._obs = np.zeros((n, len(OBS_FIELDS)), dtype=np.float32)
+        self._obs = np.zeros((n, _n_obs(self.observe_shapes)), dtype=np.float32)
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._last_designs: list[np.ndarray | None] = [None] * n
         self._render_caches: list[dict] = [{} for _ in range(n)]
@@ -982,6 +1087,8 @@ class GripperDesignVectorEnv(VectorEnv):
         # which validate a fixed object from the options before any sub-env changes
         table = _object_table(disks)
         obs = _observe_table(table, needs)
+        if self.observe_shapes:
+            obs = np.hstack([obs, shape_observation(disks)])
         for k, i in enumerate(idx):
             self._disks[i] = disks[k]
             self._last_designs[i] = None
@@ -1114,6 +1221,13 @@ def jaw_bounds(jaw: str = "any", jaw_per_finger: bool = False,
         raise ValueError(f"bounds must be None or a DesignBounds, got {type(bounds).__name__}")
     base = DesignBounds() if bounds is None else bounds
     return base.with_jaw(jaw, jaw_per_finger)
+
+
+def make_vector_env_v4(num_envs: int = 1, **kwargs: Any) -> GripperDesignVectorEnv:
+    """The vector entry point of ``GripperShapeDesign-v0``: a :class:`GripperDesignVectorEnv`
+    that draws ellipses at any orientation (:data:`SHAPE_DISTRIBUTION` unless a
+    ``distribution`` is given) and observes their shape (``observe_shapes=True``)."""
+    return GripperDesignVectorEnv(num_envs, observe_shapes=True, **kwargs)
 
 
 def make_vector_env_v3(num_envs: int = 1, *, jaw: str = "any", jaw_per_finger: bool = False,

@@ -21,6 +21,7 @@ from .scene import (
     SoftDisk,
     design_fields,
     design_from_relative,
+    placement_support,
     relative_from_design,
 )
 from .validation import check_range, check_sequence
@@ -461,7 +462,8 @@ class DesignBounds:
         a = np.asarray(action, dtype=np.float64)
         radius, unit = _scales(disks, a.shape[0] if a.ndim == 2 else None)
         rel = self.relative(a)
-        base = design_from_relative(rel[..., :N_DESIGN], radius, unit)
+        base = design_from_relative(rel[..., :N_DESIGN], radius, unit,
+                                    placement_support(disks))
         if self.jaw == "straight":
             return base
         return np.concatenate([base, *self._jaws_si(rel, radius)], axis=-1)
@@ -473,7 +475,8 @@ class DesignBounds:
         d = np.asarray(designs, dtype=np.float64)
         self._check_width(d, self.design_width, "designs")
         radius, unit = _scales(disks, d.shape[0] if d.ndim == 2 else None)
-        rel = np.concatenate([relative_from_design(d[..., :N_DESIGN], radius, unit),
+        rel = np.concatenate([relative_from_design(d[..., :N_DESIGN], radius, unit,
+                                                   placement_support(disks)),
                               self._jaws_relative(d, np.asarray(radius))], axis=-1)
         lo, hi = self.low_array, self.high_array
         action = 2.0 * (rel - lo) / (hi - lo) - 1.0

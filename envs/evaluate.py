@@ -69,6 +69,7 @@ from .batch_metrics import (  # noqa: F401 (re-exported: the metrics' definition
     finger_gaps_m,
     grip_share,
     grooves_m,
+    outline_finger_gaps_m,
     rest_violation,
 )
 from .design_space import DesignBounds  # noqa: F401
@@ -168,8 +169,10 @@ def _evaluate_arrays(des: np.ndarray, disk: np.ndarray, n_tri: np.ndarray, needs
     missing = out["converged"][:, None] & ~out["touching"]
     rows = np.flatnonzero(missing.any(axis=1))
     if rows.size:
-        gaps = finger_gaps_m(des[rows], disk[rows, DISK_RADIUS], out["jaw_angles_rad"][rows],
-                             disk[rows, DISK_OFFSET_X], grooves_m(cols.take(rows)))
+        part = cols.take(rows)
+        gaps = outline_finger_gaps_m(part, out["jaw_angles_rad"][rows], finger_gaps_m(
+            des[rows], disk[rows, DISK_RADIUS], out["jaw_angles_rad"][rows],
+            disk[rows, DISK_OFFSET_X], grooves_m(part)))
         out["finger_gap_m"][rows] = np.where(missing[rows], gaps, 0.0)
     out["holds"][:] = (out["converged"] & out["touching"].all(axis=1)
                        & (out["required_friction"] <= out["friction_coefficient"]))

@@ -21,6 +21,21 @@ A designer's own object is four numbers and, optionally, what the design must re
                                   # "cradle", "vee" or "any" (envs.design_space.DesignBounds)
     jaw_per_finger = false        # optional: each finger its own groove (default false)
 
+An object that is not a disk names its shape and its own dimensions instead of ``radius_m``
+(:mod:`envs.objects`; its area-equivalent radius is then the object's scale)::
+
+    shape = "ellipse"             # "disk" (default), "ellipse", "rounded_rectangle",
+                                  # "superellipse" or "measured"
+    semi_axes_m = [0.020, 0.010]  # ellipse, superellipse: along and across its first axis
+                                  # (each may be a range [low, high])
+    exponent = 4                  # superellipse: |x/a|^p + |y/b|^p = 1
+    sides_m = [0.030, 0.015]      # rounded_rectangle: its sides, the long one first
+    corner_radius_m = 0.004       # rounded_rectangle: at most half the short side
+    outline_file = "part.csv"     # measured: points (CSV) or a closed DXF polyline, next
+    outline_unit = "mm"           # to the object file; their unit, "m" or "mm"
+    orientation_deg = 90          # optional: its first axis from +x (across the jaws), ccw
+    orientation_tolerance_deg = 15  # optional: +- turn about its centroid as placed
+
 A range instead of a number, e.g. ``radius_m = [0.010, 0.015]``, asks for one design that
 serves every object in it (radius, modulus, Poisson ratio, thickness, density, friction): the
 design is made for the ranges' centre and judged over the scenarios of :mod:`envs.scenarios`.
@@ -66,7 +81,9 @@ from .model.defaults import (
     OBJECT_DENSITY_KG_M3,
 )
 from .model.loads import LOAD_SETS
-from .scenarios import RANGE_FIELDS, Scenarios
+from .objects import SHAPE_NAMES, as_object, outline_info, outline_of
+from .objects.files import OUTLINE_UNITS, read_outline
+from .scenarios import OUTLINE_RANGE_FIELDS, RANGE_FIELDS, Scenarios
 from .scene import Gripper, Scene, SoftDisk, check_torque, joint_spring_nm_per_rad
 from .tolerances import Tolerances, parse_tolerances
 from .validation import check_plausible, check_range, read_text_file
@@ -108,13 +125,20 @@ TOLERANCE_KEY = "placement_tolerance_m"
 TOLERANCE_RULE = (0.0, math.inf, False, False, False)
 # the jaws a design problem designs (envs.design_space.DesignBounds): a word and a flag
 JAW_KEY, JAW_PER_FINGER_KEY = "jaw", "jaw_per_finger"
+# an object that is not a disk (envs.objects): its shape, dimensions and orientation
+SHAPE_KEYS = ("shape", "semi_axes_m", "exponent", "sides_m", "corner_radius_m",
+              "outline_file", "outline_unit", "orientation_deg", "orientation_tolerance_deg")
+_LENGTH_RULE = (0.0, math.inf, True, False, False)
+_SHAPE_NEEDS = {"ellipse": ("semi_axes_m",), "superellipse": ("semi_axes_m", "exponent"),
+                "rounded_rectangle": ("sides_m", "corner_radius_m"),
+                "measured": ("outline_file", "outline_unit")}
 # how the object is picked: the payload's directions (envs.model.loads.LOAD_SETS)
 LOAD_SET_KEY = "load_set"
 # the [gripper] table's manufacturing tolerances (envs.tolerances.TOLERANCE_KEYS)
 TOLERANCES_KEY = "tolerances"
 # every key of the [object] table, in the order the unknown-key message lists them
 OBJECT_TABLE_KEYS = ("name", TOLERANCE_KEY, *OBJECT_KEYS, JAW_KEY, JAW_PER_FINGER_KEY,
-                     LOAD_SET_KEY)
+                     LOAD_SET_KEY, *SHAPE_KEYS)
 
 
 @dataclass(frozen=True)
@@ -207,7 +231,7 @@ class ObjectSpec:
     def info(self) -> dict[str, Any]:
         """The object's fields as plain data (what a result JSON records)."""
         d = self.disk
-        return {"name": self.name, "radius_m": d.radius_m,
+        return {"name": self.name, "radius_m": d.radius_m, **outline_info(d),
                 "youngs_modulus_pa": d.youngs_modulus_pa, "poisson_ratio": d.poisson_ratio,
                 "thickness_m": d.thickness_m, "stiffness_scale": d.stiffness_scale,
                 "density_kg_m3": d.density_kg_m3,
@@ -297,6 +321,8 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
     if not isinstance(name, str) or not name.strip():
         raise ValueError(f"{where}: [object] name must be a non-empty string, got {name!r}")
     table = dict(table)
+    folder = Path(".") if path is None else path.parent
+    outline, table, axis_ranges, turn = _shape(f"{where}: [object]", table, folder)
     tolerance = _tolerance(f"{where}: [object]", table.pop(TOLERANCE_KEY, None))
     jaw, per_finger = _jaws(f"{where}: [object]", table.pop(JAW_KEY, None),
                             table.pop(JAW_PER_FINGER_KEY, None))
@@ -306,20 +332,22 @@ def parse_object(data: dict[str, Any], where: str, default_name: str = "object",
                          f"{', '.join(repr(k) for k in LOAD_SETS)}, got {load_set!r}")
     table, ranges = _ranges(f"{where}: [object]", table)
     values = _table(f"{where}: [object]", table, OBJECT_KEYS, extra=("name", TOLERANCE_KEY),
-                    after=(JAW_KEY, JAW_PER_FINGER_KEY, LOAD_SET_KEY))
+                    after=(JAW_KEY, JAW_PER_FINGER_KEY, LOAD_SET_KEY, *SHAPE_KEYS))
+    ranges.update(axis_ranges)
     gripper, tolerances = (_gripper(f"{where}: [gripper]", data["gripper"])
                            if "gripper" in data else (None, None))
     scenarios = None
-    if ranges or tolerance is not None or tolerances is not None:
+    if ranges or tolerance is not None or tolerances is not None or turn is not None:
         try:
-            scenarios = Scenarios.of(ranges, tolerance, tolerances)
+            scenarios = Scenarios.of(ranges, tolerance, tolerances, turn)
             scenarios.check_placement(values["radius_m"])  # (the ranges' centre)
         except ValueError as exc:
             raise ValueError(f"{where}: [object]: {exc}") from None
-    disk = SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
-                    values["poisson_ratio"], values["thickness_m"],
-                    values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
-                    density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3))
+    disk = as_object(SoftDisk(values["radius_m"], 0.0, values["youngs_modulus_pa"],
+                              values["poisson_ratio"], values["thickness_m"],
+                              values.get("stiffness_scale", DEFAULT_STIFFNESS_SCALE),
+                              density_kg_m3=values.get("density_kg_m3", OBJECT_DENSITY_KG_M3)),
+                     **outline)
     if gripper is not None and gripper.torque_nm is not None:
         try:  # a torque far beyond what squeezes this object (N·mm typed for N·m)
             check_torque("torque_nm", data["gripper"]["torque_nm"], disk.torque_unit_nm,
@@ -376,6 +404,109 @@ def _ranges(where: str, table: dict[str, Any]) -> tuple[dict[str, Any], dict[str
         ranges[key] = (low, high)
         table[key] = 0.5 * (low + high)
     return table, ranges
+
+
+def _shape(where: str, table: dict[str, Any], folder: Path
+           ) -> tuple[dict[str, Any], dict[str, Any], dict[str, tuple[float, float]],
+                      float | None]:
+    """The shape keys of an ``[object]`` table (:data:`SHAPE_KEYS`): the object's ``outline``
+    and ``orientation_rad`` (empty for a disk), the table without them (with ``radius_m`` the
+    outline's equivalent radius), the semi-axis ranges (:mod:`envs.scenarios`) and the
+    orientation tolerance [deg] (``None``: not given)."""
+    table = dict(table)
+    given = {k: table.pop(k) for k in SHAPE_KEYS if k in table}
+    shape = given.pop("shape", "measured" if "outline_file" in given else "disk")
+    if not isinstance(shape, str) or shape not in SHAPE_NAMES:
+        raise ValueError(f"{where}: shape must be one of "
+                         f"{', '.join(repr(k) for k in SHAPE_NAMES)}, got {shape!r}")
+    psi = given.pop("orientation_deg", None)
+    turn = given.pop("orientation_tolerance_deg", None)
+    if shape == "disk":
+        extra = [k for k in (*given, *(("orientation_deg",) if psi is not None else ()),
+                             *(("orientation_tolerance_deg",) if turn is not None else ()))]
+        if extra:
+            raise ValueError(f"{where}: {extra[0]} applies to an object with a shape, not a "
+                             "disk: set shape = \"ellipse\", \"rounded_rectangle\", "
+                             "\"superellipse\" or \"measured\"")
+        return {}, table, {}, None
+    if "radius_m" in table:
+        raise ValueError(f"{where}: radius_m does not apply to shape = {shape!r}: its own "
+                         f"dimensions ({', '.join(_SHAPE_NEEDS[shape])}) set its size")
+    wrong = [k for k in given if k not in _SHAPE_NEEDS[shape]]
+    if wrong:
+        raise ValueError(f"{where}: {wrong[0]} does not apply to shape = {shape!r} (it takes "
+                         f"{', '.join(_SHAPE_NEEDS[shape])})")
+    missing = [k for k in _SHAPE_NEEDS[shape] if k not in given]
+    if missing:
+        raise ValueError(f"{where}: shape = {shape!r} needs {missing[0]}")
+    ranges: dict[str, tuple[float, float]] = {}
+    try:
+        if shape == "measured":
+            outline, r_eq = _measured(where, given, folder)
+        else:
+            dims = {}
+            for key in ("semi_axes_m", "sides_m"):
+                if key in given:
+                    dims[key], found = _pair_of_lengths(where, key, given[key])
+                    if key == "semi_axes_m":
+                        ranges.update({name: pair for name, pair in zip(
+                            OUTLINE_RANGE_FIELDS, found, strict=True) if pair is not None})
+            if "corner_radius_m" in given:
+                dims["corner_radius_m"] = _number(where, "corner_radius_m",
+                                                  given["corner_radius_m"], (0.0, math.inf,
+                                                                             False, False,
+                                                                             False))
+            if "exponent" in given:
+                dims["exponent"] = _number(where, "exponent", given["exponent"],
+                                           (1.0, 20.0, False, False, False))
+            outline, r_eq = outline_of(shape, **dims)
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    angle = 0.0 if psi is None else _number(where, "orientation_deg", psi,
+                                            (-360.0, 360.0, False, False, False))
+    if turn is not None:
+        turn = _number(where, "orientation_tolerance_deg", turn, (0.0, 90.0, False, False,
+                                                                   False))
+    table["radius_m"] = r_eq
+    return ({"outline": outline, "orientation_rad": math.radians(angle)}, table, ranges,
+            turn)
+
+
+def _pair_of_lengths(where: str, key: str, value: Any
+                     ) -> tuple[tuple[float, float], tuple[tuple[float, float] | None, ...]]:
+    """A pair of lengths [m] whose entries may each be a range [low, high]: the pair at the
+    ranges' centres, and each entry's range (``None`` for a number)."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise ValueError(f"{key} must be a pair [first, second] of lengths [m], got {value!r}")
+    centre, ranges = [], []
+    for i, v in enumerate(value):
+        if isinstance(v, list):
+            if len(v) != 2:
+                raise ValueError(f"{key}[{i}] as a range must be [low, high], got {v!r}")
+            low, high = (_number(where, f"{key}[{i}][{j}]", x, _LENGTH_RULE)
+                         for j, x in enumerate(v))
+            if not low <= high:
+                raise ValueError(f"{key}[{i}] = {v!r}: low must not exceed high")
+            centre.append(0.5 * (low + high))
+            ranges.append((low, high))
+        else:
+            centre.append(_number(where, f"{key}[{i}]", v, _LENGTH_RULE))
+            ranges.append(None)
+    if key != "semi_axes_m" and any(r is not None for r in ranges):
+        raise ValueError(f"{key} must be two numbers (ranges are allowed for semi_axes_m)")
+    return (centre[0], centre[1]), tuple(ranges)
+
+
+def _measured(where: str, given: dict[str, Any], folder: Path):
+    """A measured outline of ``outline_file`` (next to the object file) in ``outline_unit``."""
+    name, unit = given["outline_file"], given["outline_unit"]
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"outline_file must be a file name, got {name!r}")
+    if not isinstance(unit, str) or unit not in OUTLINE_UNITS:
+        raise ValueError(f"outline_unit must be one of {', '.join(map(repr, OUTLINE_UNITS))}, "
+                         f"got {unit!r}")
+    path = Path(name)
+    return read_outline(path if path.is_absolute() else folder / path, unit)
 
 
 def _written(value: list) -> str:

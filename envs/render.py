@@ -36,6 +36,7 @@ __all__ = [
     "finger_to_drawing",
     "groove_vertices",
     "outline_polygon",
+    "object_patch",
     "OUTLINE_COLUMNS",
     "spring_segments",
     "unit_scale",
@@ -240,7 +241,7 @@ def spring_segments(points_m: np.ndarray, center_m: np.ndarray, radius_m: float)
 
 def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.ndarray,
                   radius_m: float, n_rings: int, phase_rad: float = math.pi / 2,
-                  element: str = "spring"):
+                  element: str = "spring", rest_unit: np.ndarray | None = None):
     """Edges of a ring mesh (:mod:`envs.model.rings`) and their strains ``(L - L0) / L0``.
 
     Parameters
@@ -256,6 +257,10 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
         The member's element (its ring spacing: even for ``"nhquad"``).
     phase_rad
         Angle of the first point of every ring [rad].
+    rest_unit
+        An outline's contour points at rest in units of ``radius_m`` about the centre (N, 2)
+        (:meth:`envs.objects.Outline.contour`): the mesh's rings scaled onto it; ``None``: the
+        disk's unit circle.
 
     Returns
     -------
@@ -272,7 +277,8 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
     n, m = pts.shape[0], int(n_rings)
     centre = np.asarray(center_m, dtype=float)
     ang = phase_rad + 2 * math.pi * np.arange(n) / n
-    unit = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    unit = (np.stack([np.cos(ang), np.sin(ang)], axis=1) if rest_unit is None
+            else np.asarray(rest_unit, dtype=float))
 
     def point(k, i, rest):
         if rest or k == 0:
@@ -290,6 +296,24 @@ def mesh_segments(points_m: np.ndarray, interior_m: np.ndarray, center_m: np.nda
     return np.array(segs), np.array(strains)
 
 
+def object_patch(disk: SoftDisk, scale: float = 1.0, centre_m=None, **style):
+    """The object at rest as a matplotlib patch, ``scale`` drawn units a metre: a circle for
+    a disk, its outline at its orientation otherwise (centred at ``centre_m``, default its
+    own centre)."""
+    centre = np.asarray(disk.center_m if centre_m is None else centre_m, dtype=float)
+    if disk.outline is None:
+        return Circle(scale * centre, scale * disk.radius_m, **style)
+    pts = centre + disk.radius_m * disk.outline.contour(256, disk.orientation_rad)
+    return Polygon(scale * pts, closed=True, **style)
+
+
+def _reach(disk: SoftDisk | None, radius_m: float) -> float:
+    """The farthest the object reaches from its centre [m] (framing a drawing)."""
+    if disk is None or disk.outline is None:
+        return radius_m
+    return disk.radius_m * disk.outline.radius_range()[1]
+
+
 def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float,
            length_unit: str = "m") -> None:
     """Limits around the fingers and the disk, equal axes, labelled in ``length_unit``."""
@@ -304,7 +328,7 @@ def _frame(ax, fingers: list[np.ndarray], center: np.ndarray, radius: float,
 
 
 def draw_design(ax, design, radius_m: float, *, title: str | None = None,
-                length_unit: str = "m") -> None:
+                length_unit: str = "m", disk: SoftDisk | None = None) -> None:
     """Draw a design at rest from raw numbers, without validating it (for invalid designs).
 
     Parameters
@@ -321,6 +345,10 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None,
         Axes title.
     length_unit
         Units of the drawing's axes, ``"m"`` (default) or ``"mm"``.
+    disk
+        The object, where it is not a disk of ``radius_m`` (an outline is drawn at its
+        orientation, its lowest point ``d_1`` above the joints' line); its own
+        ``distance_m`` is not read.
     """
     k = unit_scale(length_unit)
     row = np.asarray(design, dtype=float)
@@ -334,8 +362,14 @@ def draw_design(ax, design, radius_m: float, *, title: str | None = None,
     fingers = [k * finger_polygon(ln, th0, d3, w, side, jaws[side]) for side in (0, 1)]
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.8))
-    ax.add_patch(Circle(center, k * radius_m, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
-    _frame(ax, fingers, center, k * radius_m, length_unit)
+    if disk is None or disk.outline is None:
+        ax.add_patch(Circle(center, k * radius_m, facecolor="tab:orange", alpha=0.3,
+                            edgecolor="k"))
+    else:
+        center = k * np.array([disk.offset_x_m, d1 + disk.lift_m])
+        ax.add_patch(object_patch(disk, k, center / k, facecolor="tab:orange", alpha=0.3,
+                                  edgecolor="k"))
+    _frame(ax, fingers, center, k * _reach(disk, radius_m), length_unit)
     if title:
         ax.set_title(title, fontsize=9)
 
@@ -389,7 +423,7 @@ def draw_grasp(
     g: Gripper = scene.gripper
     d: SoftDisk = scene.disk
     k = unit_scale(length_unit)  # every position is drawn k times its value in metres
-    center, radius = k * np.asarray(d.center_m, dtype=float), k * d.radius_m
+    center = k * np.asarray(d.center_m, dtype=float)
     rest_fingers = [k * finger_polygon(g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
                                         g.finger_width_m, side, g.jaws[side])
                     for side in (0, 1)]
@@ -399,7 +433,7 @@ def draw_grasp(
     if show_rest and result is not None:
         for poly in rest_fingers:
             ax.add_patch(Polygon(poly, closed=True, **REST_STYLE))
-        ax.add_patch(Circle(center, radius, **REST_STYLE, label="rest (dashed)"))
+        ax.add_patch(object_patch(d, k, **REST_STYLE, label="rest (dashed)"))
     for poly in fingers:
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.75", edgecolor="0.3", alpha=0.9,
                              zorder=3))
@@ -413,8 +447,7 @@ def draw_grasp(
                    label=f"gripper axis (object held {d.offset_x_m * 1e3:+.3g} mm off it)")
     lines = None
     if result is None:
-        ax.add_patch(Circle(center, radius, facecolor="tab:orange", alpha=0.3,
-                            edgecolor="k"))
+        ax.add_patch(object_patch(d, k, facecolor="tab:orange", alpha=0.3, edgecolor="k"))
     else:
         pts_m = np.asarray(result.points_m, dtype=float)
         pts = k * pts_m
@@ -425,9 +458,11 @@ def draw_grasp(
             if rings > 1:
                 # a ring mesh: every edge (for the constant-strain element, the triangles'
                 # edge strains), the hub's ring drawn at rest
-                segs, strains = mesh_segments(pts_m, result.interior_points_m, d.center_m,
-                                              d.radius_m, rings,
-                                              element=getattr(result, "element", "spring"))
+                segs, strains = mesh_segments(
+                    pts_m, result.interior_points_m, d.center_m, d.radius_m, rings,
+                    element=getattr(result, "element", "spring"),
+                    rest_unit=None if d.outline is None else d.outline.contour(
+                        len(pts_m), d.orientation_rad))
                 widths = np.full(len(segs), 0.8)
             else:
                 segs, strains = spring_segments(pts_m, d.center_m, d.radius_m)
@@ -443,7 +478,7 @@ def draw_grasp(
             ax.plot(hit[:, 0], hit[:, 1], "o", markersize=6, markeredgecolor="k",
                     markeredgewidth=0.8, zorder=5, linestyle="none",
                     **{"markerfacecolor": style["color"], "label": style["label"]})
-    _frame(ax, rest_fingers + fingers, center, radius, length_unit)
+    _frame(ax, rest_fingers + fingers, center, k * _reach(d, d.radius_m), length_unit)
     if legend:
         # below the axes: inside, it would hide the grasp it explains
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7,

@@ -67,5 +67,12 @@ def make_env_v3(*, jaw: str = "any", jaw_per_finger: bool = False, bounds=None,
 
 
 # gym.make reads the render modes from its entry point
+def make_env_v4(**kwargs: Any) -> gym.Env:
+    """The entry point of ``GripperShapeDesign-v0``: :func:`make_env` of an env that draws
+    ellipses at any orientation and observes their shape (``observe_shapes=True``)."""
+    return make_env(observe_shapes=True, **kwargs)
+
+
 make_env.metadata = GripperDesignEnv.metadata  # type: ignore[attr-defined]
+make_env_v4.metadata = GripperDesignEnv.metadata  # type: ignore[attr-defined]
 make_env_v3.metadata = GripperDesignEnv.metadata  # type: ignore[attr-defined]

@@ -12,6 +12,10 @@ close. Across the axis this is conservative: a free object on a slippery surface
 towards the middle. A larger or smaller object keeps the placed centre, so its nearest point moves
 by the change of radius.
 
+An object that is not a disk (:mod:`envs.objects`) may also be turned: an orientation
+tolerance ``+- dpsi`` (``orientation_tolerance_rad``, beside the placement tolerance) about its
+centroid, which stays where it was placed, and an ellipse's semi-axes may range
+(``semi_axis_a_m``, ``semi_axis_b_m``).
 The design itself may vary as built (:mod:`envs.tolerances`): its lengths, rest angle, spring
 and torque within manufacturing tolerances are scenario dimensions beside the object's.
 
@@ -48,6 +52,7 @@ import numpy as np
 from .evaluate import METRIC_KEYS, evaluate_designs
 from .model.defaults import PLAUSIBLE_RANGES
 from .model.jaw import DESIGN_WIDTHS
+from .objects import with_semi_axes
 from .scene import DESIGN_FIELDS, SoftDisk
 from .tolerances import (
     Tolerances,
@@ -77,11 +82,14 @@ __all__ = [
 # object quantities that may vary (the disk's own fields, and the friction of the pads on it)
 DISK_RANGE_FIELDS = ("radius_m", "youngs_modulus_pa", "poisson_ratio", "thickness_m",
                      "density_kg_m3")
-RANGE_FIELDS = (*DISK_RANGE_FIELDS, "friction_coefficient")
+# an ellipse's (or superellipse's) semi-axes along and across its first axis [m]
+OUTLINE_RANGE_FIELDS = ("semi_axis_a_m", "semi_axis_b_m")
+RANGE_FIELDS = (*DISK_RANGE_FIELDS, "friction_coefficient", *OUTLINE_RANGE_FIELDS)
 ROBUST_MEASURES = ("worst", "mean", "cvar")
 CVAR_SHARE = 0.25  # the CVaR's tail: the mean of the worst quarter of the scenarios
 # the placement as the last two coordinates of a scenario's point in the unit box
 PLACEMENT_FIELDS = ("dx_m", "dy_m")
+ORIENTATION_FIELD = "dpsi_rad"  # the orientation, after the placement
 DISTANCE_COLUMN = DESIGN_FIELDS.index("distance_m")
 
 # all 2^k corners up to this many varied quantities (32 corners); a covering set beyond
@@ -116,6 +124,8 @@ class Scenario:
         The varied quantities of the object (:data:`RANGE_FIELDS`) and their values [SI].
     dx_m, dy_m
         The object's centre displaced across (x) and along (y) the gripper's axis [m].
+    dpsi_rad
+        An outline turned about its centroid from its nominal orientation [rad].
     label
         A short name: ``nominal``, or the varied quantities at their low (``-``), middle
         (``0``) or high (``+``) end, e.g. ``radius_m+ dx_m-``.
@@ -129,13 +139,21 @@ class Scenario:
     dx_m: float = 0.0
     dy_m: float = 0.0
     label: str = "nominal"
+    dpsi_rad: float = 0.0
     design: Mapping[str, float] = field(default_factory=dict)
 
     def disk(self, nominal: SoftDisk) -> SoftDisk:
         """The scenario's object: the nominal disk with its varied fields (its placement is the
-        design's, :meth:`Scenarios.flatten`)."""
+        design's, :meth:`Scenarios.flatten`); an outline with its semi-axes and turned by
+        ``dpsi_rad``."""
         changes = {k: v for k, v in self.values.items() if k in DISK_RANGE_FIELDS}
-        return replace(nominal, **changes) if changes else nominal
+        disk = replace(nominal, **changes) if changes else nominal
+        axes = [self.values.get(k) for k in OUTLINE_RANGE_FIELDS]
+        if any(v is not None for v in axes):
+            disk = with_semi_axes(disk, *axes)
+        if self.dpsi_rad != 0.0 and disk.outline is not None:  # (a disk turned is itself)
+            disk = replace(disk, orientation_rad=disk.orientation_rad + self.dpsi_rad)
+        return disk
 
     def friction(self, nominal: float) -> float:
         """The scenario's friction coefficient [-]."""
@@ -146,6 +164,7 @@ class Scenario:
         ``design`` when there are any."""
         return {"label": self.label, **{k: float(v) for k, v in self.values.items()},
                 "dx_m": self.dx_m, "dy_m": self.dy_m,
+                **({ORIENTATION_FIELD: self.dpsi_rad} if self.dpsi_rad != 0.0 else {}),
                 **({"design": {k: float(v) for k, v in self.design.items()}}
                    if self.design else {})}
 
@@ -180,6 +199,9 @@ class Scenarios:
         Placement tolerance along the gripper's axis (y), ``+-`` [m], >= 0.
     placement_across_m
         Placement tolerance across the gripper's axis (x), ``+-`` [m], >= 0.
+    orientation_tolerance_rad
+        An outline's orientation tolerance ``+- dpsi`` about its centroid [rad], in [0, pi/2]
+        (a disk's answers do not depend on it).
     tolerances
         The design's manufacturing tolerances (:class:`envs.tolerances.Tolerances`), each a
         scenario dimension of its own; default none.
@@ -188,13 +210,15 @@ class Scenarios:
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     placement_along_m: float = 0.0
     placement_across_m: float = 0.0
+    orientation_tolerance_rad: float = 0.0
     tolerances: Tolerances = field(default_factory=Tolerances)
 
     def __post_init__(self) -> None:
         if not isinstance(self.ranges, Mapping):
             raise ValueError(f"ranges must be a mapping of field -> (low, high), got "
                              f"{type(self.ranges).__name__}")
-        allowed = [f for f in RANGE_FIELDS if f in _disk_fields() or f == "friction_coefficient"]
+        allowed = [f for f in RANGE_FIELDS if f in _disk_fields() or f == "friction_coefficient"
+                   or f in OUTLINE_RANGE_FIELDS]
         checked: dict[str, tuple[float, float]] = {}
         for name, pair in self.ranges.items():
             if name not in allowed:
@@ -204,6 +228,8 @@ class Scenarios:
         high = PLAUSIBLE_RANGES["placement_tolerance_m"][1]
         for name in ("placement_along_m", "placement_across_m"):
             object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0, high))
+        object.__setattr__(self, "orientation_tolerance_rad", check_range(
+            "orientation_tolerance_rad", self.orientation_tolerance_rad, 0.0, math.pi / 2))
         if self.tolerances is None:
             object.__setattr__(self, "tolerances", Tolerances())
         if not isinstance(self.tolerances, Tolerances):
@@ -226,9 +252,11 @@ class Scenarios:
     @classmethod
     def of(cls, ranges: Mapping[str, Any] | None = None,
            placement_tolerance_m: float | tuple[float, float] | None = None,
-           tolerances: Tolerances | None = None) -> Scenarios:
+           tolerances: Tolerances | None = None,
+           orientation_tolerance_deg: float | None = None) -> Scenarios:
         """From ranges, a placement tolerance given as one number (both directions) or as
-        ``(along, across)`` [m], and manufacturing tolerances."""
+        ``(along, across)`` [m], manufacturing tolerances and an outline's orientation
+        tolerance ``+-`` [deg]."""
         along = across = 0.0
         if placement_tolerance_m is not None:
             tol = placement_tolerance_m
@@ -241,8 +269,10 @@ class Scenarios:
             else:
                 raise ValueError("placement_tolerance_m must be a number or a pair (along, "
                                  f"across) [m], got {tol!r}")
-        return cls(dict(ranges or {}), along, across,
-                   Tolerances() if tolerances is None else tolerances)
+        turn = 0.0 if orientation_tolerance_deg is None else math.radians(check_range(
+            "orientation_tolerance_deg", orientation_tolerance_deg, 0.0, 90.0))
+        return cls(dict(ranges or {}), along, across, orientation_tolerance_rad=turn,
+                   tolerances=Tolerances() if tolerances is None else tolerances)
 
     def with_tolerances(self, tolerances: Tolerances | None) -> Scenarios:
         """These scenarios with other manufacturing tolerances."""
@@ -259,6 +289,8 @@ class Scenarios:
             names.append("dx_m")
         if self.placement_along_m > 0.0:
             names.append("dy_m")
+        if self.orientation_tolerance_rad > 0.0:
+            names.append(ORIENTATION_FIELD)
         return (*names, *tolerance_dimensions(self.tolerances))
 
     @property
@@ -278,6 +310,10 @@ class Scenarios:
         changes = {k: 0.5 * (lo + hi) for k, (lo, hi) in self.ranges.items()
                    if k in DISK_RANGE_FIELDS}
         nominal = replace(disk, **changes) if changes else disk
+        axes = [0.5 * sum(self.ranges[k]) if k in self.ranges else None
+                for k in OUTLINE_RANGE_FIELDS]
+        if any(v is not None for v in axes):
+            nominal = with_semi_axes(nominal, *axes)
         self.check_placement(nominal.radius_m)
         return nominal
 
@@ -315,13 +351,15 @@ class Scenarios:
         for point in self.unit_points(full):
             values: dict[str, float] = {}
             design: dict[str, float] = {}
-            dx = dy = 0.0
+            dx = dy = dpsi = 0.0
             marks = []
             for name, u in zip(names, point.tolist(), strict=True):
                 if name == "dx_m":
                     dx = u * self.placement_across_m
                 elif name == "dy_m":
                     dy = u * self.placement_along_m
+                elif name == ORIENTATION_FIELD:
+                    dpsi = u * self.orientation_tolerance_rad
                 elif name not in self.ranges:
                     if u != 0.0:
                         design.update(tolerance_changes(self.tolerances, name, u))
@@ -332,7 +370,8 @@ class Scenarios:
                         lo + 0.5 * (u + 1.0) * (hi - lo))
                 if u != 0.0:
                     marks.append(f"{name}{'+' if u > 0 else '-'}")
-            out.append(Scenario(values, dx, dy, " ".join(marks) or "nominal", design))
+            out.append(Scenario(values, dx, dy, " ".join(marks) or "nominal", dpsi_rad=dpsi,
+                                design=design))
         return tuple(out)
 
     @classmethod
@@ -341,7 +380,8 @@ class Scenarios:
         try:
             return cls({k: tuple(v) for k, v in data.get("ranges", {}).items()},
                        data.get("placement_along_m", 0.0), data.get("placement_across_m", 0.0),
-                       Tolerances.from_dict(data.get("tolerances")))
+                       orientation_tolerance_rad=data.get("orientation_tolerance_rad", 0.0),
+                       tolerances=Tolerances.from_dict(data.get("tolerances")))
         except (AttributeError, TypeError) as exc:
             raise ValueError(f"scenarios must be a table of ranges and tolerances: {exc}"
                              ) from None
@@ -352,6 +392,8 @@ class Scenarios:
         return {"ranges": {k: list(v) for k, v in self.ranges.items()},
                 "placement_along_m": self.placement_along_m,
                 "placement_across_m": self.placement_across_m,
+                **({"orientation_tolerance_rad": self.orientation_tolerance_rad}
+                   if self.orientation_tolerance_rad > 0.0 else {}),
                 **({} if self.tolerances.is_zero
                    else {"tolerances": self.tolerances.as_dict()})}
 
@@ -436,7 +478,8 @@ def place(designs: np.ndarray, nominal: SoftDisk, friction: float,
     [m] (the per-row inputs of :func:`~envs.evaluate.evaluate_designs`).
 
     The placed centre is fixed: ``d_1 + r`` of the design against the nominal disk, moved by
-    ``dy``; a scenario's own radius puts its nearest point at the rest.
+    ``dy``; a scenario's own radius puts its nearest point at the rest (an outline's centroid
+    likewise: its lowest point at its own size and orientation, :attr:`SoftDisk.lift_m`).
     """
     rows, disks, frictions, offsets, _ = place_built(designs, nominal, friction, 1.0, cases)
     return rows, disks, frictions, offsets
@@ -453,8 +496,8 @@ def place_built(designs: np.ndarray, nominal: SoftDisk, friction: float,
         rows, springs = apply_tolerances(rows, springs, [s.design for s in cases])
     disks = [s.disk(nominal) for s in cases]
     dy = np.array([s.dy_m for s in cases])
-    radius = np.array([d.radius_m for d in disks])
-    rows[:, DISTANCE_COLUMN] += nominal.radius_m + dy - radius
+    radius = np.array([d.lift_m for d in disks])
+    rows[:, DISTANCE_COLUMN] += nominal.lift_m + dy - radius
     frictions = np.array([s.friction(friction) for s in cases])
     offsets = np.array([s.dx_m for s in cases])
     return rows, disks, frictions, offsets, springs

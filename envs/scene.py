@@ -41,6 +41,7 @@ from .model.jaw import (
     jaw_row,
     jaws_of_row,
 )
+from .model.layout import N_OUTLINE, SHAPE_DISK, SHAPE_OUTLINE
 from .model.problem import (
     REST_MESSAGES,
     REST_OFFSET,
@@ -67,6 +68,7 @@ __all__ = [
     "PRESETS",
     "design_from_relative",
     "relative_from_design",
+    "placement_support",
     "joint_spring",
     "joint_spring_kwargs",
     "joint_spring_nm_per_rad",
@@ -236,6 +238,10 @@ class Gripper:
 class SoftDisk:
     """Soft 2-D disk (extruded by a thickness) whose centre is pinned where it was placed.
 
+    An object that is not a disk is an :class:`envs.objects.SoftObject`, this class with an
+    ``outline`` and an ``orientation_rad`` (built by :func:`envs.objects.soft_object`); a
+    disk's ``outline`` is ``None``.
+
     A radius, thickness, modulus, density, stiffness scale or placement outside its plausible
     range (:data:`~envs.model.defaults.PLAUSIBLE_RANGES`: most likely typed in another unit)
     is refused, naming the likely unit (:func:`~envs.validation.check_plausible`).
@@ -293,6 +299,9 @@ class SoftDisk:
     area_stiffness_scale: float = DEFAULT_AREA_STIFFNESS_SCALE
     offset_x_m: float = 0.0
     density_kg_m3: float = DEFAULT_DENSITY_KG_M3
+    # a disk has no outline (not fields: envs.objects.SoftObject adds them as its own)
+    outline = None
+    orientation_rad = 0.0
 
     def __post_init__(self) -> None:
         check_range("radius_m", self.radius_m, 0.0, math.inf, low_open=True)
@@ -309,7 +318,7 @@ class SoftDisk:
         check_range("density_kg_m3", self.density_kg_m3, 0.0, math.inf, low_open=True)
         for name in PLAUSIBLE_DISK_FIELDS:  # (as given: quoted as the caller wrote it)
             check_plausible(name, getattr(self, name))
-        for f in fields(self):
+        for f in fields(SoftDisk):  # (a SoftObject's outline is not a number)
             object.__setattr__(self, f.name, float(getattr(self, f.name)))
 
     @property
@@ -345,8 +354,39 @@ class SoftDisk:
 
     @property
     def center_m(self) -> np.ndarray:
-        """Position of the pinned centre ``(x_c, d_1 + r)`` [m]."""
-        return np.array([self.offset_x_m, self.distance_m + self.radius_m])
+        """Position of the pinned centre ``(x_c, d_1 + r)`` [m] (an outline's centroid:
+        ``d_1`` plus how far its lowest point lies below it, :attr:`lift_m`)."""
+        return np.array([self.offset_x_m, self.distance_m + self.lift_m])
+
+    @property
+    def lift_m(self) -> float:
+        """Height of the centre above the object's lowest point [m]: ``r`` for a disk, for
+        an outline at its orientation its own."""
+        if self.outline is None:
+            return self.radius_m
+        return self.radius_m * self.outline.lowest(self.orientation_rad)
+
+    @property
+    def shape(self) -> str:
+        """The object's shape: ``"disk"``, or its outline's kind (``"ellipse"``, ...)."""
+        return "disk" if self.outline is None else self.outline.kind
+
+    def outline_columns(self) -> tuple[float, float, np.ndarray]:
+        """The scene row's shape code, orientation and outline coefficients (layout
+        ``S_SHAPE``.. of :mod:`envs.model.layout`; zeros for a disk)."""
+        if self.outline is None:
+            return SHAPE_DISK, 0.0, np.zeros(N_OUTLINE)
+        return SHAPE_OUTLINE, self.orientation_rad, self.outline.coefficients()
+
+    def contour_m(self, n: int = 256) -> np.ndarray:
+        """``n`` points of the undeformed outline in the gripper frame [m], counter-
+        clockwise from the top, spaced evenly by arc length (a disk's by angle), (n, 2)."""
+        if self.outline is None:
+            ang = math.pi / 2 + 2 * math.pi * np.arange(n) / n
+            unit = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        else:
+            unit = self.outline.contour(n, self.orientation_rad)
+        return self.center_m + self.radius_m * unit
 
 
 @dataclass(frozen=True)
@@ -400,10 +440,12 @@ class Scene:
         reach = max(float(np.min(distance_to_finger_bar(g, side, angles, d.center_m, jaw,
                                                         rounding)))
                     for side, jaw in zip((0, 1), g.jaws, strict=True))
-        if reach > d.radius_m:
+        # an outline: its farthest point from the centroid
+        farthest = d.radius_m if d.outline is None else d.radius_m * d.outline.radius_range()[1]
+        if reach > farthest:
             return (
                 f"the fingers cannot reach the disk even fully closed (closest approach "
-                f"{reach - d.radius_m:.3g} m): no grasp is possible",
+                f"{reach - farthest:.3g} m): no grasp is possible",
             )
         return ()
 
@@ -415,11 +457,12 @@ class Scene:
         """This scene at an actuation torque [N·m] as a (1, N_SCENE) scene matrix (layout
         ``S_*`` of :mod:`envs.model.layout`)."""
         g, d = self.gripper, self.disk
+        shape, orientation, outline = d.outline_columns()
         return np.array([[g.finger_length_m, g.rest_angle_rad, g.joint_offset_m,
                           g.finger_width_m, g.torsion_stiffness_nm_per_rad, d.radius_m,
                           d.distance_m, d.youngs_modulus_pa, d.poisson_ratio, d.thickness_m,
                           d.stiffness_scale, d.contour_stiffness_ratio, d.area_stiffness_scale,
-                          float(torque_nm), d.offset_x_m,
+                          float(torque_nm), d.offset_x_m, shape, orientation, *outline,
                           *(v for jaw in g.jaws for v in jaw_row(jaw))]])
 
     @property
@@ -454,7 +497,7 @@ class Scene:
     def with_changes(self, **changes) -> Scene:
         """Return a copy with gripper or disk fields replaced by name."""
         gk = {k: v for k, v in changes.items() if k in Gripper.__dataclass_fields__}
-        dk = {k: v for k, v in changes.items() if k in SoftDisk.__dataclass_fields__}
+        dk = {k: v for k, v in changes.items() if k in type(self.disk).__dataclass_fields__}
         unknown = set(changes) - set(gk) - set(dk)
         if unknown:
             raise ValueError(f"unknown scene fields {sorted(unknown)}")
@@ -644,7 +687,37 @@ def joint_spring_nm_per_rad(disk: SoftDisk, torsion_stiffness_rel=None,
     return absolute if rel is None else rel * disk.torque_unit_nm
 
 
-def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:
+def placement_support(disks):
+    """How objects that are not disks sit before the faces, for :func:`design_from_relative`:
+    ``None`` when every object is a disk, else a function of the rows' rest angles [rad]
+    returning ``(h, lift)`` in each object's radii: how far it reaches towards either
+    gripping face (:meth:`envs.objects.Outline.face_support`; 1 for a disk) and how far its
+    centre lies above its lowest point (:attr:`SoftDisk.lift_m` over r; 1 for a disk).
+
+    ``disks``: one :class:`SoftDisk` (any row shape) or a sequence of one per row.
+    """
+    one = isinstance(disks, SoftDisk)
+    objects = [disks] if one else list(disks)
+    if all(d.outline is None for d in objects):
+        return None
+
+    def support(angle):
+        angle = np.asarray(angle, dtype=np.float64)
+        if one:
+            d = objects[0]
+            return (d.outline.face_support(angle, d.orientation_rad),
+                    np.full(angle.shape, d.lift_m / d.radius_m))
+        h, lift = np.ones(angle.shape), np.ones(angle.shape)
+        for i, d in enumerate(objects):
+            if d.outline is not None:
+                h[i] = d.outline.face_support(angle[i], d.orientation_rad)
+                lift[i] = d.lift_m / d.radius_m
+        return h, lift
+
+    return support
+
+
+def design_from_relative(relative, radius_m, torque_unit_nm, support=None) -> np.ndarray:
     """SI designs of relative ones (columns of :data:`RELATIVE_FIELDS`), shape (..., 6).
 
     The placement is chosen so that the gripping faces clear the disk at rest by the relative
@@ -662,28 +735,44 @@ def design_from_relative(relative, radius_m, torque_unit_nm) -> np.ndarray:
     torque_unit_nm
         The disk's torque unit ``s E t r^2`` [N·m] (:attr:`SoftDisk.torque_unit_nm`), same shape
         rules.
+    support
+        For objects that are not disks, :func:`placement_support` of them: the faces then
+        clear the outline (its reach ``h r`` towards them) by ``g r`` and ``d_1`` is measured
+        to its lowest point, ``d_1 = (r (g + h) + w / 2 - d_3 cos theta_a0) / sin theta_a0 -
+        lift r``; ``None``: disks.
     """
     rel = np.asarray(relative, dtype=np.float64)
     r = np.asarray(radius_m, dtype=np.float64)
     length, angle, offset, width = rel[..., 0] * r, rel[..., 1], rel[..., 2] * r, rel[..., 3] * r
     torque = rel[..., 4] * np.asarray(torque_unit_nm, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        distance = (r * (1.0 + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
-            angle) - r
+        if support is None:
+            distance = (r * (1.0 + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
+                angle) - r
+        else:
+            reach, lift = support(angle)
+            distance = (r * (reach + rel[..., 5]) + width / 2 - offset * np.cos(angle)) / np.sin(
+                angle) - r * lift
     return np.stack([length, angle, offset, width, torque, np.maximum(distance, 0.0)], axis=-1)
 
 
-def relative_from_design(designs, radius_m, torque_unit_nm) -> np.ndarray:
+def relative_from_design(designs, radius_m, torque_unit_nm, support=None) -> np.ndarray:
     """Relative designs (columns of :data:`RELATIVE_FIELDS`) of SI ones, shape (..., 6).
 
     The inverse of :func:`design_from_relative` where its placement was not raised to 0; the
     clearance is that of the gripping-face line, ``(d_3 cos theta_a0 + (d_1 + r) sin theta_a0
-    - w / 2) / r - 1``.
+    - w / 2) / r - 1`` (objects that are not disks: ``support`` as there, ``lift r`` in place
+    of the second ``r`` and ``h`` of the ``1``).
     """
     des = np.asarray(designs, dtype=np.float64)
     r = np.asarray(radius_m, dtype=np.float64)
     length, angle, offset, width, torque, distance = np.moveaxis(des, -1, 0)
-    clearance = (offset * np.cos(angle) + (distance + r) * np.sin(angle) - width / 2) / r - 1.0
+    if support is None:
+        clearance = (offset * np.cos(angle) + (distance + r) * np.sin(angle) - width / 2) / r - 1.0
+    else:
+        reach, lift = support(angle)
+        clearance = (offset * np.cos(angle) + (distance + r * lift) * np.sin(angle)
+                     - width / 2) / r - reach
     return np.stack([length / r, angle, offset / r, width / r,
                      torque / np.asarray(torque_unit_nm, dtype=np.float64), clearance], axis=-1)
 

@@ -20,6 +20,8 @@ from .model.contact_width import (
     contact_share,
     curvature_weight_n,
     hertz_arc_coefficient,
+    outline_hertz_coefficient,
+    outline_run_share,
     plane_strain_modulus_pa,
     relative_radius_m,
     run_curvature_per_m,
@@ -222,8 +224,24 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
         The disk's ``r``, ``t`` [m], modulus ``E`` [Pa] and ``nu`` (the material's, as for
         :func:`psm_metrics_rows`).
     """
+    return _grooved_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_offset_m,
+                          length_m, width_m, rounding_m, groove, base, radius_m, thickness_m,
+                          modulus_pa, poisson_ratio, 0.0, forces_n)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _grooved_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_offset_m,
+                   length_m, width_m, rounding_m, groove, base, radius_m, thickness_m,
+                   modulus_pa, poisson_ratio, perimeter_m, curvature_per_m):
+    """:func:`grooved_face_share`; with ``perimeter_m > 0`` of an outline of that perimeter
+    [m], the contour points spaced evenly along it and ``curvature_per_m`` (N,) their rest
+    curvatures [1/m]: each run capped on the outline's own curvature under it, its points'
+    weighted by their own contacts' forces
+    (:func:`envs.model.contact_width.outline_run_share`); ``perimeter_m = 0`` reads the disk
+    of ``radius_m`` (``curvature_per_m`` unread)."""
     n = points_m.shape[0]
-    spacing = 2.0 * math.pi * radius_m / n
+    outline = perimeter_m > 0.0
+    spacing = perimeter_m / n if outline else 2.0 * math.pi * radius_m / n
     e_star = plane_strain_modulus_pa(modulus_pa, poisson_ratio)
     # a free point to start from, so that no run wraps round the scan's ends
     start = -1
@@ -238,6 +256,7 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
     if start < 0:
         # every point pressed: one contact round the whole contour, without edges
         total = weighted = weight = 0.0
+        own = own_weight = 0.0
         for i in range(n):
             force = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
                                     joint_offset_m, length_m, width_m, rounding_m, groove, base)
@@ -248,6 +267,13 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
             w = curvature_weight_n(forces_n[i], curvature)
             weighted += w * curvature
             weight += w
+            if outline:
+                own += forces_n[i] * curvature_per_m[i]
+                own_weight += forces_n[i]
+        if outline:
+            return outline_run_share(1.0, total, run_curvature_per_m(weighted, weight), 0.0,
+                                     _object_curvature(own, own_weight, curvature_per_m),
+                                     perimeter_m, thickness_m, modulus_pa, poisson_ratio)
         return run_share(1.0, total, run_curvature_per_m(weighted, weight), 0.0, radius_m,
                          thickness_m, modulus_pa, poisson_ratio)
     share = 0.0
@@ -257,6 +283,7 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
                                joint_offset_m, length_m, width_m, rounding_m, groove, base,
                                spacing, thickness_m, e_star)
     extent = force = weighted = weight = 0.0
+    own = own_weight = 0.0
     for k in range(1, n + 1):
         i = (start + k) % n
         pressed = pressed_force_n(points_m, forces_n, corner_forces_n, i, j, angle_rad,
@@ -273,15 +300,61 @@ def grooved_face_share(points_m, forces_n, corner_forces_n, j, angle_rad, joint_
             w = curvature_weight_n(forces_n[i], curvature)
             weighted += w * curvature
             weight += w
+            if outline:
+                own += forces_n[i] * curvature_per_m[i]
+                own_weight += forces_n[i]
         elif before > 0.0:
             # the run ends on this free point; its two edges lie in segments 1 / n long
-            share += run_share(extent, force, run_curvature_per_m(weighted, weight), 2.0 / n,
-                               radius_m, thickness_m, modulus_pa, poisson_ratio)
+            if outline:
+                share += outline_run_share(
+                    extent, force, run_curvature_per_m(weighted, weight), 2.0 / n,
+                    _object_curvature(own, own_weight, curvature_per_m), perimeter_m,
+                    thickness_m, modulus_pa, poisson_ratio)
+            else:
+                share += run_share(extent, force, run_curvature_per_m(weighted, weight),
+                                   2.0 / n, radius_m, thickness_m, modulus_pa, poisson_ratio)
             extent = force = weighted = weight = 0.0
+            own = own_weight = 0.0
         else:
             extent = 0.0
         before = here
     return share
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _object_curvature(weighted_sum, weight_sum, curvature_per_m):
+    """An outline's curvature under a contact [1/m]: its pressed points' rest curvatures
+    weighted by their own forces (``weighted_sum / weight_sum``); where no point carries a
+    force of its own (a contact through a corner only), the largest on the contour (the
+    narrowest Hertz cap: a conservative width)."""
+    if weight_sum > 0.0:
+        return weighted_sum / weight_sum
+    big = 0.0
+    for i in range(curvature_per_m.shape[0]):
+        big = max(big, curvature_per_m[i])
+    return big
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _outline_face_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m, width_m,
+                        perimeter_m, curvature_per_m, thickness_m, modulus_pa, poisson_ratio,
+                        total_n):
+    """An outline's share of the perimeter in contact with the straight face of finger ``j``:
+    the interpolated extent (:func:`face_extent_share`, the points spaced evenly along the
+    perimeter) at most the Hertz width of the face force ``total_n`` on the outline's own
+    curvature under the contact (:func:`_object_curvature`)."""
+    e_star = plane_strain_modulus_pa(modulus_pa, poisson_ratio)
+    extent = face_extent_share(points_m, forces_n, j, angle_rad, joint_offset_m, length_m,
+                               width_m, perimeter_m / (2.0 * math.pi), thickness_m, e_star)
+    own = own_weight = 0.0
+    for i in range(forces_n.shape[0]):
+        if forces_n[i] > 0.0:
+            own += forces_n[i] * curvature_per_m[i]
+            own_weight += forces_n[i]
+    k = outline_hertz_coefficient(_object_curvature(own, own_weight, curvature_per_m),
+                                  FLAT_FACE_CURVATURE_PER_M, perimeter_m, thickness_m,
+                                  modulus_pa, poisson_ratio)
+    return contact_share(extent, total_n, k)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -291,7 +364,8 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                      peak_strain, peak_log_strain, max_displacement_ratio, peak_compression,
                      finger_length_m, joint_offset_m, finger_width_m, radius_m, thickness_m,
                      youngs_modulus_pa, poisson_ratio, material_scale, torque_nm,
-                     kf_nm_per_rad, rest_angle_rad, grooves_m, rounding_m, status, converged,
+                     kf_nm_per_rad, rest_angle_rad, grooves_m, rounding_m, perimeter_m,
+                     curvature_per_m, status, converged,
                      iterations, stable, jaw_out, n_contacts, touching, total_force_n,
                      contact_score, grip_share, peak_out, peak_log_out, displacement_out,
                      compression_out):
@@ -310,7 +384,12 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
     material). A grooved finger's share is :func:`grooved_face_share`, each contact capped on
     its own with the surface's curvature where it touches; ``grooves_m`` (G, 2 N_GROOVE) holds
     each row's two grooves packed in metres (:func:`envs.model.jaw.pack_groove`, unit 1; depth
-    0: straight) and ``rounding_m`` (G,) the corner radius they were packed with.
+    0: straight) and ``rounding_m`` (G,) the corner radius they were packed with. A row whose
+    object is an outline has its perimeter ``perimeter_m[g] > 0`` [m] (0: a disk) and its
+    contour points' rest curvatures ``curvature_per_m[g]`` (N,) [1/m]: its contour points
+    are spaced evenly along the perimeter, and each face's Hertz cap takes the outline's own
+    curvature under the contact, its pressed points' weighted by their forces
+    (:func:`envs.model.contact_width.outline_hertz_coefficient`).
     """
     for g in range(rows.shape[0]):
         r = rows[g]
@@ -336,11 +415,17 @@ def psm_metrics_rows(rows, n_points, status_in, converged_in, iterations_in, sta
                     cnt += 1
             base = N_GROOVE * j
             if grooves_m[g, base + G_DEPTH] > 0.0:
-                shares += grooved_face_share(
+                shares += _grooved_share(
                     points_m[g], face_forces_n[g, j], corner_forces_n[g, j], j,
                     jaw_angles_rad[g, j],
                     joint_offset_m[g], finger_length_m[g], finger_width_m[g], rounding_m[g],
-                    grooves_m[g], base, radius_m[g], thickness_m[g], modulus, poisson_ratio[g])
+                    grooves_m[g], base, radius_m[g], thickness_m[g], modulus, poisson_ratio[g],
+                    perimeter_m[g], curvature_per_m[g])
+            elif perimeter_m[g] > 0.0:
+                shares += _outline_face_share(
+                    points_m[g], face_forces_n[g, j], j, jaw_angles_rad[g, j],
+                    joint_offset_m[g], finger_length_m[g], finger_width_m[g], perimeter_m[g],
+                    curvature_per_m[g], thickness_m[g], modulus, poisson_ratio[g], total)
             else:
                 extent = face_extent_share(points_m[g], face_forces_n[g, j], j,
                                            jaw_angles_rad[g, j], joint_offset_m[g],

@@ -22,6 +22,7 @@ from envs.model.defaults import (
     PAPER_TORSION_STIFFNESS_NM_PER_RAD,
 )
 from envs.model.jaw import jaws_of_row
+from envs.objects import as_object, outline_fields
 from envs.render import draw_design, draw_grasp, grasp_figure
 from envs.scene import Design, Scene, SoftDisk, design_row
 
@@ -49,10 +50,12 @@ def _save(fig: Figure, path: str | Path | None) -> Figure:
 
 def disk_of(obj: dict[str, Any], distance_m: float = 0.0) -> SoftDisk:
     """The disk of a result's object (its placement ``distance_m``; a design replaces it)."""
-    return SoftDisk(obj["radius_m"], distance_m, obj["youngs_modulus_pa"],
-                    obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
-                    obj.get("contour_stiffness_ratio", DEFAULT_CONTOUR_STIFFNESS_RATIO),
-                    density_kg_m3=obj.get("density_kg_m3", DEFAULT_DENSITY_KG_M3))
+    return as_object(SoftDisk(obj["radius_m"], distance_m, obj["youngs_modulus_pa"],
+                              obj["poisson_ratio"], obj["thickness_m"], obj["stiffness_scale"],
+                              obj.get("contour_stiffness_ratio",
+                                      DEFAULT_CONTOUR_STIFFNESS_RATIO),
+                              density_kg_m3=obj.get("density_kg_m3", DEFAULT_DENSITY_KG_M3)),
+                     **outline_fields(obj))
 
 
 def scene_of(design: dict[str, float], obj: dict[str, Any]) -> Scene:
@@ -109,7 +112,7 @@ def _draw_design_grasp(ax, design: dict[str, float], obj: dict[str, Any], title:
         scene = scene_of(design, obj)
     except ValueError:
         draw_design(ax, design_row(design), obj["radius_m"], title=title + " (invalid)",
-                    length_unit="mm")
+                    length_unit="mm", disk=disk_of(obj))
         return
     res = simulate(scene, design["torque_nm"], **model_of(obj))
     draw_grasp(ax, scene, res, strain_limit=obj.get("strain_limit"), title=title, legend=legend,
@@ -162,12 +165,13 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
     obj = result.object
     d, m = result.best_design, result.best_metrics
     name = obj.get("name") or "the object"
+    size = "r" if obj.get("outline_coefficients") is None else f"{obj.get('shape')}, r_eq"
     governing = m.get("governing_scenario")
     # with scenarios the numbers are the governing scenario's, the drawing the nominal grasp
     where = (f"governing scenario {governing}: " if governing is not None else "")
     banner = verdict_of(m, result.extra.get("scenario_rows")).banner
     title = ((f"{banner}\n" if banner else "")
-             + f"{name}, r = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
+             + f"{name}, {size} = {obj['radius_m'] * 1e3:.3g} mm: {result.method} (seed "
              f"{result.seed}) best, reward {result.best_reward:.4f}\n"
              + (f"drawn: the nominal scenario; {where}" if governing is not None else "")
              + f"contact {m.get('contact_score', math.nan):.2f}, "
@@ -184,7 +188,7 @@ def best_grasp_figure(result: OptimResult, path: str | Path | None = None) -> Fi
         fig = Figure(figsize=(5.5, 5.5), dpi=100)
         row = design_row(result.best_design)
         draw_design(fig.add_subplot(), row, obj["radius_m"], title=title + " (invalid)",
-                    length_unit="mm")
+                    length_unit="mm", disk=disk_of(obj))
         return _save(fig, path)
     # the member that reported the metrics in the title (the finer one after the finish)
     member = result.extra.get("reward_model") or model_of(obj)

@@ -37,6 +37,7 @@ from envs.model.defaults import (
 )
 from envs.model.family import resolve_model
 from envs.model.loads import DEFAULT_LOAD_SET, load_set_code
+from envs.objects import outline_info
 from envs.scenarios import (
     ENVELOPE_KEYS,
     ROBUST_MEASURES,
@@ -53,6 +54,7 @@ from envs.scene import (
     design_row,
     joint_spring,
     joint_spring_kwargs,
+    placement_support,
     relative_from_design,
 )
 from envs.validation import check_integer, check_range, real_array
@@ -222,7 +224,8 @@ def paper_design_for(disk: SoftDisk, torques_nm: Any = 0.2) -> np.ndarray:
     paper = Scene.preset("paper-r070").disk
     rows = np.array([paper_design("paper-r070", t) for t in np.atleast_1d(torques_nm)])
     rel = relative_from_design(rows, paper.radius_m, paper.torque_unit_nm)
-    return design_from_relative(rel, disk.radius_m, disk.torque_unit_nm)
+    return design_from_relative(rel, disk.radius_m, disk.torque_unit_nm,
+                                placement_support(disk))
 
 
 def pareto_mask(objectives: np.ndarray) -> np.ndarray:
@@ -757,6 +760,7 @@ class DesignProblem:
             "load_set": self.load_set,
             "torsion_stiffness_rel": self.torsion_stiffness_rel,
             "torsion_stiffness_nm_per_rad": self.torsion_stiffness_nm_per_rad,
+            **outline_info(d),
             **self.model.kwargs(),
             **({} if self.scenarios is None else {"scenarios": self.scenarios.as_dict(),
                                                   "robust": self.robust}),

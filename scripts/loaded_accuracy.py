@@ -12,16 +12,20 @@ those needing a real coefficient, at most 2, at either fidelity, and by jaw) and
 holding verdicts agree at friction 0.3, 0.5, 0.7 and 1, and writes ``out/loaded_accuracy.json``
 and ``.png`` (PSM against FEM per design). Near a contact's release the need is steep (it grows
 as ``1 / N'``), where small differences of the loaded forces are large ones of the need.
+``--outlines`` compares objects that are not disks instead: ellipses 2:1 of the r = 70 mm disk's
+area across the jaws, at 45 deg and along them (``out/loaded_accuracy_outlines.json``).
 
 Usage::
 
-    python scripts/loaded_accuracy.py [--designs 20] [--load-set any] [--fem-rings 12] [--replot]
+    python scripts/loaded_accuracy.py [--designs 20] [--load-set any] [--fem-rings 12]
+        [--outlines] [--replot]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -30,18 +34,35 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from envs.evaluate import DesignBounds, evaluate_designs  # noqa: E402
+from envs.objects import Ellipse, as_object  # noqa: E402
 from envs.scene import Scene, SoftDisk  # noqa: E402
 
 SCENES = ("paper-r050", "paper-r070", "paper-r100")
 JAWS = ("straight", "any")
+# --outlines: ellipses 2:1 of the paper disk's area (r_eq = 0.07 m) across the jaws, at 45 deg
+# and along them, each turned by a further 1e-3 rad (a symmetric FEM of an elongated outline
+# can stay on an unstable symmetric branch: docs/accuracy.md, turned grasps)
+OUTLINES = {"ellipse 2:1 across": 0.0, "ellipse 2:1 at 45 deg": math.pi / 4,
+            "ellipse 2:1 along": math.pi / 2}
+TURN_RAD = 1e-3
 
 
-def compare(designs: int, seed: int, load_set: str, fem_rings: int) -> dict:
-    """The per-design required friction at both fidelities, by scene and jaw."""
+def objects(outlines: bool) -> list[tuple[str, SoftDisk]]:
+    """The objects compared, water-dense: the three paper disks, or the ellipses of
+    :data:`OUTLINES`."""
+    if not outlines:
+        return [(name, SoftDisk(Scene.preset(name).disk.radius_m, 0.0, density_kg_m3=1000.0))
+                for name in SCENES]
+    disk = SoftDisk(Scene.preset("paper-r070").disk.radius_m, 0.0, density_kg_m3=1000.0)
+    return [(name, as_object(disk, Ellipse(2.0), psi + TURN_RAD))
+            for name, psi in OUTLINES.items()]
+
+
+def compare(designs: int, seed: int, load_set: str, fem_rings: int,
+            outlines: bool = False) -> dict:
+    """The per-design required friction at both fidelities, by object and jaw."""
     out: dict = {"load_set": load_set, "fem_rings": fem_rings, "cases": []}
-    for k, name in enumerate(SCENES):
-        preset = Scene.preset(name).disk
-        disk = SoftDisk(preset.radius_m, 0.0, density_kg_m3=1000.0)
+    for k, (name, disk) in enumerate(objects(outlines)):
         for j, jaw in enumerate(JAWS):
             rows = DesignBounds(jaw=jaw).sample(np.random.default_rng(seed + 10 * k + j),
                                                 designs, disk)
@@ -70,7 +91,7 @@ REAL_NEED = 2.0
 def summary(cases: list[dict]) -> dict:
     """Median and 90th percentile of the relative difference (all designs, and those whose
     need is a real coefficient's at either fidelity), and the share of designs whose holding
-    verdict agrees at each coefficient of :data:`VERDICT_MU`, overall and by jaw."""
+    verdict agrees at each coefficient of :data:`VERDICT_MU`, overall, by jaw and by object."""
     def stats(rows):
         if not rows:
             return {}
@@ -86,8 +107,10 @@ def summary(cases: list[dict]) -> dict:
                                  for mu in VERDICT_MU}
         return out
 
+    names = list(dict.fromkeys(c["scene"] for c in cases))
     return {"all": stats(cases), **{jaw: stats([c for c in cases if c["jaw"] == jaw])
-                                    for jaw in JAWS}}
+                                    for jaw in JAWS},
+            **{name: stats([c for c in cases if c["scene"] == name]) for name in names}}
 
 
 def figure(data: dict, path: Path) -> None:
@@ -121,17 +144,20 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--load-set", default="any")
     parser.add_argument("--fem-rings", type=int, default=12)
     parser.add_argument("--out", type=Path, default=Path("out"))
+    parser.add_argument("--outlines", action="store_true",
+                        help="ellipses 2:1 at 0, 45 and 90 deg (r_eq 70 mm) for the disks")
     parser.add_argument("--replot", action="store_true",
                         help="summarize and plot the JSON of an earlier run in --out again")
     args = parser.parse_args(argv)
+    stem = "loaded_accuracy_outlines" if args.outlines else "loaded_accuracy"
     if args.replot:
-        data = json.loads((args.out / "loaded_accuracy.json").read_text())
+        data = json.loads((args.out / f"{stem}.json").read_text())
     else:
-        data = compare(args.designs, args.seed, args.load_set, args.fem_rings)
+        data = compare(args.designs, args.seed, args.load_set, args.fem_rings, args.outlines)
     data["summary"] = summary(data["cases"])
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "loaded_accuracy.json").write_text(json.dumps(data, indent=1))
-    figure(data, args.out / "loaded_accuracy.png")
+    (args.out / f"{stem}.json").write_text(json.dumps(data, indent=1))
+    figure(data, args.out / f"{stem}.png")
     for key, s in data["summary"].items():
         if not s:
             continue

@@ -26,6 +26,8 @@ from envs.model.contact_width import (
     contact_share,
     curvature_weight_n,
     hertz_arc_coefficient,
+    outline_hertz_coefficient,
+    outline_run_share,
     plane_strain_modulus_pa,
     relative_radius_m,
     run_curvature_per_m,
@@ -62,16 +64,24 @@ class _Rim:
     weight_m2: np.ndarray  # (m,) rim length share times thickness [m^2]
 
     @classmethod
-    def build(cls, body: _Body, arc_facets: np.ndarray, centre: np.ndarray, thickness_m: float):
+    def build(cls, body: _Body, arc_facets: np.ndarray, centre: np.ndarray, thickness_m: float,
+              curved: bool = False):
+        """The rim of ``arc_facets``; their lengths as circular arcs about ``centre``, or
+        (``curved``: an outline's rim) as the quadratic edges through their midside nodes."""
         b, mesh = body.basis, body.mesh
         verts = mesh.facets[:, arc_facets]  # (2, nf)
         vdofs = b.nodal_dofs[:, verts]  # (2 comps, 2 ends, nf)
         mdofs = b.facet_dofs[:, arc_facets]  # (2 comps, nf)
         pa = mesh.p[:, verts[0]] - centre[:, None]
         pb = mesh.p[:, verts[1]] - centre[:, None]
-        radius = np.linalg.norm(pa, axis=0)
-        cosang = np.sum(pa * pb, axis=0) / (radius * np.linalg.norm(pb, axis=0))
-        length = radius * np.arccos(np.clip(cosang, -1.0, 1.0))
+        if curved:
+            from .mesh import _p2_lengths
+
+            length = _p2_lengths(pa, b.doflocs[:, mdofs[0]] - centre[:, None], pb)
+        else:
+            radius = np.linalg.norm(pa, axis=0)
+            cosang = np.sum(pa * pb, axis=0) / (radius * np.linalg.norm(pb, axis=0))
+            length = radius * np.arccos(np.clip(cosang, -1.0, 1.0))
         xdofs = np.concatenate((vdofs[0, 0], vdofs[0, 1], mdofs[0]))
         ydofs = np.concatenate((vdofs[1, 0], vdofs[1, 1], mdofs[1]))
         wts = np.concatenate((length / 6, length / 6, 2 * length / 3))
@@ -373,7 +383,8 @@ def jaw_curvature_per_m(local: np.ndarray) -> np.ndarray:
 
 
 def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
-                    curvature_per_m: np.ndarray, scene: Scene) -> float:
+                    curvature_per_m: np.ndarray, scene: Scene,
+                    outline: tuple[np.ndarray, float] | None = None) -> float:
     """One grooved face's share of the rim: the sum over its contact segments (runs of
     neighbouring pressed nodes) of :func:`envs.model.contact_width.run_share`, the rule the
     point-spring model applies to its contour points.
@@ -381,7 +392,9 @@ def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
     Each run's curvature is its nodes' curvatures weighted by their forces
     (:func:`~envs.model.contact_width.curvature_weight_n`: a node on a rounded convex edge does
     not count); its extent is the rim segments of its pressed nodes and its two interpolated
-    edges, its edge spacing the rim segments in which those edges lie.
+    edges, its edge spacing the rim segments in which those edges lie. ``outline``: an outline's
+    nodes' rest curvatures [1/m] and its perimeter [m] (each run capped on its own curvature
+    under it, :func:`~envs.model.contact_width.outline_run_share`).
     """
     disk = scene.disk
     pressed = phi > 0.0
@@ -415,15 +428,33 @@ def _segment_shares(phi: np.ndarray, segment: np.ndarray, forces_n: np.ndarray,
                             for i in members])
         curvature = run_curvature_per_m(float(np.sum(weights * curvature_per_m[members])),
                                         float(np.sum(weights)))
+        if outline is not None:
+            own = forces_n[members]
+            total += outline_run_share(
+                float(extent[k]), float(np.sum(own)), curvature, float(edges[k]),
+                _weighted_curvature(own, outline[0][members], outline[0]), outline[1],
+                disk.thickness_m, disk.youngs_modulus_pa, disk.poisson_ratio)
+            continue
         total += run_share(float(extent[k]), float(np.sum(forces_n[members])), curvature,
                            float(edges[k]), disk.radius_m, disk.thickness_m,
                            disk.youngs_modulus_pa, disk.poisson_ratio)
     return total
 
 
+def _weighted_curvature(forces_n: np.ndarray, curvature_per_m: np.ndarray,
+                        every: np.ndarray) -> float:
+    """An outline's curvature under a contact: its pressed nodes' rest curvatures weighted by
+    their forces; with no force, the largest of ``every`` (the point-spring model's rule,
+    :func:`envs.scoring._object_curvature`)."""
+    weight = float(np.sum(np.maximum(forces_n, 0.0)))
+    if weight > 0.0:
+        return float(np.sum(np.maximum(forces_n, 0.0) * curvature_per_m)) / weight
+    return float(max(np.max(every), 0.0))
+
+
 def rim_contact_shares(scene: Scene, rim: _Rim, order: np.ndarray, positions_m: np.ndarray,
-                       face_forces_n: list[np.ndarray], jaw_angles_rad: np.ndarray
-                       ) -> tuple[tuple[float, float], tuple[float, float]]:
+                       face_forces_n: list[np.ndarray], jaw_angles_rad: np.ndarray,
+                       outline_map=None) -> tuple[tuple[float, float], tuple[float, float]]:
     """Share of the rim in contact with each jaw, interpolated between rim nodes (the
     point-spring model's measure, :mod:`envs.model.contact_width`, on the FEM's rim), and the
     same capped by Hertz's width.
@@ -458,18 +489,33 @@ def rim_contact_shares(scene: Scene, rim: _Rim, order: np.ndarray, positions_m: 
         each at most the Hertz width of its own force on the jaw's curvature under it
         (:func:`_segment_shares`: a fitted cradle is not capped, a V's flanks are capped one by
         one, a disk wedged into a narrower groove scores the extent it touches).
+        ``outline_map``: an outline's :class:`~envs.fem.mesh.OutlineMap` (``None``: a disk):
+        its rim's segments count by arc length, and each contact is capped on the outline's
+        own curvature under it (the point-spring model's rule).
     """
     disk, grip = scene.disk, scene.gripper
     e_star = plane_strain_modulus_pa(disk.youngs_modulus_pa, disk.poisson_ratio)
-    ref = rim.ref_m[order] - disk.center_m
-    angle = np.arctan2(ref[:, 1], ref[:, 0])
-    segment = np.mod(np.roll(angle, -1) - angle, 2 * math.pi) / (2 * math.pi)
-    spacing_m = 0.5 * (segment + np.roll(segment, 1)) * 2 * math.pi * disk.radius_m
     weight_m2 = rim.weight_m2[order]
     p = positions_m[order]
-    flat_k = hertz_arc_coefficient(disk.radius_m, disk.thickness_m, disk.youngs_modulus_pa,
-                                   disk.poisson_ratio,
-                                   relative_radius_m(disk.radius_m, FLAT_FACE_CURVATURE_PER_M))
+    outline = None
+    if outline_map is None:
+        ref = rim.ref_m[order] - disk.center_m
+        angle = np.arctan2(ref[:, 1], ref[:, 0])
+        segment = np.mod(np.roll(angle, -1) - angle, 2 * math.pi) / (2 * math.pi)
+        spacing_m = 0.5 * (segment + np.roll(segment, 1)) * 2 * math.pi * disk.radius_m
+        flat_k = hertz_arc_coefficient(disk.radius_m, disk.thickness_m, disk.youngs_modulus_pa,
+                                       disk.poisson_ratio,
+                                       relative_radius_m(disk.radius_m,
+                                                         FLAT_FACE_CURVATURE_PER_M))
+    else:
+        # an outline: segments by arc length, each node's own rest curvature
+        ref = rim.ref_m[order]
+        s = outline_map.arc_fraction(ref, disk.center_m)
+        segment = np.mod(np.roll(s, -1) - s, 1.0)
+        spacing_m = 0.5 * (segment + np.roll(segment, 1)) * outline_map.perimeter_m
+        rel = ref - disk.center_m
+        kappa = outline_map.curvature_per_m(np.arctan2(rel[:, 1], rel[:, 0]) - outline_map.psi)
+        outline = (kappa, outline_map.perimeter_m)
     extents, shares = [], []
     for side, forces in enumerate(face_forces_n):
         jaw = grip.jaws[side]
@@ -486,8 +532,15 @@ def rim_contact_shares(scene: Scene, rim: _Rim, order: np.ndarray, positions_m: 
                                           float(gap_m[i]), e_star) for i in range(f.size)])
         extent = float(contact_arc_share(phi, segment))
         extents.append(extent)
-        if jaw.depth_m == 0.0:
+        if jaw.depth_m == 0.0 and outline is not None:
+            k = outline_hertz_coefficient(_weighted_curvature(f, outline[0], outline[0]),
+                                          FLAT_FACE_CURVATURE_PER_M, outline[1],
+                                          disk.thickness_m, disk.youngs_modulus_pa,
+                                          disk.poisson_ratio)
+            shares.append(float(contact_share(extent, float(np.sum(f)), k)))
+        elif jaw.depth_m == 0.0:
             shares.append(float(contact_share(extent, float(np.sum(f)), flat_k)))
         else:
-            shares.append(_segment_shares(phi, segment, f, jaw_curvature_per_m(local), scene))
+            shares.append(_segment_shares(phi, segment, f, jaw_curvature_per_m(local), scene,
+                                          outline))
     return (extents[0], extents[1]), (shares[0], shares[1])

@@ -53,7 +53,9 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
     edges included), ``peak_compression`` (B,) the largest shortening of a radius
     ``max (r - |p - C|) / r`` over the rim nodes ``p`` (``C = (centre_x_m, centre_y_m)``, the
     disk centre; ``centre_x_m`` 0 unless the disk was displaced across the axis), the
-    point-spring model's same measure.
+    point-spring model's same measure (an outline's: the grasp's own
+    :attr:`~envs.fem.result.FemResult.peak_compression`, each node's shortening over its rest
+    distance from the centroid).
     """
     b = len(results)
     radius_m = np.broadcast_to(np.asarray(radius_m, dtype=float), (b,))
@@ -62,7 +64,10 @@ def fem_metrics(results: Sequence[FemResult], radius_m: np.ndarray,
 
     compression = np.full(b, math.nan)
     for i, r in enumerate(results):
-        if r.converged:
+        if r.converged and math.isfinite(r.peak_compression):
+            # an outline's: each rim node's shortening over its own rest distance
+            compression[i] = r.peak_compression
+        elif r.converged:
             rim = np.asarray(r.contour_m, dtype=float)
             dist = np.hypot(rim[:, 0] - centre_x_m[i], rim[:, 1] - centre_y_m[i])
             compression[i] = max(0.0, float(np.max(radius_m[i] - dist))) / radius_m[i]

@@ -27,6 +27,7 @@ from .contact import _PENALTY_FACTOR, _Rim, jaw_corners, jaw_obstacle, rim_conta
 from .loaded import fem_holding
 from .material import _check_plane, _log_strain_magnitude, _stretch_strain_magnitude
 from .mesh import (
+    OutlineMap,
     _arc_facets,
     _check_mesh_size,
     _grasp_mesh,
@@ -147,7 +148,8 @@ def fem_grasp(
                     if f.name not in ("jaw", "left_jaw")},
         "disk": {
             f.name: getattr(disk, f.name) for f in fields(disk)
-            if f.name not in ("stiffness_scale", "contour_stiffness_ratio", "density_kg_m3")
+            if f.name not in ("stiffness_scale", "contour_stiffness_ratio", "density_kg_m3",
+                              "outline", "orientation_rad")
         },
         "torques_nm": torques,
         "rings": rings,
@@ -161,6 +163,10 @@ def fem_grasp(
         inputs["jaws"] = [list(jaw_row(jaw)) for jaw in grip.jaws]
     if payload > 0.0:  # (keys of results without a payload stay as they were)
         inputs["payload_n"] = payload
+    if disk.outline is not None:  # (a disk's keys stay as they were)
+        # the model's own curve: the same key for a shape and its SplineOutline
+        inputs["outline"] = disk.outline.coefficients().tolist()
+        inputs["orientation_rad"] = disk.orientation_rad
     if load_set != DEFAULT_LOAD_SET:  # (the default's keys stay as they were)
         inputs["load_set"] = load_set
     path = _cache_dir() / f"{_cache_key(inputs)}.json"
@@ -193,13 +199,25 @@ def _solve_grasp(
     base, _ = _grasp_mesh(r, rings, hub)
     arcs = _arc_facets(base, r)
     hub_edge = _arc_facets(base, hub, boundary=False)
-    base = replace(base, doflocs=base.p + centre[:, None])
-    mesh = _quadratic_mesh(base, r, arcs, centre, extra_circles=[(hub, hub_edge)])
+    outline = None
+    if disk.outline is None:
+        base = replace(base, doflocs=base.p + centre[:, None])
+        mesh = _quadratic_mesh(base, r, arcs, centre, extra_circles=[(hub, hub_edge)])
+    else:
+        # the disk mesh (its rings and rim on circles) mapped radially onto the outline
+        outline = OutlineMap(disk.outline.coefficients(), disk.orientation_rad, r)
+        disk_mesh = _quadratic_mesh(base, r, arcs, None, extra_circles=[(hub, hub_edge)])
+        mesh = replace(disk_mesh, doflocs=outline.apply(disk_mesh.doflocs, r)
+                       + centre[:, None])
     body = _Body(mesh, disk.youngs_modulus_pa, disk.poisson_ratio, t, plane)
-    rim = _Rim.build(body, arcs, centre, t)
+    rim = _Rim.build(body, arcs, centre, t, curved=outline is not None)
 
-    # the rigid hub: every node on or inside the (curved) hub ring
-    dist = np.linalg.norm(body.basis.doflocs - centre[:, None], axis=0)
+    # the rigid hub: every node on or inside the (curved) hub ring (an outline's: the hub
+    # ring is the outline scaled by hub / r)
+    if outline is None:
+        dist = np.linalg.norm(body.basis.doflocs - centre[:, None], axis=0)
+    else:
+        dist = r * outline.fraction(body.basis.doflocs, centre)
     fixed = np.nonzero(dist <= hub * (1 + 1e-9))[0]
     kf, th0 = grip.torsion_stiffness_nm_per_rad, grip.rest_angle_rad
     th_stop = closed_angle_rad(grip)
@@ -234,8 +252,9 @@ def _solve_grasp(
         rim_order=order,
     )
     n = body.n
-    # strain regions (see FemResult.peak_strain)
-    rho = np.linalg.norm(body.qp_xy - centre[:, None, None], axis=0)
+    # strain regions (see FemResult.peak_strain; an outline's: of the mapped radius)
+    rho = (np.linalg.norm(body.qp_xy - centre[:, None, None], axis=0) if outline is None
+           else r * outline.fraction(body.qp_xy, centre))
     outside_hub = rho > 2 * hub
     hub_layer = (rho > hub) & ~outside_hub
 
@@ -305,7 +324,13 @@ def _solve_grasp(
         pen = max(pen, float(np.max(np.where(tip > 0, tip_pen, 0.0))),
                   system.rounded_corner_penetration(x))
         extents, shares = rim_contact_shares(scene, rim, order, system.rim_positions(x),
-                                             forces[:2], x[n:])
+                                             forces[:2], x[n:], outline)
+        compression = math.nan
+        if outline is not None:
+            # each rim node's shortening over its own rest distance from the centroid
+            rest = np.linalg.norm(rim.ref_m - centre, axis=1)
+            now = np.linalg.norm(system.rim_positions(x) - centre, axis=1)
+            compression = max(0.0, float(np.max((rest - now) / rest)))
         fmat = body.deformation_gradient(x[:n])
         strain = _log_strain_magnitude(fmat)
         stretch = _stretch_strain_magnitude(fmat)
@@ -335,6 +360,7 @@ def _solve_grasp(
                 contact_shares=shares,
                 stop_torques_nm=(float(stop[0]), float(stop[1])),
                 peak_stretch_strain=float(np.max(stretch[outside_hub])),
+                peak_compression=compression,
                 **holding_fields(hold),
                 load_set=load_set,
                 **common,

@@ -158,3 +158,83 @@ def _graded_quarter_mesh(radius_m: float, contact_size_m: float) -> tuple[MeshTr
         size /= 2
         levels += 1
     return mesh, levels
+
+
+# --- an outline's mesh: the disk mesh mapped radially onto it ------------------------------
+
+_ARC_TABLE_POINTS = 4096  # arc-length table of the map: body angles at s = j / 4096
+
+
+class OutlineMap:
+    """The map of the unit disk onto an object's outline (:mod:`envs.model.outline`) that
+    meshes it: the disk's point at radius ``rho`` and angle ``theta`` (counter-clockwise from
+    the top) goes to ``rho r(phi) (cos(phi + psi), sin(phi + psi))``, with ``phi`` the body
+    angle at the arc-length fraction ``(theta - pi / 2) / (2 pi)`` of the outline from its top.
+
+    Rays go to rays, so the disk mesh's rings become the outline scaled about its centroid
+    (the point-spring model's rings, :mod:`envs.model.rings`) and its rim nodes, spaced evenly
+    in angle on the disk, lie on the outline spaced evenly by arc length. ``fraction`` inverts
+    the radial part (where a point lies between the centroid and the outline, 0 to 1).
+    """
+
+    def __init__(self, coefficients: np.ndarray, orientation_rad: float, radius_m: float):
+        from envs.model.outline import outline_body_angles, outline_length
+
+        self.coef = np.ascontiguousarray(coefficients, dtype=np.float64)
+        self.psi = float(orientation_rad)
+        self.radius_m = float(radius_m)
+        phi = outline_body_angles(self.coef, self.psi, _ARC_TABLE_POINTS)
+        self._phi = np.append(phi, phi[0] + 2 * math.pi)  # unwrapped, s = 0 .. 1
+        self.perimeter_m = float(outline_length(self.coef, 0)) * self.radius_m
+
+    def body_angle(self, theta: np.ndarray) -> np.ndarray:
+        """Body angle of the outline point the disk's rim angle ``theta`` maps to [rad]."""
+        s = np.mod((np.asarray(theta) - math.pi / 2) / (2 * math.pi), 1.0)
+        return np.interp(s * _ARC_TABLE_POINTS, np.arange(_ARC_TABLE_POINTS + 1), self._phi)
+
+    def radius(self, phi: np.ndarray) -> np.ndarray:
+        """``r(phi)`` [m]."""
+        from envs.model.outline import outline_curve
+
+        return outline_curve(self.coef, phi)[0] * self.radius_m
+
+    def curvature_per_m(self, phi: np.ndarray) -> np.ndarray:
+        """The outline's curvature at body angles ``phi`` [1/m]."""
+        from envs.model.outline import outline_curvature
+
+        return np.array([outline_curvature(self.coef, 0, float(p))
+                         for p in np.ravel(phi)]).reshape(np.shape(phi)) / self.radius_m
+
+    def apply(self, locs: np.ndarray, disk_radius_m: float) -> np.ndarray:
+        """Map points ``locs`` (2, k) of the disk of radius ``disk_radius_m`` centred at the
+        origin onto the outline (centred at the origin) [m]."""
+        rho = np.hypot(locs[0], locs[1]) / disk_radius_m
+        phi = self.body_angle(np.arctan2(locs[1], locs[0]))
+        dist = rho * self.radius(phi)
+        return np.vstack((dist * np.cos(phi + self.psi), dist * np.sin(phi + self.psi)))
+
+    def fraction(self, points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+        """Where points (2, ...) lie between the centroid (0) and the outline (1) on their
+        ray."""
+        rel = points - centre.reshape((2,) + (1,) * (points.ndim - 1))
+        phi = np.arctan2(rel[1], rel[0]) - self.psi
+        return np.hypot(rel[0], rel[1]) / self.radius(phi)
+
+    def arc_fraction(self, points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+        """Arc-length coordinate along the outline from its top, as a fraction of the
+        perimeter in [0, 1), of points (k, 2) on it (or on their rays)."""
+        rel = points - centre
+        phi = np.arctan2(rel[:, 1], rel[:, 0]) - self.psi
+        phi = self._phi[0] + np.mod(phi - self._phi[0], 2 * math.pi)
+        return np.interp(phi, self._phi, np.arange(_ARC_TABLE_POINTS + 1)) / _ARC_TABLE_POINTS
+
+
+def _p2_lengths(ends_a: np.ndarray, mids: np.ndarray, ends_b: np.ndarray) -> np.ndarray:
+    """Lengths of quadratic edges through ``a``, the midside node ``m`` and ``b`` ((2, k)
+    each): 3-point Gauss on ``|x'(xi)|``, ``x(xi) = a (1 - xi)(1 - 2 xi) + 4 m xi (1 - xi) +
+    b xi (2 xi - 1)``."""
+    total = np.zeros(ends_a.shape[1])
+    for xi, w in ((0.5 - math.sqrt(0.15), 5 / 18), (0.5, 8 / 18), (0.5 + math.sqrt(0.15), 5 / 18)):
+        d = ends_a * (4 * xi - 3) + mids * (4 - 8 * xi) + ends_b * (4 * xi - 1)
+        total += w * np.hypot(d[0], d[1])
+    return total

@@ -99,6 +99,10 @@ class FemResult:
         [N], what sets the required friction (a ``LIMIT_*`` code of :mod:`envs.model.holding`)
         and, for an in-plane payload, the direction of its worst pull [rad] (as in
         :class:`envs.solver.result.GraspResult`).
+    peak_compression
+        An outline's largest shortening of a rim node's distance from the centroid over its
+        rest distance, ``max (r_i - |p_i - C|) / r_i`` [-] (the point-spring model's measure);
+        NaN for a disk (:func:`envs.fem.designs.fem_metrics` measures it from ``contour_m``).
     load_set
         The payload's directions checked (:data:`envs.model.loads.LOAD_SETS`).
     from_cache
@@ -135,6 +139,7 @@ class FemResult:
     grip_force_n: float = math.nan
     friction_limit: int = 0
     friction_limit_angle_rad: float = math.nan
+    peak_compression: float = math.nan
     load_set: str = "any"
     from_cache: bool = field(default=False, compare=False)
 

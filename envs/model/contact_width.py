@@ -72,6 +72,8 @@ __all__ = [
     "contact_share",
     "curvature_weight_n",
     "hertz_arc_coefficient",
+    "outline_hertz_coefficient",
+    "outline_run_share",
     "plane_strain_modulus_pa",
     "relative_radius_m",
     "run_curvature_per_m",
@@ -254,9 +256,56 @@ def run_share(extent_share, force_n, curvature_per_m, edge_spacing_share, radius
     """
     cap = segment_hertz_cap(force_n, curvature_per_m, radius_m, thickness_m, youngs_modulus_pa,
                             poisson_ratio)
+    return _floored_cap(extent_share, cap, edge_spacing_share)
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _floored_cap(extent_share, cap, edge_spacing_share):
+    """``min(e, max(cap, e - q (s_a + s_b)))`` of :func:`run_share`."""
     floor = extent_share - EDGE_CORRECTION_SPACINGS * edge_spacing_share
     bound = cap if cap > floor else floor
     return bound if bound < extent_share else extent_share
+
+
+# --- an outline's contacts: its own curvature where it touches ----------------------------
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def outline_hertz_coefficient(object_curvature_per_m, face_curvature_per_m, perimeter_m,
+                              thickness_m, youngs_modulus_pa, poisson_ratio):
+    """:func:`hertz_arc_coefficient` of an outline: ``k`` [N^-1/2] such that ``k sqrt(F)`` is
+    the share of its perimeter in contact with a face pressed by ``F`` [N].
+
+    The Hertz width ``2 b``, ``b = sqrt(4 P R / (pi E*))``, with the relative radius ``R =
+    1 / (kappa_o - kappa_f)`` of the outline's own curvature where it touches ``kappa_o``
+    (:func:`envs.model.outline.outline_curvature`) against the face's ``kappa_f``, over the
+    perimeter ``L``: ``sqrt(4 R / (pi E* t)) / (L / 2)``; on a disk (``kappa_o = 1 / r``,
+    ``L = 2 pi r``) the disk's coefficient. ``inf`` where the outline is flat or concave
+    there, or the face wraps it (no cap: conforming contact, as a fitted cradle).
+    """
+    relative = object_curvature_per_m - face_curvature_per_m
+    if not relative > 0.0:
+        return math.inf
+    e_star = plane_strain_modulus_pa(youngs_modulus_pa, poisson_ratio)
+    return math.sqrt(4.0 / (relative * math.pi * e_star * thickness_m)) / (0.5 * perimeter_m)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def outline_run_share(extent_share, force_n, curvature_per_m, edge_spacing_share,
+                      object_curvature_per_m, perimeter_m, thickness_m, youngs_modulus_pa,
+                      poisson_ratio):
+    """:func:`run_share` of an outline's contact run: its Hertz cap on the outline's own
+    curvature under the run ``object_curvature_per_m`` [1/m] (its pressed points' rest
+    curvatures weighted by their forces) against the jaw's ``curvature_per_m``, as a share of
+    the perimeter ``perimeter_m`` [m] (:func:`outline_hertz_coefficient`), with the same floor
+    at each edge."""
+    if not force_n > 0.0:
+        cap = 0.0
+    else:
+        k = outline_hertz_coefficient(object_curvature_per_m, curvature_per_m, perimeter_m,
+                                      thickness_m, youngs_modulus_pa, poisson_ratio)
+        cap = k * math.sqrt(force_n) if k < math.inf else math.inf
+    return _floored_cap(extent_share, cap, edge_spacing_share)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

@@ -43,7 +43,7 @@ from .rings import (
     n_tri_types,
     point_dof,
     quad_corners,
-    quad_rest_area,
+    quad_rest_area_at,
     quad_xy,
     rest_xy,
     tri_corners,
@@ -291,8 +291,8 @@ def _quad_energy_all(x, n, m, prm):
     """Volumetric energy of every quad of a ring mesh (the nh-quad element)."""
     e = 0.0
     for k in range(1, m + 1):
-        a0 = quad_rest_area(prm, k)
         for i in range(n):
+            a0 = quad_rest_area_at(prm, n, m, k, i)
             xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
             e += area_energy(quad_area(xa, ya, xb, yb, xc, yc, xd, yd), prm[P_QUAD], a0)
     return e
@@ -302,8 +302,8 @@ def _quad_energy_all(x, n, m, prm):
 def _quad_gradient_all(x, n, m, prm, grad):
     """Add the gradient of :func:`_quad_energy_all`."""
     for k in range(1, m + 1):
-        a0 = quad_rest_area(prm, k)
         for i in range(n):
+            a0 = quad_rest_area_at(prm, n, m, k, i)
             ka, ia, kb, ib, kc, ic, kd, id_ = quad_corners(k, i, n)
             xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
             f = 0.5 * area_slope(quad_area(xa, ya, xb, yb, xc, yc, xd, yd), prm[P_QUAD], a0)

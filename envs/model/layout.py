@@ -32,6 +32,9 @@ P_QUAD    volumetric stiffness ``lambda / E`` of the area energy per quad of a r
 P_SPACING ring spacing of a ring mesh: 0 geometric from the hub, 1 even (:mod:`envs.model.rings`)
 P_GROOVE0 the right finger's jaw groove, ``N_GROOVE`` slots ``G_*`` (:mod:`envs.model.jaw`)
 P_GROOVE1 the left finger's
+P_SHAPE   the object's shape: ``SHAPE_DISK`` (0, the disk's own code paths) or ``SHAPE_OUTLINE``
+P_ORIENT  an outline's orientation ``psi`` [rad] (:mod:`envs.model.outline`)
+P_OUTLINE an outline's ``N_OUTLINE`` B-spline coefficients of ``r(phi) / r_eq``
 ========  ==================================================================================
 
 The kernels keep a longer private copy: the solver's slots P_GAUGE (stiffness of the rotation
@@ -54,7 +57,13 @@ G_POSITION, G_DEPTH, G_CENTRE, G_RADIUS, G_COS, G_SIN, G_MOUTH = range(7)
 N_GROOVE = 7
 P_GROOVE0 = 22  # right finger's groove (P_GROOVE0 + G_*)
 P_GROOVE1 = P_GROOVE0 + N_GROOVE  # left finger's
-N_PARAMS = P_GROOVE1 + N_GROOVE
+# the object's outline (envs.model.outline): a disk has SHAPE_DISK and zeros after it
+N_OUTLINE = 128  # B-spline coefficients of r(phi) / r_eq over 2 pi
+SHAPE_DISK, SHAPE_OUTLINE = 0.0, 1.0
+P_SHAPE = P_GROOVE1 + N_GROOVE
+P_ORIENT = P_SHAPE + 1
+P_OUTLINE = P_SHAPE + 2
+N_PARAMS = P_OUTLINE + N_OUTLINE
 P_GAUGE = N_PARAMS  # solver copy only: gauge spring stiffness
 P_POLICY = N_PARAMS + 1  # solver copy only: contact policy of this attempt
 P_GREF = N_PARAMS + 2  # solver copy only: the gauge spring's anchor (point 0's tangential
@@ -77,11 +86,19 @@ GAUGE_HELD = -1.0  # holds point 0 at rest, no saddle test (the plain attempts)
 (S_LENGTH, S_REST_ANGLE, S_JOINT_OFFSET, S_WIDTH, S_TORSION, S_RADIUS, S_DISTANCE, S_YOUNG,
  S_POISSON, S_THICKNESS, S_SCALE, S_CONTOUR_RATIO, S_AREA_SCALE, S_TORQUE) = range(14)
 S_OFFSET_X = 14
+# the object's shape (SHAPE_*), an outline's orientation psi [rad] (counter-clockwise from +x,
+# across the jaws, to its first axis) and its N_OUTLINE B-spline coefficients of r(phi) / r_eq
+# (envs.model.outline); S_RADIUS is then r_eq = sqrt(A / pi) and S_DISTANCE the distance from
+# the joints' line to the outline's lowest point. A disk: SHAPE_DISK and zeros.
+N_SCENE_SCALARS = S_OFFSET_X + 1  # the scalar columns of a scene row come first
+S_SHAPE = N_SCENE_SCALARS
+S_ORIENT = S_SHAPE + 1
+S_OUTLINE = S_SHAPE + 2
 # the jaw profile of each finger (envs.model.jaw.JawProfile), SI: J_* slots from S_JAW0 (right
 # finger) and S_JAW1 (left finger); depth 0 is the straight bar
 J_DEPTH, J_BOTTOM_RADIUS, J_OPENING, J_POSITION = range(4)
 N_JAW = 4
-S_JAW0 = 15
+S_JAW0 = S_OUTLINE + N_OUTLINE
 S_JAW1 = S_JAW0 + N_JAW
 N_SCENE = S_JAW1 + N_JAW
 

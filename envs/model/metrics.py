@@ -13,10 +13,12 @@ import math
 from numba import njit
 
 from .energy import folded_triangles, mesh_energy
-from .layout import P_RINGS
+from .layout import P_RINGS, P_SHAPE, SHAPE_DISK
 from .rings import (
     HUB_RADIUS,
+    contour_rest_radius,
     edge_constants,
+    edge_ends,
     edge_xy,
     n_edge_types,
     n_tri_types,
@@ -36,6 +38,7 @@ M_ENERGY = 2  # total energy [scaled: s E t r^2]
 M_INVERTED = 3  # mesh triangles turned over
 M_PEAK_LOG_STRAIN = 4  # max over triangles of the largest principal |ln lambda| [-]
 # largest shortening of a radius: max over contour points of (r - |p - C|) / r, >= 0 [-]
+# (an outline's point: (r_i - |p - C|) / r_i with r_i its own rest distance from the centroid)
 M_COMPRESSION = 5
 N_METRICS = 6
 
@@ -89,16 +92,27 @@ def _mesh_log_strain(x, n, m, prm):
     return peak
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _rest_edge(prm, n, m, t, i):
+    """Rest length of edge ``i`` of family ``t`` from its ends' rest positions (an outline's
+    edges differ around a ring)."""
+    ka, ia, kb, ib = edge_ends(t, i, n, m)
+    xa, ya = rest_xy(prm, n, m, ka, ia)
+    xb, yb = rest_xy(prm, n, m, kb, ib)
+    return math.hypot(xb - xa, yb - ya)
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def state_metrics(x, n, prm, out):
     """Fill ``out`` (layout ``M_*``) for the scaled state ``x`` of one grasp (``prm``: the
     kernels' copy with the ring table, :func:`envs.model.rings.kernel_params`)."""
     m = int(prm[P_RINGS])
+    disk = prm[P_SHAPE] == SHAPE_DISK
     peak = 0.0
     for t in range(n_edge_types(m)):
         for i in range(n):
             xa, ya, xb, yb = edge_xy(x, n, m, prm, t, i)
-            _, rest = edge_constants(prm, t, i, n, m)
+            rest = edge_constants(prm, t, i, n, m)[1] if disk else _rest_edge(prm, n, m, t, i)
             dx, dy = xb - xa, yb - ya
             peak = max(peak, abs(math.sqrt(dx * dx + dy * dy) / rest - 1.0))
     disp = 0.0
@@ -108,8 +122,14 @@ def state_metrics(x, n, prm, out):
         ux, uy = x[2 * i] - ax, x[2 * i + 1] - ay
         disp = max(disp, math.sqrt(ux * ux + uy * uy))
         # the contour points lie on the unit circle about the centre at rest: how far a
-        # finger has pushed one in (a rigid turn about the centre does not count)
-        compression = max(compression, 1.0 - math.sqrt(x[2 * i] ** 2 + x[2 * i + 1] ** 2))
+        # finger has pushed one in (a rigid turn about the centre does not count); an
+        # outline's point at its own rest distance, the shortening relative to it
+        now = math.sqrt(x[2 * i] ** 2 + x[2 * i + 1] ** 2)
+        if disk:
+            compression = max(compression, 1.0 - now)
+        else:
+            rest = contour_rest_radius(prm, n, m, i)
+            compression = max(compression, (rest - now) / rest)
     out[M_PEAK_STRAIN] = peak
     out[M_DISPLACEMENT] = disp
     out[M_ENERGY] = mesh_energy(x, n, prm)

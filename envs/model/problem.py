@@ -29,8 +29,10 @@ from .layout import (
     J_POSITION,
     N_JAW,
     N_KERNEL_PARAMS,
+    N_OUTLINE,
     N_PARAMS,
     N_SCENE,
+    N_SCENE_SCALARS,
     P_A0,
     P_C0X,
     P_C0Y,
@@ -47,10 +49,13 @@ from .layout import (
     P_LAM,
     P_LMAX,
     P_MU,
+    P_ORIENT,
+    P_OUTLINE,
     P_PHASE,
     P_QUAD,
     P_RHO,
     P_RINGS,
+    P_SHAPE,
     P_SPACING,
     P_TAU,
     P_TH0,
@@ -63,18 +68,23 @@ from .layout import (
     S_JOINT_OFFSET,
     S_LENGTH,
     S_OFFSET_X,
+    S_ORIENT,
+    S_OUTLINE,
     S_POISSON,
     S_RADIUS,
     S_REST_ANGLE,
     S_SCALE,
+    S_SHAPE,
     S_THICKNESS,
     S_TORQUE,
     S_TORSION,
     S_WIDTH,
     S_YOUNG,
+    SHAPE_DISK,
     SPACING_EVEN,
     SPACING_GEOMETRIC,
 )
+from .outline import ARC_STEPS_PER_KNOT, outline_lowest, outline_point
 from .rings import (
     N_RING_COLS,
     R_AIN,
@@ -82,6 +92,7 @@ from .rings import (
     R_LCIRC,
     R_LRAD,
     fill_ring_table,
+    rest_xy,
     ring_rest_state_into,
     ring_table_size,
 )
@@ -152,6 +163,10 @@ class SceneColumns(NamedTuple):
     jaw_bottom_radius_m: np.ndarray | None = None  # (B, 2)
     jaw_opening_angle_rad: np.ndarray | None = None  # (B, 2)
     jaw_position_m: np.ndarray | None = None  # (B, 2)
+    # the object's shape (envs.model.outline); None: disks
+    shape: np.ndarray | None = None  # (B,) SHAPE_DISK or SHAPE_OUTLINE
+    orientation_rad: np.ndarray | None = None  # (B,) an outline's psi
+    outline: np.ndarray | None = None  # (B, N_OUTLINE) its B-spline coefficients
 
     def take(self, rows) -> SceneColumns:
         """The scenes of some rows."""
@@ -161,15 +176,24 @@ class SceneColumns(NamedTuple):
     def size(self) -> int:
         return int(self.radius_m.shape[0])
 
+    @property
+    def has_outlines(self) -> bool:
+        """Whether a row's object is an outline (not a disk)."""
+        return self.shape is not None and bool(np.any(self.shape != SHAPE_DISK))
+
     def rows(self) -> np.ndarray:
         """The scenes as a (B, N_SCENE) float64 matrix (layout ``S_*``)."""
         out = np.zeros((self.size, N_SCENE))
-        for k, column in enumerate(self[:S_JAW0]):
+        for k, column in enumerate(self[:N_SCENE_SCALARS]):
             out[:, k] = column
-        for k, column in enumerate(self[S_JAW0:]):
+        for k, column in enumerate(self[N_SCENE_SCALARS : N_SCENE_SCALARS + N_JAW]):
             if column is not None:
                 out[:, S_JAW0 + k] = column[:, 0]
                 out[:, S_JAW1 + k] = column[:, 1]
+        if self.shape is not None:
+            out[:, S_SHAPE] = self.shape
+            out[:, S_ORIENT] = self.orientation_rad
+            out[:, S_OUTLINE : S_OUTLINE + N_OUTLINE] = self.outline
         return out
 
     @classmethod
@@ -178,7 +202,8 @@ class SceneColumns(NamedTuple):
         table = np.asarray(rows, dtype=np.float64)
         jaws = (np.stack([table[:, S_JAW0 + k], table[:, S_JAW1 + k]], axis=1)
                 for k in range(N_JAW))
-        return cls(*table[:, :S_JAW0].T, *jaws)
+        return cls(*table[:, :N_SCENE_SCALARS].T, *jaws, table[:, S_SHAPE], table[:, S_ORIENT],
+                   table[:, S_OUTLINE : S_OUTLINE + N_OUTLINE])
 
 
 @vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
@@ -212,13 +237,24 @@ def _clearance_m(finger_length_m, rest_angle_rad, joint_offset_m, finger_width_m
 def _clearance(cols: SceneColumns) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance of the disk centre in front of the gripping faces, and the rest
     clearance between the disk and the finger bars [m]: each the smaller of the two fingers'
-    (the finger the displaced disk is nearer to; both alike for a centred disk)."""
+    (the finger the displaced disk is nearer to; both alike for a centred disk). An
+    outline's rows: its centroid's, and its own clearance (:func:`outline_clearance_m`)."""
     front = [_front_m(cols.rest_angle_rad, cols.joint_offset_m, cols.finger_width_m,
                       cols.radius_m, cols.distance_m, x) for x in _mirrored(cols.offset_x_m)]
     clear = [_clearance_m(cols.finger_length_m, cols.rest_angle_rad, cols.joint_offset_m,
                           cols.finger_width_m, cols.radius_m, cols.distance_m, x)
              for x in _mirrored(cols.offset_x_m)]
-    return np.minimum(*front), np.minimum(*clear)
+    front, clear = np.minimum(*front), np.minimum(*clear)
+    if cols.has_outlines:
+        table = cols.rows()
+        for i in np.flatnonzero(cols.shape != SHAPE_DISK):
+            s = table[i]
+            lift = scene_centre_y_m(s) - s[S_DISTANCE]
+            xc = s[S_OFFSET_X]
+            front[i] = min(_front_m(s[S_REST_ANGLE], s[S_JOINT_OFFSET], s[S_WIDTH], lift,
+                                    s[S_DISTANCE], x) for x in (xc, -xc))
+            clear[i] = min(outline_clearance_m(s, 1.0, xc), outline_clearance_m(s, -1.0, xc))
+    return front, clear
 
 
 def _mirrored(centre_x_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -248,6 +284,8 @@ def _rest_codes_into(table, codes):
             codes[i] = REST_WIDTH
         elif not (_jaw_fits(table[i], S_JAW0, ln, w, r) and _jaw_fits(table[i], S_JAW1, ln, w, r)):
             codes[i] = REST_JAW
+        elif table[i, S_SHAPE] != SHAPE_DISK:
+            codes[i] = _outline_placement_code(table[i])
         else:
             codes[i] = _placement_code(ln, th0, d3, w, r, d1, xc)
 
@@ -281,6 +319,78 @@ def _placement_code(ln, th0, d3, w, r, d1, xc):
         return REST_OK
     if xc != 0.0 and _front_m(th0, d3, w, r, d1, 0.0) > 0 and (
             _clearance_m(ln, th0, d3, w, r, d1, 0.0) > 0):
+        return REST_OFFSET
+    return REST_BEHIND_FACE if not front > 0 else REST_OVERLAP
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _bar_signed_distance(along, across, length_m, width_m):
+    """Signed distance [m] of a point from a finger bar (its coordinates along the bar axis
+    and along the inward normal, relative to the joint): :func:`bar_distance` outside, minus
+    the depth to the nearest side inside."""
+    hw = 0.5 * width_m
+    if 0.0 <= along <= length_m and -hw <= across <= hw:
+        return -min(min(along, length_m - along), hw - abs(across))
+    return bar_distance(along, across, length_m, width_m)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def outline_clearance_m(s, sign, offset_x_m):
+    """Rest clearance [m] between an outline (scene row ``s``, its centroid at ``offset_x_m``
+    across the axis) and the right finger bar (``sign`` 1) or the left one (``sign`` -1: the
+    right one's mirror image sees the outline mirrored), signed: negative where the bar
+    reaches into it, by the depth of its deepest point. On the outline's dense scan
+    (:data:`~envs.model.outline.ARC_STEPS_PER_KNOT` points a knot interval): exact to the
+    scan's chord sag, ~1e-5 r_eq."""
+    return outline_bar_distance_m(s, sign, offset_x_m, s[S_REST_ANGLE])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def outline_bar_distance_m(s, sign, offset_x_m, angle_rad):
+    """:func:`outline_clearance_m` with the finger at ``angle_rad`` [rad] instead of at rest:
+    the signed distance [m] between the undeformed outline and the finger bar."""
+    r = s[S_RADIUS]
+    sn, cs = math.sin(angle_rad), math.cos(angle_rad)
+    xc = sign * offset_x_m
+    yc = scene_centre_y_m(s)
+    steps = N_OUTLINE * ARC_STEPS_PER_KNOT
+    best = math.inf
+    for j in range(steps):
+        ux, uy = outline_point(s, S_OUTLINE, 2.0 * math.pi * j / steps, s[S_ORIENT])
+        rel_x = xc + sign * r * ux - s[S_JOINT_OFFSET]
+        rel_y = yc + r * uy
+        along = sn * rel_x + cs * rel_y  # right finger: e = (s, c), n = (-c, s)
+        across = -cs * rel_x + sn * rel_y
+        best = min(best, _bar_signed_distance(along, across, s[S_LENGTH], s[S_WIDTH]))
+    return best
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def scene_centre_y_m(s):
+    """Height of the object's centre above the joints' line [m] of scene row ``s``: ``d_1 +
+    r`` for a disk, ``d_1`` plus how far an outline's lowest point lies below its centroid at
+    its orientation (:func:`envs.model.outline.outline_lowest`) for an outline."""
+    if s[S_SHAPE] == SHAPE_DISK:
+        return s[S_DISTANCE] + s[S_RADIUS]
+    return s[S_DISTANCE] + s[S_RADIUS] * outline_lowest(s, S_OUTLINE, s[S_ORIENT])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _outline_placement_code(s):
+    """:func:`_placement_code` of an outline: its centroid in front of both gripping faces,
+    the fingers clear of it (:func:`outline_clearance_m`); where the outline centred on the
+    axis would be clear, :data:`REST_OFFSET` instead."""
+    th0, d3, w = s[S_REST_ANGLE], s[S_JOINT_OFFSET], s[S_WIDTH]
+    # _front_m of the centroid: the distance from it to each face line
+    lift = scene_centre_y_m(s) - s[S_DISTANCE]
+    xc = s[S_OFFSET_X]
+    front = min(_front_m(th0, d3, w, lift, s[S_DISTANCE], xc),
+                _front_m(th0, d3, w, lift, s[S_DISTANCE], -xc))
+    clear = min(outline_clearance_m(s, 1.0, xc), outline_clearance_m(s, -1.0, xc))
+    if front > 0 and clear > 0:
+        return REST_OK
+    if xc != 0.0 and _front_m(th0, d3, w, lift, s[S_DISTANCE], 0.0) > 0 and min(
+            outline_clearance_m(s, 1.0, 0.0), outline_clearance_m(s, -1.0, 0.0)) > 0:
         return REST_OFFSET
     return REST_BEHIND_FACE if not front > 0 else REST_OVERLAP
 
@@ -343,6 +453,10 @@ def pack_rows(scene: np.ndarray, n_triangles: int, stiffness_rule: str = "van_ge
         raise ValueError(f"element must be one of {ELEMENTS}, got {element!r}")
     n = int(n_triangles)
     m = int(n_rings)
+    if element == "spring" and np.any(scene[:, S_SHAPE] != SHAPE_DISK):
+        raise ValueError(f"an object with an outline (not a disk) needs element 'nhquad' or "
+                         f"'cst' (a mesh of elements mapped onto the outline), got element "
+                         f"{element!r}: the springs' calibrated scales hold for disks only")
     if element == "nhquad" and m < 2:
         raise ValueError(f"n_rings must be 2 to 16 for element 'nhquad' (its volumetric term "
                          f"acts on the quads between rings), got {m}")
@@ -414,7 +528,7 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     p[P_KR] = k_int
     p[P_KC] = k_ext * s[S_CONTOUR_RATIO]
     p[P_H] = 2 * math.sin(math.pi / n)
-    yc = (s[S_DISTANCE] + r) / r
+    yc = scene_centre_y_m(s) / r
     # the centre (x_c, d_1 + r) relative to each joint (+-d_3, 0)
     p[P_C0X], p[P_C0Y] = (s[S_OFFSET_X] - s[S_JOINT_OFFSET]) / r, yc
     p[P_C1X], p[P_C1Y] = (s[S_OFFSET_X] + s[S_JOINT_OFFSET]) / r, yc
@@ -433,6 +547,10 @@ def _pack_row(s, n, k_int, k_ext, phase, p):
     for base, slot in ((S_JAW0, P_GROOVE0), (S_JAW1, P_GROOVE1)):
         pack_groove(s[base + J_DEPTH], s[base + J_BOTTOM_RADIUS], s[base + J_OPENING],
                     s[base + J_POSITION], p[P_RHO] * r, r, p, slot)
+    p[P_SHAPE] = s[S_SHAPE]
+    p[P_ORIENT] = s[S_ORIENT]
+    for k in range(N_OUTLINE):
+        p[P_OUTLINE + k] = s[S_OUTLINE + k]
 
 
 def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
@@ -450,14 +568,21 @@ def rest_state(params: np.ndarray, n_triangles: int) -> np.ndarray:
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _rest_rows(params, n, x, work):
     for b in range(params.shape[0]):
-        rest_points_into(n, params[b, P_PHASE], x[b])
+        outline = params[b, P_SHAPE] != SHAPE_DISK
+        if not outline:
+            rest_points_into(n, params[b, P_PHASE], x[b])
         x[b, 2 * n] = params[b, P_TH0]
         x[b, 2 * n + 1] = params[b, P_TH0]
-        if params[b, P_RINGS] > 1:
+        if params[b, P_RINGS] > 1 or outline:
             for j in range(N_PARAMS):
                 work[j] = params[b, j]
             fill_ring_table(work, n)
             ring_rest_state_into(work, n, x[b])
+        if outline:
+            # the contour: the outline's points, as the ring table holds them
+            m = int(params[b, P_RINGS])
+            for i in range(n):
+                x[b, 2 * i], x[b, 2 * i + 1] = rest_xy(work, n, m, m, i)
 
 
 def spring_strains(q: np.ndarray, h) -> tuple[np.ndarray, np.ndarray]:

@@ -31,6 +31,15 @@ fingers keep the fan's slots (the contact code sees only them); interior point `
 The per-layer constants (radii, rest lengths and areas) are written once per solve into the
 kernel's parameter copy after its solver slots (:func:`fill_ring_table`), so that every energy
 term reads them by name (``R_*`` columns) instead of recomputing trigonometry.
+
+An object that is not a disk (slot ``P_SHAPE``, :mod:`envs.model.outline`) has the same mesh
+mapped radially onto its outline: the rest position of point ``(k, i)`` is ``rho_k u_i``, with
+``u_i`` the outline's contour point ``i`` (spaced evenly by arc length, in units of ``r_eq``)
+in place of the unit direction, so the hub is the outline scaled by :data:`HUB_RADIUS`. Its
+quads then differ around a ring: their rest areas are tabled per quad, and the contour points'
+rest distances from the centroid per point (:func:`quad_rest_area_at`,
+:func:`contour_rest_radius`). The springs' per-ring constants serve disks only (a spring
+member refuses an outline, :func:`envs.model.problem.pack_params`).
 """
 
 from __future__ import annotations
@@ -48,11 +57,16 @@ from .layout import (
     P_H,
     P_KC,
     P_KR,
+    P_ORIENT,
+    P_OUTLINE,
     P_PHASE,
     P_RINGS,
+    P_SHAPE,
     P_SPACING,
+    SHAPE_DISK,
     SPACING_EVEN,
 )
+from .outline import outline_contour_into
 
 __all__ = [
     "HUB_RADIUS",
@@ -69,6 +83,8 @@ __all__ = [
     "quad_corners",
     "quad_xy",
     "quad_rest_area",
+    "quad_rest_area_at",
+    "contour_rest_radius",
     "ring_table_size",
     "fill_ring_table",
     "kernel_params",
@@ -122,8 +138,9 @@ def ring_radius(k, m, spacing):
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def ring_table_size(n, m):
-    """Length of the ring table and rest directions after the kernel slots."""
-    return (m + 1) * N_RING_COLS + 2 * n
+    """Length of the ring table, the rest directions and an outline's tables (quad areas,
+    contour radii) after the kernel slots."""
+    return (m + 1) * N_RING_COLS + 2 * n + m * n + n
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -136,10 +153,23 @@ def _dir_slot(m):
     return N_KERNEL_PARAMS + (m + 1) * N_RING_COLS
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _quad_slot(n, m):
+    """Start of an outline's quad rest areas (layer k, angle i at ``(k - 1) n + i``)."""
+    return N_KERNEL_PARAMS + (m + 1) * N_RING_COLS + 2 * n
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _radius_slot(n, m):
+    """Start of an outline's contour rest radii (point i at ``i``) [r_eq]."""
+    return _quad_slot(n, m) + m * n
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
 def fill_ring_table(prm, n):
     """Write the ring table and the rest directions of the ``n`` angles into ``prm`` (the
-    kernel copy, long enough: :func:`ring_table_size`)."""
+    kernel copy, long enough: :func:`ring_table_size`); for an outline its contour points in
+    place of the directions and its tables (see the module)."""
     m = int(prm[P_RINGS])
     delta = 2.0 * math.pi / n
     sd, cd = math.sin(delta), math.cos(delta)
@@ -162,8 +192,31 @@ def fill_ring_table(prm, n):
         prm[row + R_AOUT] = 0.5 * rho * (rho - rin) * sd
         prm[row + R_AIN] = 0.5 * rin * (rho - rin) * sd
     base = _dir_slot(m)
+    if prm[P_SHAPE] == SHAPE_DISK:
+        for i in range(n):
+            prm[base + 2 * i], prm[base + 2 * i + 1] = rest_point(i, n, prm[P_PHASE])
+        return
+    outline_contour_into(prm, P_OUTLINE, prm[P_ORIENT], n, prm, base)
+    _fill_outline_tables(prm, n, m)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _fill_outline_tables(prm, n, m):
+    """An outline's quad rest areas and contour rest radii (from the rest positions)."""
+    quads = _quad_slot(n, m)
+    for k in range(1, m + 1):
+        for i in range(n):
+            ka, ia, kb, ib, kc, ic, kd, id_ = quad_corners(k, i, n)
+            xa, ya = rest_xy(prm, n, m, ka, ia)
+            xb, yb = rest_xy(prm, n, m, kb, ib)
+            xc, yc = rest_xy(prm, n, m, kc, ic)
+            xd, yd = rest_xy(prm, n, m, kd, id_)
+            prm[quads + (k - 1) * n + i] = 0.5 * ((xa * yb - xb * ya) + (xb * yc - xc * yb)
+                                                   + (xc * yd - xd * yc) + (xd * ya - xa * yd))
+    radii = _radius_slot(n, m)
+    base = _dir_slot(m)
     for i in range(n):
-        prm[base + 2 * i], prm[base + 2 * i + 1] = rest_point(i, n, prm[P_PHASE])
+        prm[radii + i] = math.hypot(prm[base + 2 * i], prm[base + 2 * i + 1])
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -362,6 +415,24 @@ def quad_rest_area(prm, k):
     """Rest area of a quad of layer ``k``: its two triangles'."""
     row = _row(k)
     return prm[row + R_AOUT] + prm[row + R_AIN]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def quad_rest_area_at(prm, n, m, k, i):
+    """Rest area of quad ``i`` of layer ``k``: :func:`quad_rest_area` on a disk, an outline's
+    own quad's (its quads differ around a ring)."""
+    if prm[P_SHAPE] == SHAPE_DISK:
+        return quad_rest_area(prm, k)
+    return prm[_quad_slot(n, m) + (k - 1) * n + i]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def contour_rest_radius(prm, n, m, i):
+    """Rest distance of contour point ``i`` from the centre [r]: 1 on a disk, the outline's
+    ``r(phi_i)`` [r_eq]."""
+    if prm[P_SHAPE] == SHAPE_DISK:
+        return 1.0
+    return prm[_radius_slot(n, m) + i]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

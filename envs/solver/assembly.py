@@ -39,7 +39,7 @@ from ..model.rings import (
     n_edge_types,
     n_tri_types,
     quad_corners,
-    quad_rest_area,
+    quad_rest_area_at,
     quad_xy,
     tri_corners,
     tri_rest_area,
@@ -200,8 +200,8 @@ def _quad_hessian(x, n, prm, bidx, ab, bb, dd, psd, sign=1.0):
     nb = ab.shape[0]
     m = int(prm[P_RINGS])
     for k in range(1, m + 1):
-        a0 = quad_rest_area(prm, k)
         for i in range(n):
+            a0 = quad_rest_area_at(prm, n, m, k, i)
             ka, ia, kb, ib, kc, ic, kd, id_ = quad_corners(k, i, n)
             xa, ya, xb, yb, xc, yc, xd, yd = quad_xy(x, n, m, prm, k, i)
             area = quad_area(xa, ya, xb, yb, xc, yc, xd, yd)

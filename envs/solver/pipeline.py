@@ -40,6 +40,7 @@ from envs.model.layout import (
     N_CORNERS,
     N_INFO,
     N_JAW,
+    N_OUTLINE,
     P_A0,
     P_H,
     P_KA,
@@ -54,14 +55,16 @@ from envs.model.layout import (
     P_SPACING,
     P_THMIN,
     S_CONTOUR_RATIO,
-    S_DISTANCE,
     S_JAW0,
     S_JAW1,
     S_JOINT_OFFSET,
     S_LENGTH,
     S_OFFSET_X,
+    S_ORIENT,
+    S_OUTLINE,
     S_RADIUS,
     S_REST_ANGLE,
+    S_SHAPE,
     S_TORQUE,
     S_TORSION,
     S_WIDTH,
@@ -78,7 +81,13 @@ from envs.model.metrics import (
     N_METRICS,
     state_metrics,
 )
-from envs.model.problem import SceneColumns, pack_params, rest_state, stiffness_unit
+from envs.model.problem import (
+    SceneColumns,
+    pack_params,
+    rest_state,
+    scene_centre_y_m,
+    stiffness_unit,
+)
 from envs.model.rings import HUB_RADIUS, kernel_copy, kernel_copy_into, mesh_band_index
 
 from ..parallel import run_rows
@@ -273,7 +282,7 @@ def _check_row(s, prm, n, ck):
     k_unit = stiffness_unit(s)
     ck[check.CK_RADIUS] = r
     ck[check.CK_CENTRE_X] = s[S_OFFSET_X]
-    ck[check.CK_CENTRE_Y] = s[S_DISTANCE] + r
+    ck[check.CK_CENTRE_Y] = scene_centre_y_m(s)
     ck[check.CK_JOINT_OFFSET] = s[S_JOINT_OFFSET]
     ck[check.CK_LENGTH] = s[S_LENGTH]
     ck[check.CK_HALF_WIDTH] = s[S_WIDTH] / 2
@@ -298,6 +307,10 @@ def _check_row(s, prm, n, ck):
     # nh-quad: the volumetric modulus of the quads, and the ring spacing the mesh was built with
     ck[check.CK_QUAD] = prm[P_QUAD] * k_unit
     ck[check.CK_SPACING] = prm[P_SPACING]
+    # the object's outline (0: a disk), as the scene row gives it (its coefficients: an
+    # argument of the check)
+    ck[check.CK_SHAPE] = s[S_SHAPE]
+    ck[check.CK_ORIENT] = s[S_ORIENT]
     # each finger's jaw groove, SI, as the scene row gives it (the check grows it itself)
     for base, jaw in ((check.CK_JAW0, S_JAW0), (check.CK_JAW1, S_JAW1)):
         ck[base + check.JW_DEPTH] = s[jaw + J_DEPTH]
@@ -312,7 +325,7 @@ def _to_si(s, n, x, lam_face, lam_corner, lam_stop, points, interior, face, corn
     state) and forces [N, N·m] of one scaled answer."""
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
-    xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
+    xc, yc = s[S_OFFSET_X], scene_centre_y_m(s)
     for i in range(n):
         points[i, 0] = x[2 * i] * r + xc
         points[i, 1] = x[2 * i + 1] * r + yc
@@ -370,7 +383,7 @@ def _finish_one(s, prm, n, x, lam_face, lam_corner, lam_stop, info, points, inte
         check.check_one(ck, points, x[2 * n : 2 * n + 2], face, corner, stop, verdict)
     else:
         check.check_mesh_one(ck, points, interior, x[2 * n : 2 * n + 2], face, corner, stop,
-                             verdict)
+                             verdict, s[S_OUTLINE : S_OUTLINE + N_OUTLINE])
     return _public_status(int(info[I_STATUS]), verdict[check.OUT_PASSED] > 0.0,
                           int(metrics[M_INVERTED]))
 

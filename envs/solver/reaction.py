@@ -27,7 +27,6 @@ from ..model.layout import (
     N_BAR_CORNERS,
     N_CORNERS,
     P_RINGS,
-    S_DISTANCE,
     S_JOINT_OFFSET,
     S_OFFSET_X,
     S_POISSON,
@@ -38,7 +37,7 @@ from ..model.layout import (
     S_YOUNG,
 )
 from ..model.loads import N_RESPONSE, loaded_holding, patch_constraints, patch_response
-from ..model.problem import stiffness_unit
+from ..model.problem import scene_centre_y_m, stiffness_unit
 from .contact import _corner_eval, _face_eval, _grooved, _sel, _trig
 from .loaded import contact_compliance
 
@@ -119,7 +118,7 @@ def holding_one(s, prm, kprm, n, x, lam_face, lam_corner, lam_stop, payload, loa
     """
     r = s[S_RADIUS]
     force_unit = stiffness_unit(s) * r
-    xc, yc = s[S_OFFSET_X], s[S_DISTANCE] + r
+    xc, yc = s[S_OFFSET_X], scene_centre_y_m(s)
     q = x[: 2 * n].reshape(n, 2)
     sn, cs = _trig(x, n)
     # np.int64, not a literal 0: numba would compile the callees once more for Literal[int](0)
@@ -241,7 +240,7 @@ def loaded_contacts(scene_row: np.ndarray, prm_row: np.ndarray, n: int, x: np.nd
     response, coupling = np.zeros((max(mc, 1), N_RESPONSE)), np.zeros((max(mc, 1), max(mc, 1)))
     ok = g.shape[0] == mc and patch_response(
         g, mn, mc, normals, points, fingers, count, cons, weights, scene_row[S_OFFSET_X],
-        scene_row[S_DISTANCE] + r, scene_row[S_JOINT_OFFSET], scene_row[S_TORSION],
+        scene_centre_y_m(scene_row), scene_row[S_JOINT_OFFSET], scene_row[S_TORSION],
         (lam_stop[0] > 0.0, lam_stop[1] > 0.0), r, unit, response, coupling)
     model = Response(cons[:count].copy(), weights[:count].copy(), mn, mc if ok else 0,
                      response, coupling)

@@ -118,6 +118,7 @@ def _condition_lines(sheet: dict[str, Any]) -> list[str]:
         f"object); strain limit {number('strain_limit', '.3g')}",
         payload_line,
         placement + (f"; object ranges: {ranges}" if ranges else ""),
+        *_shape_lines(sheet),
         f"fixed centre (+ in the drawing): {sheet['fixed_centre']}",
         tol["dimensions"],
         *_part_lines(sheet),
@@ -342,6 +343,27 @@ def _draw_jaw_detail(ax, entry: dict[str, Any], length: float, width: float, who
                  f"groove centre a = {a:.2f})", fontsize=7)
 
 
+def _shape_lines(sheet: dict[str, Any]) -> list[str]:
+    """The object's outline (not a disk), a line for the drawing's notes (none for a disk)."""
+    shape = sheet.get("object_shape")
+    if not shape:
+        return []
+    dims = ", ".join(f"{k.replace('_m', '')} {_lengths_mm(v)}" for k, v in shape.items()
+                     if k.endswith("_m"))
+    turn = sheet["tolerances"].get("orientation_deg")
+    return [f"object: {shape.get('shape', 'outline')}" + (f" ({dims} mm)" if dims else "")
+            + f", orientation {shape['orientation_deg']:.1f}° (first axis from x, ccw), drawn "
+            "as placed" + (f"; orientation tolerance +-{turn:.3g}°" if turn else "")
+            + "; r is its area-equivalent radius sqrt(A / pi)"]
+
+
+def _lengths_mm(value: Any) -> str:
+    """A length or a list of lengths [m] in mm, for a note."""
+    if isinstance(value, list | tuple):
+        return " x ".join(f"{float(v) * MM:.3g}" for v in value)
+    return f"{float(value) * MM:.3g}"
+
+
 def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     """A dimensioned drawing of a build sheet's gripper at rest with its object [mm], a detail of
     each grooved jaw profile, the notes a workshop needs (jaws, assembly, friction, payload,
@@ -381,11 +403,14 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
     _dimension(ax, tip - (w / 2) * outward, tip + (w / 2) * outward, 0.6 * gap * axis,
                f"w = {w:.2f}")
     _dimension(ax, np.zeros(2), joint, np.array([0.0, -1.5 * gap]), f"d3 = {d3:.2f}")
-    bottom = centre - np.array([0.0, r])
+    outline = bool(sheet.get("object_outline_mm"))
+    # d1 to the object's lowest point (a disk's: below its centre); 2r_eq for an outline
+    bottom = (np.array([centre[0], rows["object_distance_mm"]]) if outline
+              else centre - np.array([0.0, r]))
     _dimension(ax, np.array([0.0, 0.0]), bottom, np.array([-1.3 * gap - r, 0.0]),
                f"d1 = {rows['object_distance_mm']:.2f}")
     _dimension(ax, centre - np.array([r, 0.0]), centre + np.array([r, 0.0]),
-               np.array([0.0, r + gap]), f"2r = {2 * r:.2f}")
+               np.array([0.0, r + gap]), f"{'2r_eq' if outline else '2r'} = {2 * r:.2f}")
     _dimension_grooves(ax, sheet, 2.2 * gap)
     arc_r = 0.35 * ln
     ax.plot([d3, d3], [0.0, arc_r * 1.1], color="0.45", lw=0.6, ls="--")
@@ -425,12 +450,16 @@ def drawing_figure(sheet: dict[str, Any], title: str | None = None) -> Figure:
 
 
 def _draw_object(ax, sheet: dict[str, Any]) -> None:
-    """The object at its nominal place [mm], its fixed centre marked (one function, so that
-    other outlines than a disk are drawn here)."""
+    """The object at its nominal place [mm] (a disk, or an outline at its orientation), its
+    fixed centre marked."""
     rows = {row["quantity"]: row["value"] for row in sheet["rows"]}
     centre = np.array(sheet["object_centre_mm"])
-    ax.add_patch(Circle(centre, rows["object_diameter_mm"] / 2, facecolor="tab:orange",
-                        alpha=0.3, edgecolor="k"))
+    if sheet.get("object_outline_mm"):
+        ax.add_patch(Polygon(np.asarray(sheet["object_outline_mm"]), closed=True,
+                             facecolor="tab:orange", alpha=0.3, edgecolor="k"))
+    else:
+        ax.add_patch(Circle(centre, rows["object_diameter_mm"] / 2, facecolor="tab:orange",
+                            alpha=0.3, edgecolor="k"))
     ax.plot([centre[0]], [centre[1]], "+", color="k", ms=8)
 
 

@@ -133,8 +133,12 @@ def write_dxf(sheet: dict[str, Any], path: str | Path) -> Path:
         space.add_point((x, y), dxfattribs=attribs)
         space.add_line((x - mark, y), (x + mark, y), dxfattribs=attribs)
         space.add_line((x, y - mark), (x, y + mark), dxfattribs=attribs)
-    space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
-                     dxfattribs={"layer": DXF_LAYERS["object"]})
+    if sheet.get("object_outline_mm"):  # an object that is not a disk, at its orientation
+        space.add_lwpolyline(sheet["object_outline_mm"], format="xy", close=True,
+                             dxfattribs={"layer": DXF_LAYERS["object"]})
+    else:
+        space.add_circle(sheet["object_centre_mm"], rows["object_diameter_mm"] / 2,
+                         dxfattribs={"layer": DXF_LAYERS["object"]})
     doc.saveas(Path(path))
     return Path(path)
 

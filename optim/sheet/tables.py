@@ -16,6 +16,7 @@ from .common import (
     FINGERS,
     MM,
     NOT_MODELLED,
+    OUTLINE_POINTS,
 )
 from .jaws import _finger_outline_mm, _jaws, jaws_of_design
 
@@ -273,12 +274,14 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         raise ValueError("obj needs radius_m and torsion_stiffness_nm_per_rad")
     ln, th0, d3, w, torque, d1 = (float(design[k]) for k in DESIGN_FIELDS)
     r, kf = float(obj["radius_m"]), float(obj["torsion_stiffness_nm_per_rad"])
+    outline = _object_outline(obj, d1)  # an object that is not a disk, or None
+    lift = r if outline is None else outline["lift_m"]  # its centre above its lowest point
     metrics = dict(metrics or {})
     values = {
         "finger_length_mm": ln * MM, "finger_width_mm": w * MM,
         "rest_angle_deg": math.degrees(th0), "joint_offset_mm": d3 * MM,
         "joint_spacing_mm": 2 * d3 * MM, "joint_end_overlap_mm": (w - 2 * d3) * MM,
-        "object_distance_mm": d1 * MM, "object_centre_y_mm": (d1 + r) * MM,
+        "object_distance_mm": d1 * MM, "object_centre_y_mm": (d1 + lift) * MM,
         "object_diameter_mm": 2 * r * MM, "torque_nm": torque,
         "torsion_stiffness_nm_per_rad": kf,
         "torsion_stiffness_nmm_per_deg": kf * MM * math.pi / 180.0,
@@ -319,12 +322,19 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
         "frame": "origin midway between the joints, x to the right, y up the symmetry axis "
                  "towards the object; fingers at rest; millimetres",
         "joints_mm": [[d3 * MM, 0.0], [-d3 * MM, 0.0]],
-        "object_centre_mm": [0.0, (d1 + r) * MM],
+        "object_centre_mm": [0.0, (d1 + lift) * MM],
         "finger_outline_mm": {name: [[round(float(v), 4) for v in vertex[[V_X, V_Y]]]
                                      for vertex in outline]
                               for name, outline in outlines.items()},
         "jaws": jaw_entries,
     }
+    if outline is not None:
+        # the object's outline at its orientation, as placed (its area-equivalent radius r)
+        sheet["object_outline_mm"] = outline["points_mm"]
+        sheet["object_shape"] = outline["shape"]
+        turn = (obj.get("scenarios") or {}).get("orientation_tolerance_rad")
+        if turn:
+            sheet["tolerances"]["orientation_deg"] = math.degrees(float(turn))
     if any(jaw.depth_m > 0.0 for jaw in jaws):
         # (+ 0.0: a straight segment's bulge is 0, never -0)
         sheet["finger_outline_bulge"] = {name: [float(b) + 0.0 for b in outline[:, V_BULGE]]
@@ -335,6 +345,25 @@ def build_sheet(design: dict[str, float], obj: dict[str, Any],
     if envelopes:
         sheet["envelopes"] = envelopes
     return sheet
+
+
+def _object_outline(obj: dict[str, Any], distance_m: float) -> dict[str, Any] | None:
+    """An object's outline as the sheet states it (``None`` for a disk): its shape and
+    dimensions, its centre's height above its lowest point [m] and its points at rest in the
+    drawing's frame [mm], as placed ``distance_m`` above the joints' line."""
+    if obj.get("outline_coefficients") is None:
+        return None
+    from envs.objects import as_object, outline_fields
+    from envs.scene import SoftDisk
+
+    disk = as_object(SoftDisk(float(obj["radius_m"]), distance_m), **outline_fields(obj))
+    shape = {k: v for k, v in obj.items()
+             if k in ("shape", "semi_axes_m", "sides_m", "corner_radius_m", "exponent",
+                      "size_m")}
+    shape["orientation_deg"] = math.degrees(float(obj.get("orientation_rad", 0.0)))
+    points = disk.contour_m(OUTLINE_POINTS) * MM
+    return {"shape": shape, "lift_m": disk.lift_m,
+            "points_mm": [[round(float(x), 4), round(float(y), 4)] for x, y in points]}
 
 
 def _part_options(parts):
