@@ -135,6 +135,12 @@ def test_the_design_command_writes_a_result_like_optimize(tmp_path, capsys):
     # policy + 30 reaches about -0.002 as reported by the finer member
     assert data["best_reward"] > -0.01 and set(data["best_design"]) >= {"torque_nm"}
     assert (tmp_path / "design_drawing.png").stat().st_size > 0
+    assert "note: the shipped policy for shaped jaws" not in capsys.readouterr().err
+    # the shipped policy for shaped jaws says what it is: a first look, not the search's answer
+    main(["design", "--object", str(OBJECTS / "cherry_tomato.toml"), "--jaw", "any", "--out",
+          str(tmp_path / "jaws"), "--no-progress"])
+    assert ("note: the shipped policy for shaped jaws is a quick first look, a weaker start "
+            "than a search" in capsys.readouterr().err)
     bad = tmp_path / "nothing"
     bad.mkdir()
     assert main(["design", "--object", str(OBJECTS / "cherry_tomato.toml"), "--policy",
