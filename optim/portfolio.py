@@ -77,7 +77,9 @@ START_SPACING = 0.3
 POOL_PER_START = 3
 SCREENS = ("robust", "nominal")
 # shares of the budget left after the screen, after which the worse half of the live starts
-# stop (the straight bars' start is spared the first: it converges in its own smaller space)
+# stop (the straight bars' start is spared: it converges in its own smaller space, and a
+# grooved run whose straight start stopped early ended below a straight run of the same budget:
+# blueberries, 1,296 evaluations, 2 seeds of 5, 0.0189 against 0.0204)
 HALVING_SHARES = (0.5, 0.75)
 
 
@@ -398,7 +400,7 @@ def run_portfolio(
     checkpoints = [screened + (budget - screened) * share for share in HALVING_SHARES]
     while race.starts and race.round():
         while checkpoints and problem.n_evaluations >= checkpoints[0]:
-            race.halve(spare_straight=len(checkpoints) == len(HALVING_SHARES))
+            race.halve(spare_straight=True)
             checkpoints.pop(0)
     return problem.result(
         "portfolio", seed,
