@@ -7,9 +7,10 @@ search, the finish, the charts and the files), timed as the user waits for it (w
 the CPU it used (both cores count). Its answer is the result JSON's: the reward of the reported
 design by the finer member, whether it holds in every scenario, the verdict and the exit code.
 
-The best known reward of an object is the best of: ``--targets`` (a JSON object mapping an
-object file's stem, and optionally ``STEM-JAW``, to a reward, e.g. from long runs of every
-method), and every run of this measurement with either jaw (the straight bar lies inside the
+The best known reward of an object is the best of: ``--suite-targets`` (the benchmark suite's
+best-known rewards, ``optim/bench/targets.json``, for the suite's objects of the same name),
+``--targets`` (a JSON object mapping an object file's stem, and optionally ``STEM-JAW``, to a
+reward), and every run of this measurement with either jaw (the straight bar lies inside the
 shaped-jaw space). A run is *within reach* when it ends within ``--gap`` (default 0.01) of it.
 
 Prints a table per object and jaw (median, extremes, runs within reach, runs that hold, wall
@@ -19,7 +20,8 @@ seed, and writes every run to ``OUT/default_search.json``.
 Usage::
 
     python scripts/default_search.py examples/objects/strawberry.toml ... [--seeds 5]
-        [--jaws any straight] [--targets FILE] [--gap 0.01] [--out out/default_search]
+        [--jaws any straight] [--suite-targets] [--targets FILE] [--gap 0.01]
+        [--out out/default_search]
         [-- EXTRA OPTIONS FOR optimize]
 """
 
@@ -67,6 +69,25 @@ def run_once(path: Path, jaw: str, seed: int, out: Path, extra: list[str]) -> di
                holds=bool(metrics.get("holds_all", metrics.get("holds", False))),
                verdict=verdict.get("verdict"))
     return row
+
+
+def suite_targets(paths: list[Path]) -> dict[str, float]:
+    """The benchmark suite's best-known rewards of the objects of ``paths`` (by the object's
+    name: the suite's objects and the example files share theirs), keyed by file stem; a
+    target computed with another version of the model is refused."""
+    from envs.object_file import load_object
+    from optim.bench import INSTANCES, load_targets, targets_stale
+    from optim.bench.problems import OBJECTS
+
+    if targets_stale():
+        raise SystemExit("the suite's targets were computed with another version of the model: "
+                         "python scripts/bench_targets.py first")
+    by_name: dict[str, float] = {}
+    for name, target in load_targets().items():
+        key = OBJECTS[INSTANCES[name].object_key]["name"]
+        by_name[key] = max(by_name.get(key, -float("inf")), target.reward)
+    names = {path.stem: load_object(path).name for path in paths}
+    return {stem: by_name[name] for stem, name in names.items() if name in by_name}
 
 
 def best_known(rows: list[dict[str, Any]], targets: dict[str, float]) -> dict[str, float]:
@@ -133,6 +154,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--jaws", nargs="+", default=["any", "straight"],
                         choices=("straight", "cradle", "vee", "any"))
     parser.add_argument("--targets", type=Path, help="JSON: object stem (or STEM-JAW) -> reward")
+    parser.add_argument("--suite-targets", action="store_true",
+                        help="also the benchmark suite's best-known rewards (optim/bench)")
     parser.add_argument("--gap", type=float, default=GAP)
     parser.add_argument("--out", type=Path, default=Path("out/default_search"))
     parser.add_argument("--resume", action="store_true",
@@ -146,6 +169,8 @@ def main(argv: list[str] | None = None) -> None:
                                   if args.resume and record.is_file() else [])
     seen = {(r["object"], r["jaw"], r["seed"]) for r in rows}
     targets = json.loads(args.targets.read_text()) if args.targets else {}
+    if args.suite_targets:
+        targets.update(suite_targets(args.objects))
     print(f"cores {os.cpu_count()}, load {os.getloadavg()[0]:.2f}; extra options {extra}",
           flush=True)
     for seed in range(args.seeds):  # seeds outermost: every object has a few runs early

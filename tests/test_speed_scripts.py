@@ -148,3 +148,19 @@ def test_the_default_search_summary_flags_shaped_jaws_below_straight_bars():
     assert "| o | any | 0.3050 | 0.1750 (0.0500 - 0.3000) | 1 of 2 |" in text
     assert "--jaw any >= --jaw straight on 1 of 2 (object, seed) pairs: below on o seed 1" in text
     assert "within 0.01 of the best known: 1 of 2 runs (50 %)" in text
+
+
+def test_the_default_search_reads_the_suites_targets_by_object_name():
+    from optim.bench import load_targets, targets_stale
+
+    default_search = _script("default_search")
+    if targets_stale():
+        pytest.skip("the model changed since the targets were computed")
+    objects = ROOT / "examples" / "objects"
+    found = default_search.suite_targets([objects / "strawberry.toml",
+                                          objects / "tomatoes_friction_05.toml",
+                                          objects / "liver_sample.toml"])
+    targets = load_targets()
+    # the example files and the suite's objects share their names; the liver is no instance
+    assert found == {"strawberry": targets["strawberry-any"].reward,
+                     "tomatoes_friction_05": targets["tomatoes-mu05-any"].reward}
