@@ -81,6 +81,8 @@ SCREENS = ("robust", "nominal")
 # grooved run whose straight start stopped early ended below a straight run of the same budget:
 # blueberries, 1,296 evaluations, 2 seeds of 5, 0.0189 against 0.0204)
 HALVING_SHARES = (0.5, 0.75)
+# with a time limit, the designs a coordinate of the pilot batch whose rate sizes the phases
+PILOT_PER_VAR = 2
 
 
 @dataclass
@@ -275,6 +277,21 @@ class _Portfolio:
             s.live = spare_straight and s.label == STRAIGHT_LABEL
 
 
+def _planned_budget(problem: DesignProblem, budget: int, seed: int) -> int:
+    """The budget the phases are sized by: ``budget``, or under a time limit the evaluations
+    the time left allows at the rate of a pilot batch of random designs (judged and recorded
+    as the search's), whichever is less. A run given a time alone has a budget of millions: a
+    screen sized by it would outlast the time in its one batch."""
+    if problem.time_limit_s is None:
+        return budget
+    pilot = _sobol(PILOT_PER_VAR * problem.n_var, problem.n_var, seed + 1)
+    before, start = problem.n_evaluations, problem.elapsed_s
+    problem.evaluate(pilot[:problem.remaining])
+    rate = (problem.n_evaluations - before) / max(problem.elapsed_s - start, 1e-6)
+    left = max(problem.time_limit_s - problem.elapsed_s, 0.0)
+    return int(min(budget, problem.n_evaluations + max(1, math.floor(rate * left))))
+
+
 def _screened_pool(problem: DesignProblem, race: _Portfolio, budget: int, seed: int,
                    screen: str, policy: bool, starts: int) -> tuple[np.ndarray, np.ndarray]:
     """The screen: designs in search coordinates and their robust rewards, from which the
@@ -394,10 +411,11 @@ def run_portfolio(
         raise ValueError(f"screen must be one of {SCREENS}, got {screen!r}")
     problem.start(budget)
     race = _Portfolio(problem, seed, float(sigma0), popsize)
-    y, reward = _screened_pool(problem, race, budget, seed, screen, policy, starts)
+    plan = _planned_budget(problem, budget, seed)
+    y, reward = _screened_pool(problem, race, plan, seed, screen, policy, starts)
     _seat_starts(problem, race, y, reward, starts)
     screened = problem.n_evaluations
-    checkpoints = [screened + (budget - screened) * share for share in HALVING_SHARES]
+    checkpoints = [screened + (plan - screened) * share for share in HALVING_SHARES]
     while race.starts and race.round():
         while checkpoints and problem.n_evaluations >= checkpoints[0]:
             race.halve(spare_straight=True)

@@ -283,3 +283,20 @@ def test_the_screen_holds_straight_bars_and_cradles_that_conform_to_the_object()
     assert np.mean((radius[other] >= 0.95) & (radius[other] <= 1.4)) < 0.5
     vee = DesignProblem.from_scene(SCENE, 0.15, jaw="vee")
     assert portfolio._cradle_columns(vee) == {}
+
+
+def test_the_portfolio_given_a_time_alone_sizes_its_phases_by_it():
+    """A run given a time and the largest budget (what --time alone gives) sizes its screen and
+    halvings by the rate of a pilot batch, and ends near its time, not after a screen sized by
+    millions of evaluations."""
+    from envs.scenarios import Scenarios
+    from optim.problem import MAX_BUDGET
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, jaw="any",
+                                       scenarios=Scenarios.of({}, 0.002))
+    problem.time_limit_s = 4.0
+    start = time.perf_counter()
+    result = optimize("portfolio", problem, budget=MAX_BUDGET, seed=0)
+    assert time.perf_counter() - start < 60.0  # (the batch under way may overrun a little)
+    assert result.extra["out_of_time"] and 0 < result.n_evaluations < 100_000
+    assert len(result.extra["starts"]) >= 2  # the race began: the screen did not eat the time
