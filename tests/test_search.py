@@ -90,8 +90,45 @@ def test_portfolio_with_shaped_jaws_races_a_straight_bar_start():
     assert depth >= 6
 
 
+def test_portfolio_polishes_its_leader_alone_over_the_last_share():
+    """Over the last POLISH_SHARE of the budget left after the screen the leading start runs
+    alone (the others, the straight bars' included, stop), and its best before the polish is
+    kept for the finish."""
+    from optim.cmaes import default_popsize
+    from optim.portfolio import POLISH_SHARE
+
+    budget = 400
+    problem = make_problem(jaw="any")
+    result = optimize("portfolio", problem, budget=budget, seed=1)
+    polish, starts = result.extra["polish"], result.extra["starts"]
+    screened = result.extra["screened"]
+    begin = screened + (budget - screened) * (1.0 - POLISH_SHARE)
+    # it began after the round that crossed its share (one batch: at most every start's
+    # population)
+    assert begin <= polish["evaluations"] < begin + len(starts) * default_popsize(
+        problem.n_var)
+    leader = next(s for s in starts if s["label"] == polish["label"])
+    assert leader["evaluations"] >= budget - polish["evaluations"]
+    # every evaluation after the polish began is the leader's
+    others = sum(s["evaluations"] for s in starts if s is not leader)
+    assert others + leader["evaluations"] + screened == budget
+    assert others <= polish["evaluations"] - screened
+    # the leader led when it was chosen, and its best then is a candidate of the finish
+    before = result.extra["start_designs"][-1]
+    assert before["reward"] == polish["reward_before"]
+    assert polish["reward_before"] >= max(s["best_reward"] for s in starts if s is not leader)
+    assert leader["best_reward"] >= polish["reward_before"]
+
+
+def test_portfolio_without_a_polish_races_to_the_end():
+    result = optimize("portfolio", make_problem(jaw="any"), budget=300, seed=1, polish=0.0)
+    assert result.extra["polish"] is None and result.n_evaluations == 300
+    assert len(result.extra["start_designs"]) == len(result.extra["starts"])
+
+
 @pytest.mark.parametrize("bad", [{"starts": 0}, {"starts": 2.5}, {"sigma0": 0.0},
-                                 {"popsize": 1}])
+                                 {"popsize": 1}, {"polish": -0.1}, {"polish": 0.95},
+                                 {"polish": "0.4"}, {"polish": True}])
 def test_portfolio_options_refused(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         optimize("portfolio", make_problem(), budget=20, seed=0, **bad)
