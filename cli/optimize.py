@@ -308,6 +308,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
         DEFAULT_BUDGET_RANGE,
         DEFAULT_GRASP_BUDGET,
         DEFAULT_STRAIN_LIMIT,
+        DEFAULT_TIME_LIMIT_S,
         MAX_BUDGET,
     )
     from optim.verify import MAX_TOP
@@ -338,7 +339,7 @@ def add_optimize_parser(subparsers: Any) -> argparse.ArgumentParser:
                    f"{MAX_BUDGET:,}] (default: with --time, as many as it allows; else "
                    f"{DEFAULT_GRASP_BUDGET:,} grasps over the scenario count, within "
                    f"{DEFAULT_BUDGET_RANGE[0]:,}-{DEFAULT_BUDGET_RANGE[1]:,}: 3,600 with 9 "
-                   "scenarios)")
+                   f"scenarios, searched for at most {DEFAULT_TIME_LIMIT_S:.0f} s)")
     p.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="wall seconds the search may take, beside --budget: it stops at "
                    "whichever ends first (the finish and the files come after it)")

@@ -58,6 +58,7 @@ MIN_SCREEN_PER_VAR = 4
 # the screen's share of straight bars when the jaws are shaped (the groove's depth 0)
 STRAIGHT_SHARE = 0.25
 STRAIGHT_LABEL = "straight bars"
+CRADLE_LABEL = "cradle"
 # the screen's share of cradles that conform to the object, where the optima of shaped jaws
 # lie (measured: every optimum of the default search on the strawberry, the tomatoes, the
 # silicone puck and the blueberries is a groove of bottom radius 1.0-1.3 object radii, nearly
@@ -98,6 +99,12 @@ POLISH_SHARE = 0.4
 # a polished start whose CMA-ES converges restarts from its best with this fraction of SIGMA0
 POLISH_SIGMA = 0.25
 MAX_POLISH = 0.9
+# rounds every live start runs between two stages of the race (a halving, the polish), also
+# when the budget's shares come sooner: with 25 scenarios the default budget is 1,296 designs,
+# and a first halving at a quarter of it stopped starts after 5 generations, before any of them
+# found the cradles where the optimum lies (blueberries, 3 seeds of 5 ended at a straight bar's
+# reward)
+MIN_STAGE_ROUNDS = 6
 # with a time limit, the designs a coordinate of the pilot batch whose rate sizes the phases
 PILOT_PER_VAR = 2
 
@@ -335,7 +342,7 @@ def _planned_budget(problem: DesignProblem, budget: int, seed: int) -> int:
     the time left allows at the rate of a pilot batch of random designs (judged and recorded
     as the search's), whichever is less. A run given a time alone has a budget of millions: a
     screen sized by it would outlast the time in its one batch."""
-    if problem.time_limit_s is None:
+    if problem.time_limit_s is None or not problem.plan_by_time:
         return budget
     pilot = _sobol(PILOT_PER_VAR * problem.n_var, problem.n_var, seed + 1)
     before, start = problem.n_evaluations, problem.elapsed_s
@@ -367,8 +374,8 @@ def _screened_pool(problem: DesignProblem, race: _Portfolio, budget: int, seed: 
         judged = problem.screen(race.to_box(y))["reward"]
         order = np.argsort(-judged, kind="stable")
         keep = _apart(y, order, START_SPACING / 2, POOL_PER_START * starts, [])
-        straight = _straight_rows(problem, y)
-        keep += [i for i in order.tolist() if straight[i] and i not in keep][:POOL_PER_START]
+        for kind in (_straight_rows(problem, y), _cradle_rows(problem, y)):
+            keep += [i for i in order.tolist() if kind[i] and i not in keep][:POOL_PER_START]
         y = y[sorted(keep)]
     reward = problem.evaluate(race.to_box(y[:problem.remaining]))["reward"]
     return y[:len(reward)], reward
@@ -380,6 +387,16 @@ def _straight_rows(problem: DesignProblem, y: np.ndarray) -> np.ndarray:
     if not straight:
         return np.ones(len(y), dtype=bool)
     return np.all([y[:, k] == v for k, v in straight.items()], axis=0)
+
+
+def _cradle_rows(problem: DesignProblem, y: np.ndarray) -> np.ndarray:
+    """Which rows of search coordinates are conforming cradles (:func:`_cradle_columns`: every
+    designed groove's coordinates in their intervals); all False without any."""
+    cradle = _cradle_columns(problem)
+    if not cradle:
+        return np.zeros(len(y), dtype=bool)
+    return np.all([(y[:, k] >= low) & (y[:, k] <= high) for k, (low, high) in cradle.items()],
+                  axis=0)
 
 
 def _seat_starts(problem: DesignProblem, race: _Portfolio, y: np.ndarray, reward: np.ndarray,
@@ -398,6 +415,12 @@ def _seat_starts(problem: DesignProblem, race: _Portfolio, y: np.ndarray, reward
             free[list(straight)] = False
             race.add(STRAIGHT_LABEL, y[best[0]], free)
             taken.append(best[0])
+    # the best conforming cradle, where the optima of shaped jaws lie, is a start of its own:
+    # the best screened designs apart from each other may all lie elsewhere
+    cradles = [i for i in order.tolist() if _cradle_rows(problem, y[i:i + 1])[0]]
+    if cradles and starts > len(taken) + 1:
+        race.add(CRADLE_LABEL, y[cradles[0]])
+        taken.append(cradles[0])
     picked = _apart(y, order, START_SPACING, starts - len(taken), [y[i] for i in taken])
     for j, i in enumerate(picked):
         race.add(f"start {j + 1}", y[i])
@@ -479,17 +502,24 @@ def run_portfolio(
     _seat_starts(problem, race, y, reward, starts)
     screened = problem.n_evaluations
     polished: dict[str, Any] | None = None
-    checkpoints = [screened + (plan - screened) * share for share in HALVING_SHARES]
-    polish_at = screened + (plan - screened) * (1.0 - polish) if polish > 0 else math.inf
+    race_budget = plan - screened
+    polish_at = screened + race_budget * (1.0 - polish) if polish > 0 else math.inf
+    # the race's stages in order, each at its share of the budget and not before its starts
+    # had MIN_STAGE_ROUNDS rounds since the last stage
+    stages = [(screened + race_budget * share, "halve") for share in HALVING_SHARES
+              if screened + race_budget * share < polish_at]
+    stages += [(polish_at, "polish")] if polish > 0 else []
+    rounds = 0
     while race.starts and race.round():
-        while checkpoints and problem.n_evaluations >= checkpoints[0] \
-                and checkpoints[0] < polish_at:
-            race.halve(spare_straight=True)
-            checkpoints.pop(0)
-        if race.polishing is None and problem.n_evaluations >= polish_at \
-                and race.polish() is not None:
-            polished = {"label": race.polishing.label, "evaluations": problem.n_evaluations,
-                        "reward_before": race.before_polish[1]}
+        rounds += 1
+        if stages and problem.n_evaluations >= stages[0][0] and rounds >= MIN_STAGE_ROUNDS:
+            rounds = 0
+            if stages.pop(0)[1] == "halve":
+                race.halve(spare_straight=True)
+            elif race.polish() is not None:
+                polished = {"label": race.polishing.label,
+                            "evaluations": problem.n_evaluations,
+                            "reward_before": race.before_polish[1]}
     return problem.result(
         "portfolio", seed,
         options={"starts": int(starts), "sigma0": float(sigma0), "popsize": popsize,

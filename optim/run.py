@@ -38,6 +38,7 @@ from envs.scene import PRESETS, Scene
 from .optimize import check_options, get_optimizer, method_stem
 from .problem import (
     DEFAULT_STRAIN_LIMIT,
+    DEFAULT_TIME_LIMIT_S,
     MAX_BUDGET,
     DesignProblem,
     check_budget,
@@ -419,9 +420,10 @@ def run_optimize(
 
     ``budget``: evaluations (designs judged under every scenario); ``None`` (default): with
     ``time_s`` as many as the time allows, else :func:`optim.problem.default_budget` of the
-    problem's scenario count (3,600 designs with 9 scenarios). ``time_s``: the search's
-    wall-time limit [s] beside the budget (whichever ends first; the finish, the charts and the
-    files come after it).
+    problem's scenario count (3,600 designs with 9 scenarios), searched for at most
+    :data:`optim.problem.DEFAULT_TIME_LIMIT_S` seconds. ``time_s``: the search's wall-time
+    limit [s] beside the budget (whichever ends first; the finish, the charts and the files
+    come after it).
 
     Every option is validated before any cluster is started or any evaluation is spent, the
     output folder included. ``result.extra["grasp_found"]`` tells whether the best design is a
@@ -479,9 +481,11 @@ def run_optimize(
             problem = DesignProblem(target, name=obj.name, **common)
         _apply_resolution(problem, parts)
         problem.time_limit_s = time_s
-        if budget is None:  # a time alone runs until the time is up
-            budget = MAX_BUDGET if time_s is not None else default_budget(
-                problem.scenario_count)
+        if budget is None and time_s is not None:  # a time alone runs until it is up
+            budget = MAX_BUDGET
+        elif budget is None:  # the default: its budget, within the default time
+            budget = default_budget(problem.scenario_count)
+            problem.time_limit_s, problem.plan_by_time = DEFAULT_TIME_LIMIT_S, False
         bar, hook = _progress_bar(None if budget == MAX_BUDGET else budget, method, progress)
         problem.progress = hook
         try:

@@ -92,32 +92,49 @@ def test_portfolio_with_shaped_jaws_races_a_straight_bar_start():
 
 def test_portfolio_polishes_its_leader_alone_over_the_last_share():
     """Over the last POLISH_SHARE of the budget left after the screen the leading start runs
-    alone (the others, the straight bars' included, stop), and its best before the polish is
-    kept for the finish."""
-    from optim.cmaes import default_popsize
-    from optim.portfolio import POLISH_SHARE
+    alone (the others, the straight bars' included, stop), not before every start had
+    MIN_STAGE_ROUNDS rounds since the last halving, and its best before the polish is kept for
+    the finish."""
+    from optim.portfolio import MIN_STAGE_ROUNDS, POLISH_SHARE
 
-    budget = 400
+    budget = 1500
     problem = make_problem(jaw="any")
     result = optimize("portfolio", problem, budget=budget, seed=1)
     polish, starts = result.extra["polish"], result.extra["starts"]
     screened = result.extra["screened"]
-    begin = screened + (budget - screened) * (1.0 - POLISH_SHARE)
-    # it began after the round that crossed its share (one batch: at most every start's
-    # population)
-    assert begin <= polish["evaluations"] < begin + len(starts) * default_popsize(
-        problem.n_var)
+    assert polish is not None
+    assert polish["evaluations"] >= screened + (budget - screened) * (1.0 - POLISH_SHARE)
     leader = next(s for s in starts if s["label"] == polish["label"])
     assert leader["evaluations"] >= budget - polish["evaluations"]
     # every evaluation after the polish began is the leader's
     others = sum(s["evaluations"] for s in starts if s is not leader)
     assert others + leader["evaluations"] + screened == budget
     assert others <= polish["evaluations"] - screened
+    # a halved start ran its rounds before it stopped
+    assert min(s["evaluations"] for s in starts) >= MIN_STAGE_ROUNDS * 4
     # the leader led when it was chosen, and its best then is a candidate of the finish
     before = result.extra["start_designs"][-1]
     assert before["reward"] == polish["reward_before"]
     assert polish["reward_before"] >= max(s["best_reward"] for s in starts if s is not leader)
     assert leader["best_reward"] >= polish["reward_before"]
+
+
+def test_portfolio_with_shaped_jaws_races_the_best_conforming_cradle():
+    """With cradles in the box one start is the best screened conforming cradle (where the
+    optima of shaped jaws lie); V-grooves have none."""
+    from optim import portfolio
+
+    problem = make_problem(jaw="any")
+    result = optimize("portfolio", problem, budget=300, seed=0, polish=0.0)
+    labels = [s["label"] for s in result.extra["starts"]]
+    assert labels[:2] == [portfolio.STRAIGHT_LABEL, portfolio.CRADLE_LABEL]
+    design = result.extra["start_designs"][1]["design"]
+    r = problem.disk.radius_m
+    # its best stays near a conforming cradle: a groove of bottom radius about the object's
+    assert design["jaw_depth_m"] > 0.0
+    assert 0.6 < design["jaw_bottom_radius_m"] / r < 2.0
+    vee = optimize("portfolio", make_problem(jaw="vee"), budget=150, seed=0, polish=0.0)
+    assert portfolio.CRADLE_LABEL not in [s["label"] for s in vee.extra["starts"]]
 
 
 def test_portfolio_without_a_polish_races_to_the_end():
@@ -337,3 +354,21 @@ def test_the_portfolio_given_a_time_alone_sizes_its_phases_by_it():
     assert time.perf_counter() - start < 60.0  # (the batch under way may overrun a little)
     assert result.extra["out_of_time"] and 0 < result.n_evaluations < 100_000
     assert len(result.extra["starts"]) >= 2  # the race began: the screen did not eat the time
+
+
+def test_the_default_run_is_its_budget_capped_by_the_default_time(monkeypatch, tmp_path):
+    """A run given neither a budget nor a time spends its default budget as a run given that
+    budget does (seed for seed: the cap does not size its phases), and stops its search at
+    DEFAULT_TIME_LIMIT_S if the budget lasts longer."""
+    import optim.run as run
+    from optim.problem import DEFAULT_TIME_LIMIT_S
+
+    monkeypatch.setattr(run, "default_budget", lambda scenario_count: 90)
+    common = {"scene": SCENE, "seed": 2, "jaw": "any", "finish": False, "progress": False}
+    default, _ = run.run_optimize("portfolio", out=tmp_path / "a", **common)
+    given, _ = run.run_optimize("portfolio", budget=90, out=tmp_path / "b", **common)
+    assert default.extra["time_limit_s"] == DEFAULT_TIME_LIMIT_S
+    assert given.extra["time_limit_s"] is None
+    assert default.n_evaluations == given.n_evaluations == 90
+    assert default.best_reward == given.best_reward
+    assert default.best_design == given.best_design
