@@ -164,3 +164,63 @@ def test_the_default_search_reads_the_suites_targets_by_object_name():
     # the example files and the suite's objects share their names; the liver is no instance
     assert found == {"strawberry": targets["strawberry-any"].reward,
                      "tomatoes_friction_05": targets["tomatoes-mu05-any"].reward}
+
+
+def test_the_optimum_cost_script_times_a_runs_designs_under_each_load_set(tmp_path, capsys):
+    """Each row (random designs, the run's kept designs) has a positive time as searched,
+    under each load set and without a payload; the run's designs are read from its result."""
+    from envs.model.loads import LOAD_SETS
+    from envs.object_file import load_object
+    from optim import DesignProblem, optimize
+    from optim.run import problem_kwargs
+
+    optimum_cost = _script("optimum_cost")
+    path = ROOT / "examples" / "objects" / "silicone_puck.toml"
+    obj = load_object(path)
+    disk, settings = problem_kwargs(None, obj, None, None, None, None, jaw="any")
+    result = optimize("random", DesignProblem(disk, name=obj.name, **settings), budget=12,
+                      seed=0)
+    saved = tmp_path / "run" / "random_seed0_result.json"
+    saved.parent.mkdir()
+    saved.write_text(json.dumps({"top_designs": list(result.top_designs)[:3]}))
+    optimum_cost.main(["--object", str(path), "--result", str(saved), "--random", "4",
+                       "--repeats", "1"])
+    lines = capsys.readouterr().out.splitlines()
+    header = [c.strip() for c in lines[1].strip("|").split("|")]
+    assert header == ["designs", "as searched", *(f"load set {s}" for s in LOAD_SETS),
+                      "no payload"]
+    rows = {r.strip("|").split("|")[0].strip(): [float(v) for v in r.strip("|").split("|")[1:]]
+            for r in lines[3:]}
+    assert set(rows) == {"4 random designs", "run/random_seed0_result.json"}
+    assert all(v > 0.0 for row in rows.values() for v in row)
+
+
+def test_the_optimum_neighbours_stay_within_half_the_resolution():
+    """The neighbours of a design move each length by at most half the length step, each
+    angle by half the angle step, the torque by half a unit of its third figure, and keep a
+    zero groove (a straight bar) at zero."""
+    import numpy as np
+
+    from envs.scene import design_mapping, design_row
+    from optim.parts.resolution import DEFAULT_RESOLUTION
+
+    optimum_neighbours = _script("optimum_neighbours")
+    design = {"finger_length_m": 0.09, "rest_angle_rad": 0.3, "joint_offset_m": 0.002,
+              "finger_width_m": 0.005, "torque_nm": 0.1, "distance_m": 0.03,
+              "jaw_depth_m": 0.0, "jaw_bottom_radius_m": 0.02, "jaw_opening_angle_rad": 1.0,
+              "jaw_position_m": 0.04}
+    rows = optimum_neighbours.neighbours(design, 50, np.random.default_rng(1))
+    base = design_row(design)
+    assert rows.shape == (50, base.size)
+    moved = [design_mapping(r) for r in rows]
+    for name, value in design.items():
+        got = np.array([m[name] for m in moved])
+        if name.endswith("_nm"):
+            limit = optimum_neighbours.TORQUE_RELATIVE_STEP * value
+        elif name.endswith("_rad"):
+            limit = 0.5 * DEFAULT_RESOLUTION.angle_rad
+        else:
+            limit = 0.0 if value == 0.0 else 0.5 * DEFAULT_RESOLUTION.length_m
+        assert np.all(np.abs(got - value) <= limit + 1e-15), name
+        if limit:
+            assert np.ptp(got) > 0.5 * limit, name  # they do move
