@@ -137,6 +137,33 @@ def test_portfolio_with_shaped_jaws_races_the_best_conforming_cradle():
     assert portfolio.CRADLE_LABEL not in [s["label"] for s in vee.extra["starts"]]
 
 
+def test_portfolio_with_scenarios_races_its_starts_on_the_nominal_scenario_first():
+    """With scenarios the starts first spend NOMINAL_RACE_SHARE of the budget on the nominal
+    scenario (a scenario count's share of an evaluation a design), then race from their best
+    there; the run's budget is spent exactly. Without scenarios there is no such race."""
+    from envs.scenarios import Scenarios
+    from optim.portfolio import NOMINAL_RACE_SHARE
+
+    problem = DesignProblem.from_scene(SCENE, 0.15, payload_factor=0.0, jaw="any",
+                                       scenarios=Scenarios.of({}, 0.002))
+    budget = 300
+    result = optimize("portfolio", problem, budget=budget, seed=0)
+    nominal = result.extra["nominal_race"]
+    k = problem.scenario_count
+    assert k == 9 and result.n_evaluations == budget
+    # its charge: up to its share, a batch short at most, each design a ninth
+    batch = sum(1 for _ in result.extra["starts"]) * 16
+    assert NOMINAL_RACE_SHARE * budget - batch / k <= nominal["evaluations"] \
+        <= NOMINAL_RACE_SHARE * budget
+    assert nominal["designs"] > 0.8 * k * nominal["evaluations"]  # (batches charged up)
+    assert optimize("portfolio", make_problem(jaw="any"), budget=150,
+                    seed=0).extra["nominal_race"] is None
+    off = optimize("portfolio", DesignProblem.from_scene(
+        SCENE, 0.15, payload_factor=0.0, jaw="any", scenarios=Scenarios.of({}, 0.002)),
+        budget=budget, seed=0, nominal_race=0.0)
+    assert off.extra["nominal_race"] is None
+
+
 def test_portfolio_without_a_polish_races_to_the_end():
     result = optimize("portfolio", make_problem(jaw="any"), budget=300, seed=1, polish=0.0)
     assert result.extra["polish"] is None and result.n_evaluations == 300
@@ -145,7 +172,8 @@ def test_portfolio_without_a_polish_races_to_the_end():
 
 @pytest.mark.parametrize("bad", [{"starts": 0}, {"starts": 2.5}, {"sigma0": 0.0},
                                  {"popsize": 1}, {"polish": -0.1}, {"polish": 0.95},
-                                 {"polish": "0.4"}, {"polish": True}])
+                                 {"polish": "0.4"}, {"polish": True}, {"nominal_race": -0.1},
+                                 {"nominal_race": 0.6}, {"nominal_race": None}])
 def test_portfolio_options_refused(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         optimize("portfolio", make_problem(), budget=20, seed=0, **bad)
