@@ -57,7 +57,7 @@ from .verdict import NO_GRASP_EXIT, UNDECIDED_EXIT, search_verdict
 __all__ = ["run_optimize", "run_demo", "paper_reference", "write_outputs", "grasp_found",
            "no_grasp_reason", "fem_available", "verify_outputs", "problem_kwargs",
            "check_observable", "jaw_settings", "check_policy_jaw", "NO_GRASP_EXIT",
-           "UNDECIDED_EXIT", "DEMO_SCENE"]
+           "UNDECIDED_EXIT", "DEMO_SCENE", "object_problem"]
 
 # the demo's placement tolerance, +- both ways [m] (3 % of the disk's radius)
 DEMO_TOLERANCE_M = 0.002
@@ -208,6 +208,17 @@ def _print_scenarios(result: OptimResult, rows: list[dict[str, Any]]) -> None:
 def _as_text(value: Any) -> str:
     """A metric of a result JSON (infinity written as text) as text."""
     return value if isinstance(value, str) else f"{float(value):.3g}"
+
+
+def object_problem(path: str | Path, jaw: str | None = None) -> DesignProblem:
+    """The :class:`~optim.problem.DesignProblem` of an object file as ``psm-grasp optimize
+    --object PATH --jaw JAW`` judges designs (its scenarios, friction, payload and load set,
+    the default model), without an executor: for scripts that score designs of a run."""
+    from envs.object_file import load_object
+
+    obj = load_object(path)
+    target, settings = problem_kwargs(None, obj, None, None, None, None, jaw=jaw)
+    return DesignProblem(target, name=obj.name, **settings)
 
 
 def problem_kwargs(scene: str | None, obj: ObjectSpec | None, strain_limit, friction,

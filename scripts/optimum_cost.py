@@ -30,11 +30,10 @@ from pathlib import Path
 import numpy as np
 
 from envs.model.loads import LOAD_SETS
-from envs.object_file import load_object
 from envs.parallel import set_solver_threads
 from envs.scene import design_row
 from optim.problem import DesignProblem
-from optim.run import problem_kwargs
+from optim.run import object_problem
 
 
 def cpu_ms(problem: DesignProblem, designs: np.ndarray, repeats: int) -> float:
@@ -72,9 +71,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--jaw", default="any")
     args = parser.parse_args(argv)
     set_solver_threads(1)
-    obj = load_object(args.object)
-    disk, settings = problem_kwargs(None, obj, None, None, None, None, jaw=args.jaw)
-    problem = DesignProblem(disk, name=obj.name, **settings)
+    problem = object_problem(args.object, args.jaw)
     rows: dict[str, dict[str, float]] = {}
     rng = np.random.default_rng(0)
     x = rng.uniform(-1.0, 1.0, (args.random, problem.n_var))
@@ -85,7 +82,7 @@ def main(argv: list[str] | None = None) -> None:
         designs = np.array([design_row(p["design"]) for p in result["top_designs"]])
         rows[f"{path.parent.name}/{path.name}"] = measure(problem, designs, args.repeats)
     columns = list(next(iter(rows.values())))
-    print(f"{obj.name}: {problem.scenario_count} scenario(s), load set {problem.load_set}; "
+    print(f"{problem.name}: {problem.scenario_count} scenario(s), load set {problem.load_set}; "
           "CPU ms a design, one thread")
     print("| designs | " + " | ".join(columns) + " |")
     print("|---" * (len(columns) + 1) + "|")

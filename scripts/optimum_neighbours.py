@@ -25,12 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.object_file import load_object
 from envs.scene import design_row
 from optim.finish import RANKING_MEMBER
 from optim.parts.resolution import DEFAULT_RESOLUTION
 from optim.problem import DesignProblem
-from optim.run import problem_kwargs
+from optim.run import object_problem
 
 # the reward of a design invalid at rest (the lowest tier)
 INVALID_BELOW = -3.5 + 1e-9
@@ -79,9 +78,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--jaw", default="any")
     args = parser.parse_args(argv)
-    obj = load_object(args.object)
-    disk, settings = problem_kwargs(None, obj, None, None, None, None, jaw=args.jaw)
-    problem = DesignProblem(disk, name=obj.name, **settings)
+    problem = object_problem(args.object, args.jaw)
     print("| result | reported | valid at rest | least | median | largest | spread |")
     print("|---|---|---|---|---|---|---|")
     for path in args.result:

@@ -170,16 +170,14 @@ def test_the_optimum_cost_script_times_a_runs_designs_under_each_load_set(tmp_pa
     """Each row (random designs, the run's kept designs) has a positive time as searched,
     under each load set and without a payload; the run's designs are read from its result."""
     from envs.model.loads import LOAD_SETS
-    from envs.object_file import load_object
-    from optim import DesignProblem, optimize
-    from optim.run import problem_kwargs
+    from optim import optimize
+    from optim.run import object_problem
 
     optimum_cost = _script("optimum_cost")
     path = ROOT / "examples" / "objects" / "silicone_puck.toml"
-    obj = load_object(path)
-    disk, settings = problem_kwargs(None, obj, None, None, None, None, jaw="any")
-    result = optimize("random", DesignProblem(disk, name=obj.name, **settings), budget=12,
-                      seed=0)
+    problem = object_problem(path, "any")
+    assert problem.bounds.n_var > 6 and problem.name == "silicone puck"
+    result = optimize("random", problem, budget=12, seed=0)
     saved = tmp_path / "run" / "random_seed0_result.json"
     saved.parent.mkdir()
     saved.write_text(json.dumps({"top_designs": list(result.top_designs)[:3]}))
