@@ -301,12 +301,7 @@ class _Portfolio:
         free = np.ones(n, dtype=bool) if free is None else free
         dim = int(free.sum())
         lam = default_popsize(dim) if self.popsize is None else self.popsize
-        es = self.cma.CMAEvolutionStrategy(np.clip(x0[free], -1.0, 1.0), self.sigma0, {
-            "bounds": [-1.0, 1.0], "popsize": lam,
-            "randn": lambda *shape: self.rng.standard_normal(shape),
-            "seed": np.nan, "verbose": -9, "verb_log": 0, "verb_disp": 0,
-            "tolflatfitness": 10,
-        })
+        es = self.new_es(x0[free], self.sigma0, lam)
         self.starts.append(_Start(label, es, free, np.asarray(x0, dtype=np.float64).copy()))
 
     def restart(self, start: _Start) -> None:
@@ -322,12 +317,7 @@ class _Portfolio:
         x0[~start.free] = start.base[~start.free]
         lam = start.es.popsize if local else 2 * start.es.popsize
         sigma = self.sigma0 * (POLISH_SIGMA if local else 1.0)
-        start.es = self.cma.CMAEvolutionStrategy(np.clip(x0[start.free], -1.0, 1.0), sigma, {
-            "bounds": [-1.0, 1.0], "popsize": lam,
-            "randn": lambda *shape: self.rng.standard_normal(shape),
-            "seed": np.nan, "verbose": -9, "verb_log": 0, "verb_disp": 0,
-            "tolflatfitness": 10,
-        })
+        start.es = self.new_es(x0[start.free], sigma, lam)
         start.restarts += 1
 
     def round(self) -> bool:
@@ -378,13 +368,8 @@ class _Portfolio:
         # of one start's population leaves the workers idle) and the leader's own steps
         es = lead.es
         stds = np.sqrt(np.clip(np.diag(es.C), 1e-12, None))
-        lead.es = self.cma.CMAEvolutionStrategy(np.clip(lead.best_y[lead.free], -1, 1),
-                                                float(es.sigma), {
-            "bounds": [-1.0, 1.0], "popsize": max(lam, es.popsize), "CMA_stds": stds,
-            "randn": lambda *shape: self.rng.standard_normal(shape),
-            "seed": np.nan, "verbose": -9, "verb_log": 0, "verb_disp": 0,
-            "tolflatfitness": 10,
-        })
+        lead.es = self.new_es(lead.best_y[lead.free], float(es.sigma), max(lam, es.popsize),
+                              CMA_stds=stds)
         return lead
 
     def halve(self, spare_straight: bool) -> None:
