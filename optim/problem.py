@@ -97,8 +97,8 @@ DEFAULT_BUDGET_RANGE = (1_000, 8_000)
 # its budget is not spent by then: a design near a shaped-jaw optimum (a cradle that conforms
 # to the object) costs 20-45 times a random one (the silicone puck: 6-14 ms against 0.3 ms a
 # straight bar, serial), and a default run that refined there took 75 s of wall on 2 cores. A
-# run that spends its budget first (every default run of the examples on the development
-# machine) is repeatable seed for seed; one cut short says so (extra["out_of_time"])
+# run that spends its budget first is repeatable seed for seed; one cut short (the shaped-jaw
+# runs of the tomatoes and the puck on a 2-core machine) says so (extra["out_of_time"])
 DEFAULT_TIME_LIMIT_S = 45.0
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0  # a week: a longer run is a typo (hours for seconds)
 TOP_DESIGNS_KEPT = 10  # distinct best designs an OptimResult keeps (for FEM verification)
